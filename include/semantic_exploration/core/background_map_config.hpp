@@ -1,0 +1,36 @@
+#pragma once
+/// @file background_map_config.hpp
+/// Settings of the background occupancy map (paper Section IV-A).
+
+#include <cmath>
+#include <string>
+
+#include "semantic_exploration/core/config_error.hpp"
+
+namespace semexp {
+
+struct BackgroundMapConfig {
+  double resolution_m = 0.04;      ///< finest voxel edge, m (Table I r)
+  int block_size = 8;              ///< voxels per dense block edge (power of two)
+  double log_odds_free = -0.4;     ///< log-odds added to voxels in front of the surface
+  double log_odds_occupied = 0.85; ///< log-odds added to voxels in the surface band
+  double log_odds_min = -2.0;      ///< clamping minimum (free)
+  double log_odds_max = 3.5;       ///< clamping maximum (occupied)
+  double surface_band_m = 0.08;    ///< thickness of the occupied band behind the measured depth, m
+  bool integrate_colour = true;    ///< fuse colour into leaves
+  double publish_period_s = 1.0;   ///< minimum period between ~occupied point clouds, s
+
+  void validate(const std::string& ns = "background_map/") const {
+    require(std::isfinite(resolution_m) && resolution_m > 0, ns + "resolution_m", "must be > 0 m");
+    require(block_size >= 2 && block_size <= 64 && (block_size & (block_size - 1)) == 0, ns + "block_size",
+            "must be a power of two in [2, 64]");
+    require(log_odds_free < 0, ns + "log_odds_free", "must be < 0");
+    require(log_odds_occupied > 0, ns + "log_odds_occupied", "must be > 0");
+    require(log_odds_min < 0, ns + "log_odds_min", "must be < 0");
+    require(log_odds_max > 0, ns + "log_odds_max", "must be > 0");
+    require(surface_band_m > 0, ns + "surface_band_m", "must be > 0 m");
+    require(publish_period_s >= 0, ns + "publish_period_s", "must be >= 0 s");
+  }
+};
+
+}  // namespace semexp

@@ -1,0 +1,60 @@
+#pragma once
+/// @file planner_config.hpp
+/// Settings of the invalid-depth history (IV-C) and the planner (IV-D).
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+#include "semantic_exploration/core/config_error.hpp"
+
+namespace semexp {
+
+struct DepthHistoryConfig {
+  double cell_size_m = 0.5;  ///< grid cell edge, m
+  int width = 36;            ///< 360-degree image width (azimuth samples)
+  int height = 10;           ///< image height (elevation samples)
+
+  void validate(const std::string& ns = "depth_history/") const {
+    require(std::isfinite(cell_size_m) && cell_size_m > 0, ns + "cell_size_m", "must be > 0 m");
+    require(width > 0, ns + "width", "must be > 0");
+    require(height > 0, ns + "height", "must be > 0");
+  }
+};
+
+struct PlannerConfig {
+  int n_candidates = 20;            ///< candidates sampled per iteration (Table I n)
+  double p_frontier = 0.5;          ///< probability of sampling from frontiers (Table I P_fr)
+  double a_ent = 0.34;              ///< weight of the entropy gain
+  double a_bg = 0.33;               ///< weight of the background distance gain
+  double a_obj = 0.33;              ///< weight of the object distance gain
+  double v_max_mps = 1.5;           ///< maximum speed, m/s
+  double omega_max_radps = 0.75;    ///< maximum yaw rate, rad/s
+  double mav_radius_m = 0.125;      ///< collision sphere radius R, m
+  int raycast_width = 36;           ///< 360-degree raycast width w
+  int raycast_height = 10;          ///< raycast height h
+  double time_budget_s = 0.1;       ///< OMPL time per candidate, s
+  double time_limit_s = 600.0;      ///< exploration time limit (sim time), s; 0 = none
+  int max_failed_iterations = 5;    ///< stop after this many iterations without a reachable candidate
+  std::uint32_t seed = 1;           ///< random seed of the sampler
+
+  void validate(const std::string& ns = "planner/") const {
+    require(n_candidates > 0, ns + "n_candidates", "must be > 0");
+    require(std::isfinite(p_frontier) && p_frontier >= 0 && p_frontier <= 1, ns + "p_frontier", "must be in [0, 1]");
+    require(std::isfinite(a_ent) && a_ent >= 0 && a_ent <= 1, ns + "a_ent", "must be in [0, 1]");
+    require(std::isfinite(a_bg) && a_bg >= 0 && a_bg <= 1, ns + "a_bg", "must be in [0, 1]");
+    require(std::isfinite(a_obj) && a_obj >= 0 && a_obj <= 1, ns + "a_obj", "must be in [0, 1]");
+    require(std::abs(a_ent + a_bg + a_obj - 1.0) < 1e-3, ns + "a_ent",
+            "a_ent + a_bg + a_obj must sum to 1 (they sum to " + std::to_string(a_ent + a_bg + a_obj) + ")");
+    require(std::isfinite(v_max_mps) && v_max_mps > 0, ns + "v_max_mps", "must be > 0 m/s");
+    require(std::isfinite(omega_max_radps) && omega_max_radps > 0, ns + "omega_max_radps", "must be > 0 rad/s");
+    require(std::isfinite(mav_radius_m) && mav_radius_m > 0, ns + "mav_radius_m", "must be > 0 m");
+    require(raycast_width > 0, ns + "raycast_width", "must be > 0");
+    require(raycast_height > 0, ns + "raycast_height", "must be > 0");
+    require(std::isfinite(time_budget_s) && time_budget_s > 0, ns + "time_budget_s", "must be > 0 s");
+    require(std::isfinite(time_limit_s) && time_limit_s >= 0, ns + "time_limit_s", "must be >= 0 s");
+    require(max_failed_iterations > 0, ns + "max_failed_iterations", "must be > 0");
+  }
+};
+
+}  // namespace semexp
