@@ -1,0 +1,105 @@
+#include "semantic_exploration/core/planning/gain.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace semexp {
+
+namespace {
+
+void check_size(const GainImage& img, const char* what, int& w, int& h) {
+  if (img.empty()) return;
+  if (img.values.size() != static_cast<std::size_t>(img.width) * img.height)
+    throw std::invalid_argument(std::string("combine_gains: ") + what + " has inconsistent size");
+  if (img.width != w || img.height != h)
+    throw std::invalid_argument(std::string("combine_gains: ") + what + " is " + std::to_string(img.width) + "x" +
+                                std::to_string(img.height) + ", expected " + std::to_string(w) + "x" +
+                                std::to_string(h));
+}
+
+double wrap_pi(double a) {
+  a = std::remainder(a, 2.0 * M_PI);  // [-pi, pi]
+  return a <= -M_PI ? a + 2.0 * M_PI : a;
+}
+
+}  // namespace
+
+GainImage combine_gains(const GainWeights& wgt, const GainSet& g, const std::vector<std::uint8_t>& mask, int width,
+                        int height) {
+  if (width <= 0 || height <= 0) throw std::invalid_argument("combine_gains: width and height must be > 0");
+  check_size(g.entropy, "entropy gain", width, height);
+  check_size(g.background, "background gain", width, height);
+  check_size(g.object, "object gain", width, height);
+  const std::size_t n = static_cast<std::size_t>(width) * height;
+  if (!mask.empty() && mask.size() != n) throw std::invalid_argument("combine_gains: mask size mismatch");
+  GainImage out(width, height);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!mask.empty() && mask[i] == 0) continue;
+    double v = 0.0;
+    if (!g.entropy.empty()) v += wgt.a_ent * g.entropy.values[i];
+    if (!g.background.empty()) v += wgt.a_bg * g.background.values[i];
+    if (!g.object.empty()) v += wgt.a_obj * g.object.values[i];
+    out.values[i] = static_cast<float>(v);
+  }
+  return out;
+}
+
+int window_columns(double hfov_rad, int width) {
+  const int k = static_cast<int>(std::lround(hfov_rad / (2.0 * M_PI) * width));
+  return std::clamp(k, 1, std::max(1, width));
+}
+
+double window_mean(const GainImage& img, int first, int columns) {
+  if (img.empty() || columns <= 0) return 0.0;
+  double sum = 0.0;
+  for (int c = 0; c < columns; ++c) {
+    const int u = ((first + c) % img.width + img.width) % img.width;
+    for (int v = 0; v < img.height; ++v) sum += img.at(u, v);
+  }
+  return sum / (static_cast<double>(columns) * img.height);
+}
+
+YawWindow best_yaw(const GainImage& img, int columns) {
+  if (img.empty() || img.width <= 0 || img.height <= 0) throw std::invalid_argument("best_yaw: empty image");
+  columns = std::clamp(columns, 1, img.width);
+  // Column sums once, then a circular running sum: O(width * height).
+  std::vector<double> col(static_cast<std::size_t>(img.width), 0.0);
+  for (int v = 0; v < img.height; ++v)
+    for (int u = 0; u < img.width; ++u) col[static_cast<std::size_t>(u)] += img.at(u, v);
+  double sum = 0.0;
+  for (int c = 0; c < columns; ++c) sum += col[static_cast<std::size_t>(c)];
+  double best = sum;
+  int best_first = 0;
+  for (int s = 1; s < img.width; ++s) {
+    sum += col[static_cast<std::size_t>((s + columns - 1) % img.width)] - col[static_cast<std::size_t>(s - 1)];
+    if (sum > best + 1e-12) {
+      best = sum;
+      best_first = s;
+    }
+  }
+  YawWindow w;
+  w.first_column = best_first;
+  w.columns = columns;
+  w.gain = best / (static_cast<double>(columns) * img.height);
+  w.yaw_rad = wrap_pi(-M_PI + 2.0 * M_PI * (best_first + 0.5 * columns) / img.width);
+  return w;
+}
+
+double path_length_m(const std::vector<Eigen::Vector3d>& path) {
+  double l = 0.0;
+  for (std::size_t i = 1; i < path.size(); ++i) l += (path[i] - path[i - 1]).norm();
+  return l;
+}
+
+double yaw_difference_rad(double a, double b) { return std::abs(wrap_pi(a - b)); }
+
+double path_time_s(const std::vector<Eigen::Vector3d>& path, double yaw_start, double yaw_end, double v_max,
+                   double omega_max) {
+  return std::max(path_length_m(path) / v_max, yaw_difference_rad(yaw_start, yaw_end) / omega_max);
+}
+
+double utility(double gain, double time_s, double min_time_s) { return gain / std::max(time_s, min_time_s); }
+
+}  // namespace semexp
