@@ -44,7 +44,7 @@ struct SphericalGrid {
     if (fv < 0.0 || fv >= height) return false;
     v = static_cast<int>(fv);
     u = static_cast<int>(std::floor((az + M_PI) / (2.0 * M_PI) * width));
-    if (u >= width) u -= width;  // az == pi
+    if (u >= width) u -= width;  // az == pi is az == -pi: column 0
     if (u < 0) u += width;
     return true;
   }

@@ -1,0 +1,79 @@
+#pragma once
+/// @file node_common.hpp
+/// What every node needs between messages and the core: image conversion with
+/// validation, camera_info to PinholeCamera, tf2 pose lookup, counted and
+/// throttled reporting of dropped input, and a guarded main.
+
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <tf2_ros/buffer.h>
+
+#include <Eigen/Geometry>
+#include <map>
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "semantic_exploration/core/camera.hpp"
+#include "semantic_exploration/core/config_error.hpp"
+
+namespace semexp_ros {
+
+/// Converts depth (32FC1 metres or 16UC1 millimetres) to a CV_32FC1 image in
+/// metres (a deep copy). Returns "" on success, else why it was rejected.
+std::string depthToMeters(const sensor_msgs::Image& msg, cv::Mat& depth_m);
+
+/// Converts colour (rgb8, bgr8, rgba8, bgra8, mono8) to a CV_8UC3 RGB image.
+/// Returns "" on success, else why it was rejected.
+std::string colourToRgb(const sensor_msgs::Image& msg, cv::Mat& rgb);
+
+/// Builds the core camera model from camera_info (K) and a depth range.
+/// Returns "" on success, else why the camera_info is unusable.
+std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, double d_max_m,
+                           semexp::PinholeCamera& camera);
+
+/// T_target_source at `stamp` through tf2, waiting up to `timeout_s`.
+/// Returns "" on success, else tf2's reason.
+std::string lookupPose(const tf2_ros::Buffer& tf, const std::string& target, const std::string& source,
+                       const ros::Time& stamp, double timeout_s, Eigen::Isometry3d& T_target_source);
+
+/// Counts dropped input per reason and logs each reason at most every
+/// `period_s` seconds, so a bad stream never floods the log.
+class DropCounter {
+ public:
+  explicit DropCounter(double period_s = 5.0) : period_s_(period_s) {}
+  /// Counts one drop for `reason` and logs `detail` (throttled per reason).
+  void drop(const std::string& reason, const std::string& detail);
+  /// Number of drops counted for `reason`.
+  uint64_t count(const std::string& reason) const;
+  uint64_t total() const;
+  const std::map<std::string, uint64_t>& counts() const { return counts_; }
+
+ private:
+  double period_s_;
+  std::map<std::string, uint64_t> counts_;
+  std::map<std::string, ros::WallTime> last_log_;
+};
+
+/// Runs a node class: constructs it (it loads and validates parameters) and
+/// spins. Invalid configuration logs FATAL naming the parameter and returns 2.
+template <typename NodeT>
+int runNode(const char* name) {
+  try {
+    ros::NodeHandle nh;
+    ros::NodeHandle pnh("~");
+    NodeT node(nh, pnh);
+    ROS_INFO("%s: started", name);
+    ros::spin();
+    ROS_INFO("%s: shutting down", name);
+    return 0;
+  } catch (const semexp::ConfigError& e) {
+    ROS_FATAL("%s: %s", name, e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    ROS_FATAL("%s: %s", name, e.what());
+    return 1;
+  }
+}
+
+}  // namespace semexp_ros

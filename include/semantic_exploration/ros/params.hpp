@@ -1,0 +1,79 @@
+#pragma once
+/// @file params.hpp
+/// The one place that turns ROS parameters into the core Config structs.
+///
+/// Every node reads its private namespace (launch files load config/*.yaml
+/// there), so a setting has the same name in YAML, code and docs, e.g.
+/// `background_map/resolution_m`. A present parameter of the wrong type, a
+/// missing required one or a value rejected by Config::validate() throws
+/// semexp::ConfigError naming the parameter; nodes exit on it at startup.
+
+#include <xmlrpcpp/XmlRpcValue.h>
+
+#include <string>
+#include <vector>
+
+#include "semantic_exploration/core/background_map_config.hpp"
+#include "semantic_exploration/core/bounds.hpp"
+#include "semantic_exploration/core/camera.hpp"
+#include "semantic_exploration/core/class_table.hpp"
+#include "semantic_exploration/core/exploration_config.hpp"
+#include "semantic_exploration/core/object_map_config.hpp"
+#include "semantic_exploration/core/planner_config.hpp"
+
+namespace ros {
+class NodeHandle;
+}
+
+namespace semexp_ros {
+
+/// Names of the tf frames (REP-103/105).
+struct FrameNames {
+  std::string world = "world";
+  std::string body = "body";
+  std::string camera = "camera";
+};
+
+/// Reads typed values out of a parameter tree (the node's private namespace).
+class ParamReader {
+ public:
+  explicit ParamReader(const XmlRpc::XmlRpcValue& root) : root_(root) {}
+  /// Reads the whole private namespace of `pnh`.
+  static ParamReader fromNodeHandle(const ros::NodeHandle& pnh);
+
+  /// True if `path` ("a/b/c") exists.
+  bool has(const std::string& path) const;
+  /// Optional parameters: leave `out` unchanged if absent, throw if present with a wrong type.
+  void get(const std::string& path, double& out) const;
+  void get(const std::string& path, int& out) const;
+  void get(const std::string& path, bool& out) const;
+  void get(const std::string& path, std::string& out) const;
+  void get(const std::string& path, std::vector<std::string>& out) const;
+  void get(const std::string& path, std::vector<double>& out) const;
+  /// Required parameters: throw ConfigError("missing") if absent.
+  template <typename T>
+  void require(const std::string& path, T& out) const {
+    if (!has(path)) throw semexp::ConfigError(path, "is required but missing");
+    get(path, out);
+  }
+
+  /// The value at `path`, or nullptr.
+  const XmlRpc::XmlRpcValue* find(const std::string& path) const;
+
+ private:
+  XmlRpc::XmlRpcValue root_;
+};
+
+// Each loader reads its section and validates it (throws semexp::ConfigError).
+semexp::PinholeCamera loadCamera(const ParamReader& p);  ///< `camera/*`; intrinsics required
+semexp::Bounds loadBounds(const ParamReader& p);         ///< `bounds/*`
+semexp::ClassTable loadClasses(const ParamReader& p);    ///< `classes/*`
+semexp::ExplorationConfig loadExploration(const ParamReader& p);      ///< `exploration/*`
+semexp::BackgroundMapConfig loadBackgroundMap(const ParamReader& p);  ///< `background_map/*`
+semexp::ObjectMapConfig loadObjectMap(const ParamReader& p);          ///< `object_map/*`
+semexp::MatchingConfig loadMatching(const ParamReader& p);            ///< `matching/*`
+semexp::DepthHistoryConfig loadDepthHistory(const ParamReader& p);    ///< `depth_history/*`
+semexp::PlannerConfig loadPlanner(const ParamReader& p);              ///< `planner/*`
+FrameNames loadFrames(const ParamReader& p);                          ///< `frames/*`
+
+}  // namespace semexp_ros

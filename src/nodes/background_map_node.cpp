@@ -1,0 +1,8 @@
+// background_map: see README (nodes table) and include/semantic_exploration/ros/background_map_node.hpp.
+#include "semantic_exploration/ros/background_map_node.hpp"
+#include "semantic_exploration/ros/node_common.hpp"
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "background_map");
+  return semexp_ros::runNode<semexp_ros::BackgroundMapNode>("background_map");
+}

@@ -1,0 +1,129 @@
+#include "semantic_exploration/ros/node_common.hpp"
+
+#include <sensor_msgs/image_encodings.h>
+
+#include <cmath>
+#include <cstring>
+#include <opencv2/imgproc.hpp>
+
+namespace semexp_ros {
+
+namespace enc = sensor_msgs::image_encodings;
+
+namespace {
+
+// Rejects images whose buffer cannot hold height * step bytes or whose step
+// is shorter than a row: such messages would read out of bounds.
+std::string checkLayout(const sensor_msgs::Image& msg, int bytes_per_pixel) {
+  if (msg.width == 0 || msg.height == 0) return "empty image";
+  if (msg.step < msg.width * static_cast<uint32_t>(bytes_per_pixel))
+    return "step " + std::to_string(msg.step) + " shorter than a row of " + std::to_string(msg.width) + " px";
+  if (msg.data.size() < static_cast<size_t>(msg.step) * msg.height)
+    return "data holds " + std::to_string(msg.data.size()) + " bytes, expected " +
+           std::to_string(static_cast<size_t>(msg.step) * msg.height);
+  if (msg.is_bigendian) return "big-endian images are not supported";
+  return "";
+}
+
+}  // namespace
+
+std::string depthToMeters(const sensor_msgs::Image& msg, cv::Mat& depth_m) {
+  if (msg.encoding == enc::TYPE_32FC1) {
+    if (auto err = checkLayout(msg, 4); !err.empty()) return err;
+    const cv::Mat view(msg.height, msg.width, CV_32FC1, const_cast<uint8_t*>(msg.data.data()), msg.step);
+    view.copyTo(depth_m);
+    return "";
+  }
+  if (msg.encoding == enc::TYPE_16UC1 || msg.encoding == enc::MONO16) {
+    if (auto err = checkLayout(msg, 2); !err.empty()) return err;
+    const cv::Mat view(msg.height, msg.width, CV_16UC1, const_cast<uint8_t*>(msg.data.data()), msg.step);
+    view.convertTo(depth_m, CV_32FC1, 1e-3);  // millimetres -> metres; 0 stays 0 (invalid)
+    return "";
+  }
+  return "unsupported depth encoding '" + msg.encoding + "' (expected 32FC1 in m or 16UC1 in mm)";
+}
+
+std::string colourToRgb(const sensor_msgs::Image& msg, cv::Mat& rgb) {
+  struct Fmt { const char* name; int type; int bpp; int code; };
+  static const Fmt fmts[] = {
+      {"rgb8", CV_8UC3, 3, -1},
+      {"bgr8", CV_8UC3, 3, cv::COLOR_BGR2RGB},
+      {"rgba8", CV_8UC4, 4, cv::COLOR_RGBA2RGB},
+      {"bgra8", CV_8UC4, 4, cv::COLOR_BGRA2RGB},
+      {"mono8", CV_8UC1, 1, cv::COLOR_GRAY2RGB},
+  };
+  for (const auto& f : fmts) {
+    if (msg.encoding != f.name) continue;
+    if (auto err = checkLayout(msg, f.bpp); !err.empty()) return err;
+    const cv::Mat view(msg.height, msg.width, f.type, const_cast<uint8_t*>(msg.data.data()), msg.step);
+    if (f.code < 0)
+      view.copyTo(rgb);
+    else
+      cv::cvtColor(view, rgb, f.code);
+    return "";
+  }
+  return "unsupported colour encoding '" + msg.encoding + "' (expected rgb8, bgr8, rgba8, bgra8 or mono8)";
+}
+
+std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, double d_max_m,
+                           semexp::PinholeCamera& camera) {
+  semexp::PinholeCamera c;
+  c.width = static_cast<int>(info.width);
+  c.height = static_cast<int>(info.height);
+  c.fx = info.K[0];
+  c.fy = info.K[4];
+  c.cx = info.K[2];
+  c.cy = info.K[5];
+  c.d_min_m = d_min_m;
+  c.d_max_m = d_max_m;
+  try {
+    c.validate("camera_info/");
+  } catch (const semexp::ConfigError& e) {
+    return e.what();
+  }
+  camera = c;
+  return "";
+}
+
+std::string lookupPose(const tf2_ros::Buffer& tf, const std::string& target, const std::string& source,
+                       const ros::Time& stamp, double timeout_s, Eigen::Isometry3d& T) {
+  std::string err;
+  if (!tf.canTransform(target, source, stamp, ros::Duration(timeout_s), &err))
+    return err.empty() ? "no transform " + target + " <- " + source : err;
+  try {
+    const auto t = tf.lookupTransform(target, source, stamp);
+    const auto& q = t.transform.rotation;
+    const auto& p = t.transform.translation;
+    T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized().toRotationMatrix();
+    T.translation() = Eigen::Vector3d(p.x, p.y, p.z);
+    if (!T.matrix().allFinite()) return "transform " + target + " <- " + source + " is not finite";
+    return "";
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+}
+
+void DropCounter::drop(const std::string& reason, const std::string& detail) {
+  ++counts_[reason];
+  const auto now = ros::WallTime::now();
+  auto it = last_log_.find(reason);
+  if (it == last_log_.end() || (now - it->second).toSec() >= period_s_) {
+    ROS_WARN("dropped input (%s, %lu so far): %s", reason.c_str(), static_cast<unsigned long>(counts_[reason]),
+             detail.c_str());
+    last_log_[reason] = now;
+  }
+}
+
+uint64_t DropCounter::count(const std::string& reason) const {
+  const auto it = counts_.find(reason);
+  return it == counts_.end() ? 0 : it->second;
+}
+
+uint64_t DropCounter::total() const {
+  uint64_t n = 0;
+  for (const auto& kv : counts_) n += kv.second;
+  return n;
+}
+
+}  // namespace semexp_ros

@@ -1,0 +1,251 @@
+#include "semantic_exploration/ros/params.hpp"
+
+#include <ros/node_handle.h>
+
+#include <cmath>
+#include <sstream>
+
+namespace semexp_ros {
+
+using semexp::ConfigError;
+using XmlRpc::XmlRpcValue;
+
+namespace {
+
+const char* typeName(const XmlRpcValue& v) {
+  switch (v.getType()) {
+    case XmlRpcValue::TypeBoolean: return "bool";
+    case XmlRpcValue::TypeInt: return "int";
+    case XmlRpcValue::TypeDouble: return "double";
+    case XmlRpcValue::TypeString: return "string";
+    case XmlRpcValue::TypeArray: return "list";
+    case XmlRpcValue::TypeStruct: return "map";
+    default: return "unset";
+  }
+}
+
+[[noreturn]] void wrongType(const std::string& path, const XmlRpcValue& v, const char* want) {
+  throw ConfigError(path, std::string("must be ") + want + ", got " + typeName(v));
+}
+
+double asDouble(const std::string& path, const XmlRpcValue& v) {
+  XmlRpcValue& m = const_cast<XmlRpcValue&>(v);  // XmlRpc's conversion operators are non-const
+  if (v.getType() == XmlRpcValue::TypeDouble) return static_cast<double>(m);
+  if (v.getType() == XmlRpcValue::TypeInt) return static_cast<int>(m);
+  wrongType(path, v, "a number");
+}
+
+}  // namespace
+
+ParamReader ParamReader::fromNodeHandle(const ros::NodeHandle& pnh) {
+  XmlRpcValue root;
+  if (!pnh.getParam(pnh.getNamespace(), root) || root.getType() != XmlRpcValue::TypeStruct) root = XmlRpcValue();
+  return ParamReader(root);
+}
+
+const XmlRpcValue* ParamReader::find(const std::string& path) const {
+  const XmlRpcValue* cur = &root_;
+  std::stringstream ss(path);
+  std::string key;
+  while (std::getline(ss, key, '/')) {
+    if (key.empty()) continue;
+    if (cur->getType() != XmlRpcValue::TypeStruct) return nullptr;
+    XmlRpcValue& m = const_cast<XmlRpcValue&>(*cur);
+    if (!m.hasMember(key)) return nullptr;
+    cur = &m[key];
+  }
+  return cur;
+}
+
+bool ParamReader::has(const std::string& path) const { return find(path) != nullptr; }
+
+void ParamReader::get(const std::string& path, double& out) const {
+  if (const auto* v = find(path)) out = asDouble(path, *v);
+}
+
+void ParamReader::get(const std::string& path, int& out) const {
+  const auto* v = find(path);
+  if (!v) return;
+  if (v->getType() != XmlRpcValue::TypeInt) wrongType(path, *v, "an integer");
+  out = static_cast<int>(const_cast<XmlRpcValue&>(*v));
+}
+
+void ParamReader::get(const std::string& path, bool& out) const {
+  const auto* v = find(path);
+  if (!v) return;
+  if (v->getType() != XmlRpcValue::TypeBoolean) wrongType(path, *v, "true or false");
+  out = static_cast<bool>(const_cast<XmlRpcValue&>(*v));
+}
+
+void ParamReader::get(const std::string& path, std::string& out) const {
+  const auto* v = find(path);
+  if (!v) return;
+  if (v->getType() != XmlRpcValue::TypeString) wrongType(path, *v, "a string");
+  out = static_cast<std::string>(const_cast<XmlRpcValue&>(*v));
+}
+
+void ParamReader::get(const std::string& path, std::vector<std::string>& out) const {
+  const auto* v = find(path);
+  if (!v) return;
+  if (v->getType() != XmlRpcValue::TypeArray) wrongType(path, *v, "a list of strings");
+  XmlRpcValue& m = const_cast<XmlRpcValue&>(*v);
+  std::vector<std::string> r;
+  for (int i = 0; i < m.size(); ++i) {
+    if (m[i].getType() != XmlRpcValue::TypeString) wrongType(path, m[i], "a list of strings");
+    r.push_back(static_cast<std::string>(m[i]));
+  }
+  out = r;
+}
+
+void ParamReader::get(const std::string& path, std::vector<double>& out) const {
+  const auto* v = find(path);
+  if (!v) return;
+  if (v->getType() != XmlRpcValue::TypeArray) wrongType(path, *v, "a list of numbers");
+  XmlRpcValue& m = const_cast<XmlRpcValue&>(*v);
+  std::vector<double> r;
+  for (int i = 0; i < m.size(); ++i) r.push_back(asDouble(path, m[i]));
+  out = r;
+}
+
+namespace {
+
+Eigen::Vector3d getVec3(const ParamReader& p, const std::string& path, const Eigen::Vector3d& def) {
+  std::vector<double> v;
+  p.get(path, v);
+  if (v.empty()) return def;
+  if (v.size() != 3) throw ConfigError(path, "must be a list of 3 numbers [x, y, z]");
+  return {v[0], v[1], v[2]};
+}
+
+}  // namespace
+
+semexp::PinholeCamera loadCamera(const ParamReader& p) {
+  semexp::PinholeCamera c;
+  p.require("camera/width", c.width);
+  p.require("camera/height", c.height);
+  p.require("camera/fx", c.fx);
+  p.require("camera/fy", c.fy);
+  p.require("camera/cx", c.cx);
+  p.require("camera/cy", c.cy);
+  p.get("camera/d_min_m", c.d_min_m);
+  p.get("camera/d_max_m", c.d_max_m);
+  c.validate("camera/");
+  return c;
+}
+
+semexp::Bounds loadBounds(const ParamReader& p) {
+  semexp::Bounds b;
+  b.min_m = getVec3(p, "bounds/min_m", b.min_m);
+  b.max_m = getVec3(p, "bounds/max_m", b.max_m);
+  b.validate("bounds/");
+  return b;
+}
+
+semexp::ClassTable loadClasses(const ParamReader& p) {
+  semexp::ClassTable t;
+  p.get("classes/names", t.names);
+  p.get("classes/of_interest", t.of_interest);
+  p.get("classes/default_resolution_m", t.default_resolution_m);
+  if (const auto* v = p.find("classes/resolution_m")) {
+    if (v->getType() != XmlRpcValue::TypeStruct)
+      throw ConfigError("classes/resolution_m", "must be a map class name -> resolution in m");
+    t.resolution_m.clear();
+    XmlRpcValue& m = const_cast<XmlRpcValue&>(*v);
+    for (auto it = m.begin(); it != m.end(); ++it) {
+      double r = 0;
+      p.get("classes/resolution_m/" + it->first, r);
+      t.resolution_m[it->first] = r;
+    }
+  }
+  t.validate("classes/");
+  return t;
+}
+
+semexp::ExplorationConfig loadExploration(const ParamReader& p) {
+  semexp::ExplorationConfig c;
+  p.get("exploration/d_bg_m", c.d_bg_m);
+  p.get("exploration/d_obj_m", c.d_obj_m);
+  c.validate("exploration/");
+  return c;
+}
+
+semexp::BackgroundMapConfig loadBackgroundMap(const ParamReader& p) {
+  semexp::BackgroundMapConfig c;
+  const std::string n = "background_map/";
+  p.get(n + "resolution_m", c.resolution_m);
+  p.get(n + "block_size", c.block_size);
+  p.get(n + "log_odds_free", c.log_odds_free);
+  p.get(n + "log_odds_occupied", c.log_odds_occupied);
+  p.get(n + "log_odds_min", c.log_odds_min);
+  p.get(n + "log_odds_max", c.log_odds_max);
+  p.get(n + "surface_band_m", c.surface_band_m);
+  p.get(n + "integrate_colour", c.integrate_colour);
+  p.get(n + "publish_period_s", c.publish_period_s);
+  c.validate(n);
+  return c;
+}
+
+semexp::ObjectMapConfig loadObjectMap(const ParamReader& p) {
+  semexp::ObjectMapConfig c;
+  const std::string n = "object_map/";
+  p.get(n + "truncation_voxels", c.truncation_voxels);
+  p.get(n + "max_weight", c.max_weight);
+  p.get(n + "block_size", c.block_size);
+  p.get(n + "publish_period_s", c.publish_period_s);
+  c.validate(n);
+  return c;
+}
+
+semexp::MatchingConfig loadMatching(const ParamReader& p) {
+  semexp::MatchingConfig c;
+  p.get("matching/iou_threshold", c.iou_threshold);
+  p.get("matching/min_mask_pixels", c.min_mask_pixels);
+  c.validate("matching/");
+  return c;
+}
+
+semexp::DepthHistoryConfig loadDepthHistory(const ParamReader& p) {
+  semexp::DepthHistoryConfig c;
+  p.get("depth_history/cell_size_m", c.cell_size_m);
+  p.get("depth_history/width", c.width);
+  p.get("depth_history/height", c.height);
+  c.validate("depth_history/");
+  return c;
+}
+
+semexp::PlannerConfig loadPlanner(const ParamReader& p) {
+  semexp::PlannerConfig c;
+  const std::string n = "planner/";
+  p.get(n + "n_candidates", c.n_candidates);
+  p.get(n + "p_frontier", c.p_frontier);
+  p.get(n + "a_ent", c.a_ent);
+  p.get(n + "a_bg", c.a_bg);
+  p.get(n + "a_obj", c.a_obj);
+  p.get(n + "v_max_mps", c.v_max_mps);
+  p.get(n + "omega_max_radps", c.omega_max_radps);
+  p.get(n + "mav_radius_m", c.mav_radius_m);
+  p.get(n + "raycast_width", c.raycast_width);
+  p.get(n + "raycast_height", c.raycast_height);
+  p.get(n + "time_budget_s", c.time_budget_s);
+  p.get(n + "time_limit_s", c.time_limit_s);
+  p.get(n + "max_failed_iterations", c.max_failed_iterations);
+  int seed = static_cast<int>(c.seed);
+  p.get(n + "seed", seed);
+  if (seed < 0) throw ConfigError(n + "seed", "must be >= 0");
+  c.seed = static_cast<std::uint32_t>(seed);
+  c.validate(n);
+  return c;
+}
+
+FrameNames loadFrames(const ParamReader& p) {
+  FrameNames f;
+  p.get("frames/world", f.world);
+  p.get("frames/body", f.body);
+  p.get("frames/camera", f.camera);
+  if (f.world.empty()) throw ConfigError("frames/world", "must not be empty");
+  if (f.body.empty()) throw ConfigError("frames/body", "must not be empty");
+  if (f.camera.empty()) throw ConfigError("frames/camera", "must not be empty");
+  return f;
+}
+
+}  // namespace semexp_ros

@@ -1,0 +1,140 @@
+// Every Config::validate() accepts the paper's defaults and rejects bad values
+// naming the parameter.
+#include <gtest/gtest.h>
+
+#include "semantic_exploration/core/background_map_config.hpp"
+#include "semantic_exploration/core/bounds.hpp"
+#include "semantic_exploration/core/camera.hpp"
+#include "semantic_exploration/core/class_table.hpp"
+#include "semantic_exploration/core/exploration_config.hpp"
+#include "semantic_exploration/core/object_map_config.hpp"
+#include "semantic_exploration/core/planner_config.hpp"
+
+using namespace semexp;
+
+// Runs `fn` and returns the parameter named by the ConfigError it throws ("" if none).
+template <typename Fn>
+std::string rejected(Fn fn) {
+  try {
+    fn();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(e.parameter()), std::string::npos) << "message must name the parameter";
+    return e.parameter();
+  }
+  return "";
+}
+
+TEST(Config, DefaultsAreValidAndMatchTableI) {
+  PinholeCamera cam;
+  EXPECT_EQ(rejected([&] { cam.validate(); }), "");
+  EXPECT_EQ(cam.width, 320);
+  EXPECT_EQ(cam.height, 240);
+  EXPECT_DOUBLE_EQ(cam.fx, 262.5);
+  EXPECT_DOUBLE_EQ(cam.d_min_m, 0.1);
+  EXPECT_DOUBLE_EQ(cam.d_max_m, 10.0);
+  BackgroundMapConfig bg;
+  EXPECT_EQ(rejected([&] { bg.validate(); }), "");
+  EXPECT_DOUBLE_EQ(bg.resolution_m, 0.04);
+  PlannerConfig pl;
+  EXPECT_EQ(rejected([&] { pl.validate(); }), "");
+  EXPECT_EQ(pl.n_candidates, 20);
+  EXPECT_DOUBLE_EQ(pl.p_frontier, 0.5);
+  EXPECT_DOUBLE_EQ(pl.v_max_mps, 1.5);
+  EXPECT_DOUBLE_EQ(pl.omega_max_radps, 0.75);
+  EXPECT_DOUBLE_EQ(pl.mav_radius_m, 0.125);
+  EXPECT_EQ(pl.raycast_width, 36);
+  EXPECT_EQ(pl.raycast_height, 10);
+  ExplorationConfig ex;
+  EXPECT_EQ(rejected([&] { ex.validate(); }), "");
+  EXPECT_DOUBLE_EQ(ex.d_bg_m, 3.0);
+  EXPECT_DOUBLE_EQ(ex.d_obj_m, 1.0);
+  ClassTable ct;
+  EXPECT_EQ(rejected([&] { ct.validate(); }), "");
+  EXPECT_DOUBLE_EQ(ct.resolution(ct.id("chair")), 0.02);
+  EXPECT_EQ(rejected([] { ObjectMapConfig().validate(); }), "");
+  EXPECT_EQ(rejected([] { MatchingConfig().validate(); }), "");
+  EXPECT_EQ(rejected([] { DepthHistoryConfig().validate(); }), "");
+  EXPECT_EQ(rejected([] { Bounds().validate(); }), "");
+}
+
+TEST(Config, NegativeResolutionIsRejected) {
+  BackgroundMapConfig bg;
+  bg.resolution_m = -0.04;
+  EXPECT_EQ(rejected([&] { bg.validate(); }), "background_map/resolution_m");
+  ClassTable ct;
+  ct.resolution_m["chair"] = -0.02;
+  EXPECT_EQ(rejected([&] { ct.validate(); }), "classes/resolution_m");
+}
+
+TEST(Config, WeightsMustSumToOne) {
+  PlannerConfig pl;
+  pl.a_ent = 0.5;  // 0.5 + 0.33 + 0.33 = 1.16
+  EXPECT_EQ(rejected([&] { pl.validate(); }), "planner/a_ent");
+  pl.a_ent = 1.0;
+  pl.a_bg = pl.a_obj = 0.0;  // classic mode
+  EXPECT_EQ(rejected([&] { pl.validate(); }), "");
+}
+
+TEST(Config, ObjectDistanceMustBeBelowBackgroundDistance) {
+  ExplorationConfig ex;
+  ex.d_obj_m = 3.0;
+  EXPECT_EQ(rejected([&] { ex.validate(); }), "exploration/d_obj_m");
+  ex.d_obj_m = 4.0;
+  EXPECT_EQ(rejected([&] { ex.validate(); }), "exploration/d_obj_m");
+}
+
+TEST(Config, UnknownClassIsRejected) {
+  ClassTable ct;
+  ct.of_interest = {"chair", "unicorn"};
+  EXPECT_EQ(rejected([&] { ct.validate(); }), "classes/of_interest");
+  ct.of_interest = {"chair"};
+  ct.resolution_m["dragon"] = 0.02;
+  EXPECT_EQ(rejected([&] { ct.validate(); }), "classes/resolution_m");
+}
+
+TEST(Config, MissingOrBadIntrinsicsAreRejected) {
+  PinholeCamera cam;
+  cam.fx = 0;  // what an unset intrinsic reads as
+  EXPECT_EQ(rejected([&] { cam.validate(); }), "camera/fx");
+  cam = PinholeCamera();
+  cam.width = 0;
+  EXPECT_EQ(rejected([&] { cam.validate(); }), "camera/width");
+  cam = PinholeCamera();
+  cam.cy = 500;
+  EXPECT_EQ(rejected([&] { cam.validate(); }), "camera/cy");
+  cam = PinholeCamera();
+  cam.d_max_m = 0.05;
+  EXPECT_EQ(rejected([&] { cam.validate(); }), "camera/d_max_m");
+}
+
+TEST(Config, OtherBadValues) {
+  PlannerConfig pl;
+  pl.p_frontier = 1.5;
+  EXPECT_EQ(rejected([&] { pl.validate(); }), "planner/p_frontier");
+  BackgroundMapConfig bg;
+  bg.block_size = 6;
+  EXPECT_EQ(rejected([&] { bg.validate(); }), "background_map/block_size");
+  MatchingConfig m;
+  m.iou_threshold = 0;
+  EXPECT_EQ(rejected([&] { m.validate(); }), "matching/iou_threshold");
+  Bounds b;
+  b.max_m.z() = b.min_m.z();
+  EXPECT_EQ(rejected([&] { b.validate(); }), "bounds/max_m");
+}
+
+TEST(ClassTable, IdsAreOneBasedAndResolutionFallsBack) {
+  ClassTable ct;
+  ct.names = {"chair", "table"};
+  ct.resolution_m = {{"chair", 0.02}};
+  ct.default_resolution_m = 0.05;
+  EXPECT_EQ(ct.id("chair"), 1);
+  EXPECT_EQ(ct.id("table"), 2);
+  EXPECT_EQ(ct.id("sofa"), 0);
+  EXPECT_EQ(ct.name(2), "table");
+  EXPECT_EQ(ct.name(0), "");
+  EXPECT_EQ(ct.name(3), "");
+  EXPECT_TRUE(ct.isOfInterest(1));
+  EXPECT_FALSE(ct.isOfInterest(2));
+  EXPECT_DOUBLE_EQ(ct.resolution(1), 0.02);
+  EXPECT_DOUBLE_EQ(ct.resolution(2), 0.05);
+}

@@ -1,0 +1,101 @@
+// ROS parameter trees -> Config structs: types, required values, validation,
+// all reported with the parameter's name.
+#include <gtest/gtest.h>
+
+#include "semantic_exploration/ros/params.hpp"
+
+using semexp::ConfigError;
+using semexp_ros::ParamReader;
+using XmlRpc::XmlRpcValue;
+
+namespace {
+
+XmlRpcValue cameraTree() {
+  XmlRpcValue root;
+  root["camera"]["width"] = 320;
+  root["camera"]["height"] = 240;
+  root["camera"]["fx"] = 262.5;
+  root["camera"]["fy"] = 262.5;
+  root["camera"]["cx"] = 159.5;
+  root["camera"]["cy"] = 119.5;
+  return root;
+}
+
+template <typename Fn>
+std::string rejected(Fn fn) {
+  try {
+    fn();
+  } catch (const ConfigError& e) {
+    return e.parameter();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Params, CameraLoadsAndIntegerFocalLengthIsANumber) {
+  XmlRpcValue root = cameraTree();
+  root["camera"]["fx"] = 300;  // an int where a double is expected is fine
+  root["camera"]["d_max_m"] = 5.0;
+  const auto cam = semexp_ros::loadCamera(ParamReader(root));
+  EXPECT_DOUBLE_EQ(cam.fx, 300.0);
+  EXPECT_DOUBLE_EQ(cam.d_max_m, 5.0);
+  EXPECT_DOUBLE_EQ(cam.d_min_m, 0.1);  // default kept
+}
+
+TEST(Params, MissingIntrinsicsNameTheParameter) {
+  XmlRpcValue root = cameraTree();
+  root["camera"].clear();
+  root["camera"]["width"] = 320;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadCamera(ParamReader(root)); }), "camera/height");
+  XmlRpcValue empty;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadCamera(ParamReader(empty)); }), "camera/width");
+}
+
+TEST(Params, WrongTypeNamesTheParameter) {
+  XmlRpcValue root = cameraTree();
+  root["camera"]["fx"] = std::string("fast");
+  EXPECT_EQ(rejected([&] { semexp_ros::loadCamera(ParamReader(root)); }), "camera/fx");
+  XmlRpcValue p;
+  p["planner"]["n_candidates"] = 2.5;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadPlanner(ParamReader(p)); }), "planner/n_candidates");
+}
+
+TEST(Params, ValidationRunsOnLoadedValues) {
+  XmlRpcValue p;
+  p["background_map"]["resolution_m"] = -0.04;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadBackgroundMap(ParamReader(p)); }), "background_map/resolution_m");
+  XmlRpcValue w;
+  w["planner"]["a_ent"] = 0.5;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadPlanner(ParamReader(w)); }), "planner/a_ent");
+  XmlRpcValue e;
+  e["exploration"]["d_obj_m"] = 3.5;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadExploration(ParamReader(e)); }), "exploration/d_obj_m");
+  XmlRpcValue c;
+  c["classes"]["of_interest"][0] = std::string("unicorn");
+  EXPECT_EQ(rejected([&] { semexp_ros::loadClasses(ParamReader(c)); }), "classes/of_interest");
+}
+
+TEST(Params, ClassResolutionMapAndBounds) {
+  XmlRpcValue p;
+  p["classes"]["of_interest"][0] = std::string("chair");
+  p["classes"]["of_interest"][1] = std::string("backpack");
+  p["classes"]["resolution_m"]["backpack"] = 0.01;
+  p["bounds"]["min_m"][0] = -1;
+  p["bounds"]["min_m"][1] = -2.0;
+  p["bounds"]["min_m"][2] = 0;
+  p["bounds"]["max_m"][0] = 1;
+  p["bounds"]["max_m"][1] = 2.0;
+  p["bounds"]["max_m"][2] = 3;
+  const ParamReader r(p);
+  const auto t = semexp_ros::loadClasses(r);
+  EXPECT_TRUE(t.isOfInterest(t.id("backpack")));
+  EXPECT_DOUBLE_EQ(t.resolution(t.id("backpack")), 0.01);
+  EXPECT_DOUBLE_EQ(t.resolution(t.id("chair")), t.default_resolution_m);  // map replaced as a whole
+  const auto b = semexp_ros::loadBounds(r);
+  EXPECT_DOUBLE_EQ(b.min_m.y(), -2.0);
+  EXPECT_DOUBLE_EQ(b.max_m.z(), 3.0);
+  XmlRpcValue bad;
+  bad["bounds"]["min_m"][0] = 1.0;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadBounds(ParamReader(bad)); }), "bounds/min_m");
+}
