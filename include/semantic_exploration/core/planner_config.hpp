@@ -37,6 +37,12 @@ struct PlannerConfig {
   double time_limit_s = 600.0;      ///< exploration time limit (sim time), s; 0 = none
   int max_failed_iterations = 5;    ///< stop after this many iterations without a reachable candidate
   std::uint32_t seed = 1;           ///< random seed of the sampler
+  double object_observed_fraction = 0.9;  ///< an object counts as observed from <= d_obj at this ObjectInfo observed_fraction, [0, 1]
+  double object_standoff_factor = 0.5;    ///< object view points lie this times d_obj outside the object's bounding box
+  double min_path_time_s = 0.1;           ///< floor of the path time in u = g / t, s (a view at the current pose stays finite)
+  double cost_threshold_factor = 1.05;    ///< a solve stops once its path is within this factor of the straight-line distance
+  double simplify_time_s = 0.02;          ///< time for path simplification per candidate, s
+  int planning_threads = 0;               ///< threads planning candidates in parallel; 0 = all hardware threads
 
   void validate(const std::string& ns = "planner/") const {
     require(n_candidates > 0, ns + "n_candidates", "must be > 0");
@@ -54,6 +60,15 @@ struct PlannerConfig {
     require(std::isfinite(time_budget_s) && time_budget_s > 0, ns + "time_budget_s", "must be > 0 s");
     require(std::isfinite(time_limit_s) && time_limit_s >= 0, ns + "time_limit_s", "must be >= 0 s");
     require(max_failed_iterations > 0, ns + "max_failed_iterations", "must be > 0");
+    require(std::isfinite(object_observed_fraction) && object_observed_fraction >= 0 && object_observed_fraction <= 1,
+            ns + "object_observed_fraction", "must be in [0, 1]");
+    require(std::isfinite(object_standoff_factor) && object_standoff_factor >= 0, ns + "object_standoff_factor",
+            "must be >= 0");
+    require(std::isfinite(min_path_time_s) && min_path_time_s > 0, ns + "min_path_time_s", "must be > 0 s");
+    require(std::isfinite(cost_threshold_factor) && cost_threshold_factor >= 1, ns + "cost_threshold_factor",
+            "must be >= 1");
+    require(std::isfinite(simplify_time_s) && simplify_time_s >= 0, ns + "simplify_time_s", "must be >= 0 s");
+    require(planning_threads >= 0, ns + "planning_threads", "must be >= 0 (0 = all hardware threads)");
   }
 };
 

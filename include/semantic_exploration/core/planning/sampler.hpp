@@ -1,0 +1,67 @@
+#pragma once
+/// @file sampler.hpp
+/// Candidate next positions (paper Section IV-D.1, DESIGN Section 5 step 1).
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "semantic_exploration/core/bounds.hpp"
+#include "semantic_exploration/core/exploration_config.hpp"
+#include "semantic_exploration/core/planner_config.hpp"
+#include "semantic_exploration/core/planning/interfaces.hpp"
+
+namespace semexp {
+
+/// Where a candidate came from (values as CandidateView.msg's SOURCE_*).
+enum class CandidateSource : std::uint8_t { kFrontier = 0, kObject = 1 };
+
+struct CandidateSample {
+  Eigen::Vector3d position_W = Eigen::Vector3d::Zero();  ///< sampled position, m
+  CandidateSource source = CandidateSource::kFrontier;
+  std::uint32_t object_id = 0;  ///< object the sample was taken near (kObject), else 0
+};
+
+/// Samples up to n candidates without replacement: each draw takes a frontier
+/// with probability P_fr, else an object not yet observed from <= d_obj. A
+/// source with zero probability is never used; when the other source is
+/// exhausted the remaining one is drawn from until n or nothing is left.
+///
+/// A frontier candidate is the frontier voxel's centre itself (the path
+/// planner then gets as close as the free space allows). An object candidate
+/// is a view point beside the object: from its centroid along a random
+/// horizontal direction to where that ray leaves the bounding box, plus a
+/// standoff of object_standoff_factor * d_obj, at the centroid's height, so
+/// that the surface facing the view point is seen from about half d_obj. Up
+/// to 8 directions (45 degrees apart, from a random start) are tried for one
+/// whose sphere of radius R is free; if none is, the first is kept and the
+/// planner reaches as close to it as it can. Positions are clamped into the
+/// bounds shrunk by R. The random engine is seeded once, so a run is
+/// reproducible given the same inputs.
+class CandidateSampler {
+ public:
+  CandidateSampler(const PlannerConfig& planner, const ExplorationConfig& exploration, const Bounds& bounds);
+
+  /// is_free may be empty (then object view points are not checked).
+  std::vector<CandidateSample> sample(const std::vector<Eigen::Vector3d>& frontiers_W,
+                                      const std::vector<ObjectSummary>& objects, const CollisionQuery& is_free);
+
+  /// True if the object still needs a closer observation.
+  bool needs_observation(const ObjectSummary& object) const {
+    return object.observed_fraction < planner_.object_observed_fraction;
+  }
+
+  /// The view point next to `object` along horizontal direction yaw_rad.
+  Eigen::Vector3d object_view_point(const ObjectSummary& object, double yaw_rad) const;
+
+ private:
+  Eigen::Vector3d clamp_to_bounds(const Eigen::Vector3d& p_W) const;
+
+  PlannerConfig planner_;
+  ExplorationConfig exploration_;
+  Bounds bounds_;
+  std::mt19937 rng_;
+};
+
+}  // namespace semexp

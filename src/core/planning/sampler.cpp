@@ -1,0 +1,92 @@
+#include "semantic_exploration/core/planning/sampler.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace semexp {
+
+CandidateSampler::CandidateSampler(const PlannerConfig& planner, const ExplorationConfig& exploration,
+                                   const Bounds& bounds)
+    : planner_(planner), exploration_(exploration), bounds_(bounds), rng_(planner.seed) {
+  planner_.validate();
+  exploration_.validate();
+  bounds_.validate();
+}
+
+Eigen::Vector3d CandidateSampler::clamp_to_bounds(const Eigen::Vector3d& p) const {
+  Eigen::Vector3d out;
+  for (int i = 0; i < 3; ++i) {
+    double lo = bounds_.min_m[i] + planner_.mav_radius_m, hi = bounds_.max_m[i] - planner_.mav_radius_m;
+    if (lo > hi) lo = hi = 0.5 * (bounds_.min_m[i] + bounds_.max_m[i]);
+    out[i] = std::clamp(p[i], lo, hi);
+  }
+  return out;
+}
+
+Eigen::Vector3d CandidateSampler::object_view_point(const ObjectSummary& o, double yaw) const {
+  const Eigen::Vector3d dir(std::cos(yaw), std::sin(yaw), 0.0);
+  // Distance from the centroid to where the horizontal ray leaves the box.
+  double t_exit = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 2; ++i) {
+    if (std::abs(dir[i]) < 1e-12) continue;
+    const double face = dir[i] > 0 ? o.bbox_max_W[i] : o.bbox_min_W[i];
+    t_exit = std::min(t_exit, std::max(0.0, (face - o.centroid_W[i]) / dir[i]));
+  }
+  if (!std::isfinite(t_exit)) t_exit = 0.0;
+  const double standoff = planner_.object_standoff_factor * exploration_.d_obj_m;
+  return clamp_to_bounds(o.centroid_W + (t_exit + standoff) * dir);
+}
+
+std::vector<CandidateSample> CandidateSampler::sample(const std::vector<Eigen::Vector3d>& frontiers_W,
+                                                      const std::vector<ObjectSummary>& objects,
+                                                      const CollisionQuery& is_free) {
+  std::vector<std::size_t> fr, ob;  // remaining indices (swap-and-pop = without replacement)
+  if (planner_.p_frontier > 0.0) {
+    fr.resize(frontiers_W.size());
+    for (std::size_t i = 0; i < fr.size(); ++i) fr[i] = i;
+  }
+  if (planner_.p_frontier < 1.0)
+    for (std::size_t i = 0; i < objects.size(); ++i)
+      if (needs_observation(objects[i])) ob.push_back(i);
+
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  auto take = [this](std::vector<std::size_t>& pool) {
+    std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
+    const std::size_t k = pick(rng_);
+    const std::size_t idx = pool[k];
+    pool[k] = pool.back();
+    pool.pop_back();
+    return idx;
+  };
+
+  std::vector<CandidateSample> out;
+  while (static_cast<int>(out.size()) < planner_.n_candidates && (!fr.empty() || !ob.empty())) {
+    // Draw the source first so that P_fr holds per draw while both remain.
+    const bool frontier = ob.empty() || (!fr.empty() && unit(rng_) < planner_.p_frontier);
+    CandidateSample s;
+    if (frontier) {
+      s.source = CandidateSource::kFrontier;
+      s.position_W = clamp_to_bounds(frontiers_W[take(fr)]);
+    } else {
+      const ObjectSummary& o = objects[take(ob)];
+      s.source = CandidateSource::kObject;
+      s.object_id = o.id;
+      const double yaw0 = unit(rng_) * 2.0 * M_PI;
+      s.position_W = object_view_point(o, yaw0);
+      if (is_free) {
+        for (int k = 0; k < 8; ++k) {
+          const Eigen::Vector3d p = object_view_point(o, yaw0 + k * M_PI / 4.0);
+          if (is_free(p, planner_.mav_radius_m)) {
+            s.position_W = p;
+            break;
+          }
+        }
+      }
+    }
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace semexp

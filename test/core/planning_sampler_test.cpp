@@ -1,0 +1,126 @@
+// Candidate sampling: P_fr over many draws (fixed seed), without replacement,
+// source fallback, object view points.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "semantic_exploration/core/planning/sampler.hpp"
+
+namespace semexp {
+namespace {
+
+struct SamplerTest : ::testing::Test {
+  PlannerConfig planner;
+  ExplorationConfig exploration;
+  Bounds bounds;
+  std::vector<Eigen::Vector3d> frontiers;
+  std::vector<ObjectSummary> objects;
+  SamplerTest() {
+    for (int i = 0; i < 400; ++i) frontiers.emplace_back(-5.0 + 0.025 * i, 1.0, 1.0);
+    for (int i = 0; i < 400; ++i) {
+      ObjectSummary o;
+      o.id = static_cast<std::uint32_t>(i + 1);
+      o.centroid_W = {-5.0 + 0.025 * i, -3.0, 0.5};
+      o.bbox_min_W = o.centroid_W - Eigen::Vector3d(0.25, 0.25, 0.5);
+      o.bbox_max_W = o.centroid_W + Eigen::Vector3d(0.25, 0.25, 0.5);
+      objects.push_back(o);
+    }
+  }
+  static int count_frontier(const std::vector<CandidateSample>& s) {
+    int n = 0;
+    for (const auto& c : s) n += c.source == CandidateSource::kFrontier;
+    return n;
+  }
+};
+
+// Both sources are far from exhausted, so every draw is a Bernoulli(P_fr)
+// trial: over N draws the frontier share must lie within 4 standard
+// deviations sqrt(P (1 - P) / N) of P_fr.
+TEST_F(SamplerTest, FrontierProbabilityRespected) {
+  for (double p : {0.5, 0.2, 0.8}) {
+    planner.p_frontier = p;
+    planner.n_candidates = 20;
+    CandidateSampler sampler(planner, exploration, bounds);
+    int fr = 0, total = 0;
+    for (int it = 0; it < 1000; ++it) {
+      const auto s = sampler.sample(frontiers, objects, {});
+      ASSERT_EQ(s.size(), 20u);
+      fr += count_frontier(s);
+      total += static_cast<int>(s.size());
+    }
+    const double share = static_cast<double>(fr) / total;
+    EXPECT_NEAR(share, p, 4.0 * std::sqrt(p * (1 - p) / total)) << "P_fr = " << p;
+  }
+}
+
+TEST_F(SamplerTest, FixedSeedIsReproducible) {
+  CandidateSampler a(planner, exploration, bounds), b(planner, exploration, bounds);
+  for (int it = 0; it < 5; ++it) {
+    const auto sa = a.sample(frontiers, objects, {});
+    const auto sb = b.sample(frontiers, objects, {});
+    ASSERT_EQ(sa.size(), sb.size());
+    for (std::size_t i = 0; i < sa.size(); ++i) EXPECT_TRUE(sa[i].position_W == sb[i].position_W);
+  }
+}
+
+TEST_F(SamplerTest, WithoutReplacementAndFallback) {
+  // 3 frontiers, 2 unobserved objects, 1 observed object, n = 20: all five
+  // usable ones exactly once, whatever P_fr.
+  std::vector<Eigen::Vector3d> f = {{0, 0, 1}, {1, 0, 1}, {2, 0, 1}};
+  std::vector<ObjectSummary> o(objects.begin(), objects.begin() + 3);
+  o[1].observed_fraction = 0.95;  // >= object_observed_fraction 0.9: done
+  planner.p_frontier = 0.5;
+  CandidateSampler sampler(planner, exploration, bounds);
+  const auto s = sampler.sample(f, o, {});
+  ASSERT_EQ(s.size(), 5u);
+  std::set<double> fx;
+  std::set<std::uint32_t> ids;
+  for (const auto& c : s) {
+    if (c.source == CandidateSource::kFrontier)
+      fx.insert(c.position_W.x());
+    else
+      ids.insert(c.object_id);
+  }
+  EXPECT_EQ(fx, (std::set<double>{0.0, 1.0, 2.0}));
+  EXPECT_EQ(ids, (std::set<std::uint32_t>{o[0].id, o[2].id}));
+}
+
+TEST_F(SamplerTest, ClassicModeNeverSamplesObjects) {
+  planner.p_frontier = 1.0;
+  planner.a_ent = 1.0;
+  planner.a_bg = planner.a_obj = 0.0;
+  CandidateSampler sampler(planner, exploration, bounds);
+  EXPECT_EQ(count_frontier(sampler.sample(frontiers, objects, {})), 20);
+  EXPECT_TRUE(sampler.sample({}, objects, {}).empty());
+  planner.p_frontier = 0.0;
+  CandidateSampler objects_only(planner, exploration, bounds);
+  EXPECT_EQ(count_frontier(objects_only.sample(frontiers, objects, {})), 0);
+}
+
+// Object (centroid (0, 0, 0.5), box +-0.25 m): looking from +x the box is
+// left at x = 0.25, plus the standoff 0.5 * d_obj = 0.5 m -> (0.75, 0, 0.5).
+// Diagonal (45 deg): the ray leaves through the corner at 0.25 sqrt(2).
+TEST_F(SamplerTest, ObjectViewPoints) {
+  CandidateSampler sampler(planner, exploration, bounds);
+  ObjectSummary o;
+  o.id = 7;
+  o.centroid_W = {0, 0, 0.5};
+  o.bbox_min_W = {-0.25, -0.25, 0.0};
+  o.bbox_max_W = {0.25, 0.25, 1.0};
+  EXPECT_TRUE(sampler.object_view_point(o, 0.0).isApprox(Eigen::Vector3d(0.75, 0.0, 0.5)));
+  const double d = 0.25 * std::sqrt(2.0) + 0.5;
+  EXPECT_TRUE(sampler.object_view_point(o, M_PI / 4).isApprox(Eigen::Vector3d(d / std::sqrt(2.0), d / std::sqrt(2.0), 0.5)));
+  // Only x < 0 is free: the sampler must pick a view point there.
+  CollisionQuery left_free = [](const Eigen::Vector3d& p, double r) { return p.x() + r < 0.0; };
+  for (int it = 0; it < 20; ++it) {
+    const auto s = sampler.sample({}, {o}, left_free);
+    ASSERT_EQ(s.size(), 1u);
+    EXPECT_EQ(s[0].object_id, 7u);
+    EXPECT_TRUE(left_free(s[0].position_W, planner.mav_radius_m)) << s[0].position_W.transpose();
+    EXPECT_NEAR(s[0].position_W.z(), 0.5, 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace semexp
