@@ -1,0 +1,231 @@
+"""Simulator settings with defaults from the paper's Table I, validated with the parameter's name."""
+
+import math
+from dataclasses import dataclass, field, fields, is_dataclass
+from typing import Any, Dict, List, Optional
+
+
+class ConfigError(ValueError):
+    """A setting is invalid; ``param`` names it."""
+
+    def __init__(self, param: str, why: str):
+        super().__init__("parameter '%s': %s" % (param, why))
+        self.param = param
+
+
+def _finite(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def _req(cond: bool, param: str, why: str) -> None:
+    if not cond:
+        raise ConfigError(param, why)
+
+
+@dataclass
+class CameraConfig:
+    width: int = 320                 # px
+    height: int = 240                # px
+    fx: float = 262.5                # px
+    fy: float = 262.5                # px
+    cx: Optional[float] = None       # px; None = (width - 1) / 2
+    cy: Optional[float] = None       # px; None = (height - 1) / 2
+    d_min_m: float = 0.1             # m; nearer returns are invalid (0)
+    d_max_m: float = 10.0            # m; farther returns are invalid (0)
+    rate_hz: float = 10.0            # frames per sim second
+    T_BC_xyz_m: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])  # camera in body, m
+    mount_rpy_rad: List[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])  # mount roll/pitch/yaw, rad
+
+    def validate(self, ns="camera/"):
+        _req(isinstance(self.width, int) and self.width > 0, ns + "width", "must be an integer > 0 px")
+        _req(isinstance(self.height, int) and self.height > 0, ns + "height", "must be an integer > 0 px")
+        _req(_finite(self.fx) and self.fx > 0, ns + "fx", "must be a finite focal length > 0 px")
+        _req(_finite(self.fy) and self.fy > 0, ns + "fy", "must be a finite focal length > 0 px")
+        if self.cx is None:
+            self.cx = (self.width - 1) / 2.0
+        if self.cy is None:
+            self.cy = (self.height - 1) / 2.0
+        _req(_finite(self.cx) and 0 <= self.cx < self.width, ns + "cx", "must lie inside the image")
+        _req(_finite(self.cy) and 0 <= self.cy < self.height, ns + "cy", "must lie inside the image")
+        _req(_finite(self.d_min_m) and self.d_min_m >= 0, ns + "d_min_m", "must be >= 0 m")
+        _req(_finite(self.d_max_m) and self.d_max_m > self.d_min_m, ns + "d_max_m", "must be > d_min_m")
+        _req(_finite(self.rate_hz) and self.rate_hz > 0, ns + "rate_hz", "must be > 0 Hz")
+        _req(isinstance(self.T_BC_xyz_m, list) and len(self.T_BC_xyz_m) == 3 and all(map(_finite, self.T_BC_xyz_m)),
+             ns + "T_BC_xyz_m", "must be 3 finite numbers (m)")
+        _req(isinstance(self.mount_rpy_rad, list) and len(self.mount_rpy_rad) == 3
+             and all(map(_finite, self.mount_rpy_rad)), ns + "mount_rpy_rad", "must be 3 finite numbers (rad)")
+
+
+@dataclass
+class NoiseConfig:
+    enabled: bool = True
+    sigma_min_m: float = 0.005       # m (Table I)
+    sigma_max_m: float = 0.2         # m (Table I)
+    s_per_m: float = 0.002           # 1/m; sigma = s d^2 (Table I)
+    seed: int = 1
+
+    def validate(self, ns="noise/"):
+        _req(_finite(self.sigma_min_m) and self.sigma_min_m >= 0, ns + "sigma_min_m", "must be >= 0 m")
+        _req(_finite(self.sigma_max_m) and self.sigma_max_m >= self.sigma_min_m, ns + "sigma_max_m",
+             "must be >= sigma_min_m")
+        _req(_finite(self.s_per_m) and self.s_per_m >= 0, ns + "s_per_m", "must be >= 0 1/m")
+        _req(isinstance(self.seed, int) and self.seed >= 0, ns + "seed", "must be an integer >= 0")
+
+
+@dataclass
+class DetectorConfig:
+    min_mask_pixels: int = 50        # px; smaller masks are missed
+    drop_fraction: float = 0.0       # probability that a detection is missed
+    bleed_probability: float = 0.0   # probability that a mask bleeds onto its neighbours
+    bleed_pixels: int = 3            # px; dilation of a bleeding mask
+    confidence_min: float = 0.6      # reported confidence range
+    confidence_max: float = 1.0
+    seed: int = 2
+
+    def validate(self, ns="detector/"):
+        _req(isinstance(self.min_mask_pixels, int) and self.min_mask_pixels >= 0, ns + "min_mask_pixels",
+             "must be an integer >= 0 px")
+        _req(_finite(self.drop_fraction) and 0 <= self.drop_fraction <= 1, ns + "drop_fraction", "must be in [0, 1]")
+        _req(_finite(self.bleed_probability) and 0 <= self.bleed_probability <= 1, ns + "bleed_probability",
+             "must be in [0, 1]")
+        _req(isinstance(self.bleed_pixels, int) and self.bleed_pixels >= 0, ns + "bleed_pixels",
+             "must be an integer >= 0 px")
+        _req(_finite(self.confidence_min) and 0 <= self.confidence_min <= 1, ns + "confidence_min", "must be in [0, 1]")
+        _req(_finite(self.confidence_max) and self.confidence_min <= self.confidence_max <= 1, ns + "confidence_max",
+             "must be in [confidence_min, 1]")
+        _req(isinstance(self.seed, int) and self.seed >= 0, ns + "seed", "must be an integer >= 0")
+
+
+@dataclass
+class MavConfig:
+    v_max_mps: float = 1.5           # m/s (Table I)
+    omega_max_radps: float = 0.75    # rad/s (Table I)
+    a_max_mps2: float = 1.0          # m/s^2
+    alpha_max_radps2: float = 1.0    # rad/s^2
+    radius_m: float = 0.125          # collision sphere R, m (Table I)
+    physics_rate_hz: float = 100.0   # Hz (sim time)
+    position_tolerance_m: float = 0.05   # goal reached when this close, m
+    yaw_tolerance_rad: float = 0.05      # and yaw this close, rad
+    speed_tolerance_mps: float = 0.05    # and this slow, m/s
+
+    def validate(self, ns="mav/"):
+        for name, unit in (("v_max_mps", "m/s"), ("omega_max_radps", "rad/s"), ("a_max_mps2", "m/s^2"),
+                           ("alpha_max_radps2", "rad/s^2"), ("radius_m", "m"), ("physics_rate_hz", "Hz"),
+                           ("position_tolerance_m", "m"), ("yaw_tolerance_rad", "rad"),
+                           ("speed_tolerance_mps", "m/s")):
+            v = getattr(self, name)
+            _req(_finite(v) and v > 0, ns + name, "must be a finite value > 0 %s" % unit)
+
+
+@dataclass
+class SceneConfig:
+    file: str = ""                   # scene mesh; "" = generate
+    labels: str = ""                 # .house / .json label table; "" = next to the mesh
+    up_axis: str = "z"               # "z" or "y" (glTF/Habitat y-up)
+    seed: int = 0                    # generator seed
+    size_m: List[float] = field(default_factory=lambda: [15.0, 12.0, 3.0])  # generated house x, y, z, m
+    non_returning: List[str] = field(default_factory=lambda: ["window", "mirror"])  # labels without depth
+    gt_dir: str = ""                 # export ground truth here at start ("" = no export)
+
+    def validate(self, ns="scene/"):
+        _req(isinstance(self.file, str), ns + "file", "must be a path string")
+        _req(self.up_axis in ("z", "y"), ns + "up_axis", "must be 'z' or 'y'")
+        _req(isinstance(self.seed, int) and self.seed >= 0, ns + "seed", "must be an integer >= 0")
+        _req(isinstance(self.size_m, list) and len(self.size_m) == 3 and all(map(_finite, self.size_m)),
+             ns + "size_m", "must be [x, y, z] in m")
+        _req(3.0 <= self.size_m[0] <= 40 and 3.0 <= self.size_m[1] <= 40 and 2.2 <= self.size_m[2] <= 6,
+             ns + "size_m", "must be within [3, 40] x [3, 40] x [2.2, 6] m")
+
+
+@dataclass
+class SimConfig:
+    camera: CameraConfig = field(default_factory=CameraConfig)
+    noise: NoiseConfig = field(default_factory=NoiseConfig)
+    detector: DetectorConfig = field(default_factory=DetectorConfig)
+    mav: MavConfig = field(default_factory=MavConfig)
+    scene: SceneConfig = field(default_factory=SceneConfig)
+    class_names: List[str] = field(default_factory=lambda: ["chair", "table", "sofa", "bed", "cabinet", "plant",
+                                                             "tv_monitor", "backpack", "keyboard", "cushion"])
+    classes_of_interest: List[str] = field(default_factory=lambda: ["chair"])
+    real_time_factor: float = 1.0    # sim seconds per wall second; 0 = as fast as possible
+    lockstep: bool = False
+    lockstep_nodes: List[str] = field(default_factory=list)
+    lockstep_timeout_s: float = 5.0          # wall s to wait for one frame
+    lockstep_startup_timeout_s: float = 30.0  # wall s to wait for subscribers before the first frame
+    start_pose: Optional[List[float]] = None  # [x, y, z, yaw] (m, rad); None = scene's start
+    bounds_min_m: Optional[List[float]] = None  # path bounds; None = scene bounds
+    bounds_max_m: Optional[List[float]] = None
+    start_time_s: float = 1.0        # first sim time stamp, s (0 means "no time" in ROS)
+    tf_rate_hz: float = 50.0         # world->body tf and mav/pose rate (sim time)
+    world_frame: str = "world"
+    body_frame: str = "body"
+    camera_frame: str = "camera"
+
+    def validate(self):
+        self.camera.validate()
+        self.noise.validate()
+        self.detector.validate()
+        self.mav.validate()
+        self.scene.validate()
+        from .classes import ClassTable
+        ClassTable(self.class_names, self.classes_of_interest).validate("")
+        _req(_finite(self.real_time_factor) and self.real_time_factor >= 0, "real_time_factor", "must be >= 0")
+        _req(isinstance(self.lockstep_nodes, list) and all(isinstance(n, str) and n for n in self.lockstep_nodes),
+             "lockstep_nodes", "must be a list of node names")
+        _req(not self.lockstep or self.lockstep_nodes, "lockstep_nodes", "must not be empty when lockstep is on")
+        _req(_finite(self.lockstep_timeout_s) and self.lockstep_timeout_s > 0, "lockstep_timeout_s", "must be > 0 s")
+        _req(_finite(self.lockstep_startup_timeout_s) and self.lockstep_startup_timeout_s >= 0,
+             "lockstep_startup_timeout_s", "must be >= 0 s")
+        if self.start_pose is not None:
+            _req(isinstance(self.start_pose, list) and len(self.start_pose) == 4 and all(map(_finite, self.start_pose)),
+                 "start_pose", "must be [x, y, z, yaw] (m, rad) or empty")
+        for name in ("bounds_min_m", "bounds_max_m"):
+            v = getattr(self, name)
+            if v is not None:
+                _req(isinstance(v, list) and len(v) == 3 and all(map(_finite, v)), name, "must be 3 finite numbers (m)")
+        if self.bounds_min_m is not None and self.bounds_max_m is not None:
+            _req(all(a < b for a, b in zip(self.bounds_min_m, self.bounds_max_m)), "bounds_max_m",
+                 "must be > bounds_min_m on every axis")
+        _req(_finite(self.start_time_s) and self.start_time_s > 0, "start_time_s", "must be > 0 s")
+        _req(_finite(self.tf_rate_hz) and self.tf_rate_hz > 0, "tf_rate_hz", "must be > 0 Hz")
+        for n in ("world_frame", "body_frame", "camera_frame"):
+            _req(isinstance(getattr(self, n), str) and getattr(self, n), n, "must be a non-empty frame name")
+        return self
+
+
+def from_dict(d: Dict[str, Any], cls=SimConfig, ns: str = ""):
+    """Builds a config dataclass from a nested dict (e.g. rosparam), rejecting unknown keys and wrong types."""
+    if d is None:
+        d = {}
+    if not isinstance(d, dict):
+        raise ConfigError(ns.rstrip("/") or "(root)", "must be a dictionary")
+    obj = cls()
+    names = {f.name: f for f in fields(cls)}
+    for k, v in d.items():
+        if k not in names:
+            raise ConfigError(ns + k, "unknown parameter")
+        cur = getattr(obj, k)
+        if is_dataclass(cur):
+            setattr(obj, k, from_dict(v, type(cur), ns + k + "/"))
+            continue
+        if isinstance(cur, bool):
+            _req(isinstance(v, bool), ns + k, "must be true or false")
+        elif isinstance(cur, float) and isinstance(v, int) and not isinstance(v, bool):
+            v = float(v)
+        elif isinstance(cur, float):
+            _req(isinstance(v, float), ns + k, "must be a number")
+        elif isinstance(cur, int):
+            _req(isinstance(v, int) and not isinstance(v, bool), ns + k, "must be an integer")
+        elif isinstance(cur, str):
+            _req(isinstance(v, str), ns + k, "must be a string")
+        elif isinstance(cur, list) or cur is None:
+            if cur is None and (v is None or v == [] or v == ""):
+                v = None
+            elif v is not None:
+                _req(isinstance(v, list), ns + k, "must be a list")
+                v = [float(x) if isinstance(x, int) and not isinstance(x, bool) and isinstance(cur, list)
+                     and cur and isinstance(cur[0], float) else x for x in v]
+                if cur is None:
+                    v = [float(x) if isinstance(x, int) and not isinstance(x, bool) else x for x in v]
+        setattr(obj, k, v)
+    return obj

@@ -1,0 +1,606 @@
+"""Seeded generator of indoor scenes: rooms off a corridor, joined by doorways, with furniture.
+
+The house occupies [0, X] x [0, Y] x [0, H] (z up, m). Houses wider than
+about 6 m get a corridor along x with rooms on both sides, each room with a
+doorway to the corridor and sometimes one to its neighbour; smaller sizes give
+one room. Walls, floor and ceiling are boxes (labels wall/floor/ceiling);
+exterior walls carry windows and some rooms a mirror (both non-returning).
+Furniture is built from parts (boxes, cylinders, spheres) so that each class
+is recognisable at 2 cm: chairs around tables and at desks, sofas with
+cushions, beds, cabinets, plants, monitors/TVs, backpacks, keyboards.
+"""
+
+import math
+from typing import Dict, List, Optional, Tuple
+
+import numpy as np
+
+from .scene import Scene
+
+WALL_T = 0.1      # wall thickness, m
+DOOR_W = 0.95     # doorway width, m
+DOOR_H = 2.1      # doorway height, m
+CORRIDOR_W = 1.5  # corridor width, m
+
+
+def _box_mesh():
+    v = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)], float)
+    # Outward-facing triangles of the unit cube (vertex index = 4x + 2y + z).
+    f = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]], np.int64)
+    return v, f
+
+
+def _cylinder_mesh(sections=12):
+    a = np.linspace(0, 2 * math.pi, sections, endpoint=False)
+    ring = np.stack([np.cos(a), np.sin(a)], 1)
+    v = np.concatenate([np.c_[ring, np.zeros(sections)], np.c_[ring, np.ones(sections)], [[0, 0, 0], [0, 0, 1]]])
+    f = []
+    for i in range(sections):
+        j = (i + 1) % sections
+        f += [[i, j, sections + j], [i, sections + j, sections + i],
+              [2 * sections, j, i], [2 * sections + 1, sections + i, sections + j]]
+    return v, np.array(f, np.int64)
+
+
+def _sphere_mesh():
+    # Icosahedron subdivided once (80 faces), unit radius.
+    t = (1 + 5 ** 0.5) / 2
+    v = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t], [0, -1, -t], [0, 1, -t],
+                  [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], float)
+    f = [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6],
+         [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10],
+         [8, 6, 7], [9, 8, 1]]
+    verts = list(v / np.linalg.norm(v, axis=1, keepdims=True))
+    mid = {}
+    out = []
+
+    def m(a, b):
+        key = (min(a, b), max(a, b))
+        if key not in mid:
+            p = verts[a] + verts[b]
+            verts.append(p / np.linalg.norm(p))
+            mid[key] = len(verts) - 1
+        return mid[key]
+    for a, b, c in f:
+        ab, bc, ca = m(a, b), m(b, c), m(c, a)
+        out += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+    return np.array(verts), np.array(out, np.int64)
+
+
+_BOX = _box_mesh()
+_CYL = _cylinder_mesh()
+_SPH = _sphere_mesh()
+
+
+class MeshBuilder:
+    """Accumulates parts (each tagged with an object id and a colour) into one scene."""
+
+    def __init__(self, rng: np.random.Generator):
+        self.rng = rng
+        self.v: List[np.ndarray] = []
+        self.f: List[np.ndarray] = []
+        self.ids: List[np.ndarray] = []
+        self.cols: List[np.ndarray] = []
+        self.n = 0
+        self.objects: Dict[int, str] = {}
+        self.next_id = 1
+
+    def new_object(self, label: str) -> int:
+        oid = self.next_id
+        self.next_id += 1
+        self.objects[oid] = label
+        return oid
+
+    def _add(self, verts, faces, oid, color):
+        self.v.append(verts)
+        self.f.append(faces + self.n)
+        self.ids.append(np.full(len(faces), oid, np.int32))
+        self.cols.append(np.tile(np.clip(np.asarray(color), 0, 255).astype(np.uint8), (len(faces), 1)))
+        self.n += len(verts)
+
+    def box(self, oid, color, center, size, pose=None):
+        v = _BOX[0] * np.asarray(size, float) + np.asarray(center, float)
+        self._add(_apply(pose, v), _BOX[1], oid, color)
+
+    def box_minmax(self, oid, color, lo, hi, pose=None):
+        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+        self.box(oid, color, (lo + hi) / 2, hi - lo, pose)
+
+    def cylinder(self, oid, color, base, radius, height, pose=None):
+        v = _CYL[0] * np.array([radius, radius, height]) + np.asarray(base, float)
+        self._add(_apply(pose, v), _CYL[1], oid, color)
+
+    def sphere(self, oid, color, center, radii, pose=None):
+        v = _SPH[0] * np.asarray(radii, float) + np.asarray(center, float)
+        self._add(_apply(pose, v), _SPH[1], oid, color)
+
+    def scene(self, name, start) -> Scene:
+        return Scene(np.concatenate(self.v), np.concatenate(self.f), np.concatenate(self.ids),
+                     np.concatenate(self.cols), self.objects, name=name, start=start)
+
+
+def _apply(pose, v):
+    """Applies pose (x, y, yaw) about z to local points."""
+    if pose is None:
+        return v
+    x, y, yaw = pose
+    c, s = math.cos(yaw), math.sin(yaw)
+    out = v.copy()
+    out[:, 0] = c * v[:, 0] - s * v[:, 1] + x
+    out[:, 1] = s * v[:, 0] + c * v[:, 1] + y
+    return out
+
+
+def _vary(rng, color, amount=18):
+    return np.asarray(color, float) + rng.integers(-amount, amount + 1, 3)
+
+
+# ---------------------------------------------------------------------------
+# Furniture, each in its local frame: origin on the floor at the footprint
+# centre, front towards +x. Returns the footprint half extents (hx, hy).
+# ---------------------------------------------------------------------------
+WOODS = [(139, 94, 60), (160, 120, 80), (110, 75, 45), (190, 160, 120), (90, 60, 40)]
+FABRICS = [(70, 90, 140), (150, 60, 60), (90, 130, 90), (120, 120, 120), (180, 150, 100), (60, 60, 70)]
+
+
+def chair(b: MeshBuilder, pose, z0=0.0):
+    rng = b.rng
+    oid = b.new_object("chair")
+    wood = _vary(rng, WOODS[rng.integers(len(WOODS))])
+    seat = _vary(rng, FABRICS[rng.integers(len(FABRICS))])
+    w, d, h = 0.44, 0.44, 0.45
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            b.box(oid, wood, (sx * (d / 2 - 0.03), sy * (w / 2 - 0.03), z0 + h / 2), (0.035, 0.035, h), pose)
+    b.box(oid, seat, (0, 0, z0 + h + 0.025), (d, w, 0.05), pose)
+    b.box(oid, wood, (-d / 2 + 0.02, 0, z0 + h + 0.05 + 0.22), (0.035, w, 0.36), pose)  # backrest
+    return oid, (d / 2, w / 2)
+
+
+def armchair(b: MeshBuilder, pose):
+    rng = b.rng
+    oid = b.new_object("chair")
+    fab = _vary(rng, FABRICS[rng.integers(len(FABRICS))])
+    b.box_minmax(oid, fab, (-0.38, -0.38, 0.0), (0.38, 0.38, 0.42), pose)
+    b.box_minmax(oid, fab, (-0.38, -0.38, 0.42), (-0.2, 0.38, 0.9), pose)
+    for sy in (-1, 1):
+        b.box_minmax(oid, _vary(rng, fab, 8), (-0.2, sy * 0.38 - 0.07, 0.42), (0.38, sy * 0.38 + 0.07, 0.62), pose)
+    return oid, (0.38, 0.45)
+
+
+def table(b: MeshBuilder, pose, length=1.4, width=0.85, height=0.75, label="table"):
+    rng = b.rng
+    oid = b.new_object(label)
+    wood = _vary(rng, WOODS[rng.integers(len(WOODS))])
+    b.box(oid, wood, (0, 0, height - 0.02), (width, length, 0.04), pose)
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            b.box(oid, _vary(rng, wood, 6), (sx * (width / 2 - 0.06), sy * (length / 2 - 0.06), (height - 0.04) / 2),
+                  (0.05, 0.05, height - 0.04), pose)
+    return oid, (width / 2, length / 2)
+
+
+def sofa(b: MeshBuilder, pose, length=2.0):
+    rng = b.rng
+    oid = b.new_object("sofa")
+    fab = _vary(rng, FABRICS[rng.integers(len(FABRICS))])
+    d = 0.88
+    b.box_minmax(oid, _vary(rng, fab, 5), (-d / 2, -length / 2, 0.08), (d / 2, length / 2, 0.42), pose)
+    b.box_minmax(oid, fab, (-d / 2, -length / 2 + 0.18, 0.42), (-d / 2 + 0.22, length / 2 - 0.18, 0.86), pose)
+    for sy in (-1, 1):
+        y0 = sy * length / 2
+        b.box_minmax(oid, fab, (-d / 2, min(y0, y0 - sy * 0.18), 0.08), (d / 2, max(y0, y0 - sy * 0.18), 0.64), pose)
+        for sx in (-1, 1):  # feet
+            b.box(oid, (40, 30, 25), (sx * (d / 2 - 0.06), y0 - sy * 0.06, 0.04), (0.05, 0.05, 0.08), pose)
+    return oid, (d / 2, length / 2)
+
+
+def cushion(b: MeshBuilder, pose, z0):
+    rng = b.rng
+    oid = b.new_object("cushion")
+    col = _vary(rng, FABRICS[rng.integers(len(FABRICS))], 30)
+    # Soft look: a flattened sphere over a thin box.
+    b.box(oid, col, (0, 0, z0 + 0.04), (0.12, 0.38, 0.08), pose)
+    b.sphere(oid, col, (0, 0, z0 + 0.2), (0.07, 0.2, 0.19), pose)
+    return oid, (0.1, 0.21)
+
+
+def bed(b: MeshBuilder, pose, width=1.5, length=2.05):
+    rng = b.rng
+    oid = b.new_object("bed")
+    wood = _vary(rng, WOODS[rng.integers(len(WOODS))])
+    sheet = _vary(rng, (225, 225, 215), 10)
+    b.box_minmax(oid, wood, (-length / 2, -width / 2, 0.05), (length / 2, width / 2, 0.32), pose)
+    b.box_minmax(oid, sheet, (-length / 2 + 0.08, -width / 2 + 0.04, 0.32), (length / 2 - 0.03, width / 2 - 0.04, 0.52),
+                 pose)
+    b.box_minmax(oid, wood, (-length / 2, -width / 2, 0.0), (-length / 2 + 0.08, width / 2, 1.05), pose)  # headboard
+    for sy in (-1, 1):
+        b.box(oid, (245, 245, 240), (-length / 2 + 0.3, sy * width / 4, 0.58), (0.35, width / 2 - 0.15, 0.12), pose)
+    return oid, (length / 2, width / 2)
+
+
+def cabinet(b: MeshBuilder, pose, width=0.9, depth=0.45, height=0.8):
+    rng = b.rng
+    oid = b.new_object("cabinet")
+    wood = _vary(rng, WOODS[rng.integers(len(WOODS))])
+    b.box_minmax(oid, _vary(rng, wood, 5), (-depth / 2, -width / 2, 0.0), (depth / 2, width / 2, 0.06), pose)
+    b.box_minmax(oid, wood, (-depth / 2, -width / 2, 0.06), (depth / 2 - 0.02, width / 2, height), pose)
+    n_doors = 2 if width > 0.6 else 1
+    for k in range(n_doors):
+        yc = -width / 2 + (k + 0.5) * width / n_doors
+        b.box(oid, _vary(rng, wood, 12), (depth / 2 - 0.01, yc, (height + 0.06) / 2),
+              (0.02, width / n_doors - 0.02, height - 0.1), pose)
+        b.box(oid, (200, 200, 205), (depth / 2 + 0.01, yc + (0.08 if k == 0 and n_doors == 2 else -0.08),
+                                     height * 0.6), (0.02, 0.02, 0.12), pose)
+    return oid, (depth / 2, width / 2), height
+
+
+def plant(b: MeshBuilder, pose):
+    rng = b.rng
+    oid = b.new_object("plant")
+    pot = _vary(rng, (180, 90, 60), 12)
+    b.cylinder(oid, pot, (0, 0, 0), 0.16, 0.32, pose)
+    b.cylinder(oid, (90, 70, 40), (0, 0, 0.32), 0.02, 0.45, pose)
+    for _ in range(int(rng.integers(4, 7))):
+        c = (rng.uniform(-0.12, 0.12), rng.uniform(-0.12, 0.12), rng.uniform(0.65, 1.05))
+        r = rng.uniform(0.12, 0.2)
+        b.sphere(oid, _vary(rng, (50, 120, 50), 25), c, (r, r, r * 0.8), pose)
+    return oid, (0.3, 0.3)
+
+
+def monitor(b: MeshBuilder, pose, z0, big=False):
+    rng = b.rng
+    oid = b.new_object("tv_monitor")
+    w, h = (1.0, 0.6) if big else (0.56, 0.34)
+    frame = _vary(rng, (35, 35, 38), 6)
+    b.box(oid, frame, (0, 0, z0 + 0.012), (0.2, 0.28, 0.025), pose)  # foot
+    b.box(oid, frame, (-0.03, 0, z0 + 0.1), (0.04, 0.05, 0.16), pose)  # neck
+    b.box(oid, frame, (0, 0, z0 + 0.16 + h / 2), (0.04, w, h), pose)  # panel
+    b.box(oid, (20, 25, 45), (0.021, 0, z0 + 0.16 + h / 2), (0.004, w - 0.04, h - 0.04), pose)  # screen
+    return oid, (0.1, w / 2)
+
+
+def keyboard(b: MeshBuilder, pose, z0):
+    oid = b.new_object("keyboard")
+    col = _vary(b.rng, (50, 50, 55), 10)
+    b.box(oid, col, (0, 0, z0 + 0.012), (0.15, 0.44, 0.024), pose)
+    for r in range(4):
+        b.box(oid, (200, 200, 200), (-0.05 + r * 0.033, 0, z0 + 0.028), (0.022, 0.40, 0.008), pose)
+    return oid, (0.075, 0.22)
+
+
+def backpack(b: MeshBuilder, pose, z0=0.0):
+    rng = b.rng
+    oid = b.new_object("backpack")
+    col = _vary(rng, [(200, 60, 40), (40, 80, 160), (60, 60, 60), (50, 120, 70)][rng.integers(4)], 15)
+    b.box(oid, col, (0, 0, z0 + 0.21), (0.18, 0.3, 0.42), pose)
+    b.cylinder(oid, col, (0, 0, z0 + 0.42), 0.09, 0.05, (pose[0], pose[1], pose[2]) if pose else None)
+    b.box(oid, _vary(rng, col, 20), (0.11, 0, z0 + 0.14), (0.06, 0.24, 0.2), pose)  # front pocket
+    for sy in (-1, 1):
+        b.box(oid, (30, 30, 30), (-0.1, sy * 0.09, z0 + 0.25), (0.02, 0.04, 0.34), pose)  # straps
+    return oid, (0.14, 0.16)
+
+
+# ---------------------------------------------------------------------------
+# Layout
+# ---------------------------------------------------------------------------
+class Room:
+    def __init__(self, x0, y0, x1, y1, kind):
+        self.x0, self.y0, self.x1, self.y1, self.kind = x0, y0, x1, y1, kind
+        self.taken: List[Tuple[float, float, float, float]] = []  # reserved footprints (x0, y0, x1, y1)
+
+    def inner(self, margin):
+        return self.x0 + margin, self.y0 + margin, self.x1 - margin, self.y1 - margin
+
+    def free(self, rect, clearance=0.08):
+        x0, y0, x1, y1 = rect
+        ix0, iy0, ix1, iy1 = self.inner(WALL_T / 2 + 0.02)
+        if x0 < ix0 or y0 < iy0 or x1 > ix1 or y1 > iy1:
+            return False
+        for t in self.taken:
+            if x0 < t[2] + clearance and x1 > t[0] - clearance and y0 < t[3] + clearance and y1 > t[1] - clearance:
+                return False
+        return True
+
+
+def _footprint(pose, half):
+    x, y, yaw = pose
+    c, s = abs(math.cos(yaw)), abs(math.sin(yaw))
+    hx = c * half[0] + s * half[1]
+    hy = s * half[0] + c * half[1]
+    return (x - hx, y - hy, x + hx, y + hy)
+
+
+def _wall_pose(rng, room: Room, half, side=None, pos=None):
+    """A pose that puts an item of half extents ``half`` with its back against a wall of ``room``."""
+    if side is None:
+        side = int(rng.integers(4))
+    ix0, iy0, ix1, iy1 = room.inner(WALL_T / 2 + 0.03)
+    hx, hy = half
+    if side == 0:    # south wall, facing +y
+        lo, hi = ix0 + hy, ix1 - hy
+        p = rng.uniform(lo, hi) if pos is None else pos
+        return (p, iy0 + hx, math.pi / 2)
+    if side == 1:    # north wall, facing -y
+        lo, hi = ix0 + hy, ix1 - hy
+        p = rng.uniform(lo, hi) if pos is None else pos
+        return (p, iy1 - hx, -math.pi / 2)
+    if side == 2:    # west wall, facing +x
+        lo, hi = iy0 + hy, iy1 - hy
+        p = rng.uniform(lo, hi) if pos is None else pos
+        return (ix0 + hx, p, 0.0)
+    lo, hi = iy0 + hy, iy1 - hy
+    p = rng.uniform(lo, hi) if pos is None else pos
+    return (ix1 - hx, p, math.pi)
+
+
+def _try_place(b, room, half, make, tries=40, side=None, clearance=0.08):
+    """Finds a free wall pose for an item and builds it; returns (pose, result) or None."""
+    for _ in range(tries):
+        try:
+            pose = _wall_pose(b.rng, room, half, side)
+        except ValueError:
+            return None
+        rect = _footprint(pose, half)
+        if room.free(rect, clearance):
+            room.taken.append(rect)
+            return pose, make(pose)
+    return None
+
+
+def _local(pose, dx, dy):
+    x, y, yaw = pose
+    c, s = math.cos(yaw), math.sin(yaw)
+    return (x + c * dx - s * dy, y + s * dx + c * dy)
+
+
+def _dining_group(b, room, center=None, n_chairs=None):
+    rng = b.rng
+    length, width = rng.uniform(1.2, 1.8), rng.uniform(0.8, 0.95)
+    ix0, iy0, ix1, iy1 = room.inner(WALL_T / 2)
+    along_x = (ix1 - ix0) >= (iy1 - iy0)
+    for attempt in range(40):
+        if attempt == 20:  # small room: a small table
+            length, width = 1.0, 0.8
+        half = (length / 2 + 0.5, width / 2 + 0.5) if along_x else (width / 2 + 0.5, length / 2 + 0.5)
+        if center is None:
+            lo_x, hi_x = ix0 + half[0] + 0.1, ix1 - half[0] - 0.1
+            lo_y, hi_y = iy0 + half[1] + 0.1, iy1 - half[1] - 0.1
+            if lo_x > hi_x or lo_y > hi_y:
+                continue
+            c = (rng.uniform(lo_x, hi_x), rng.uniform(lo_y, hi_y))
+        else:
+            c = center
+        rect = (c[0] - half[0], c[1] - half[1], c[0] + half[0], c[1] + half[1])
+        if room.free(rect):
+            break
+        if center is not None:
+            return False
+    else:
+        return False
+    room.taken.append(rect)
+    tpose = (c[0], c[1], math.pi / 2 if along_x else 0.0)  # table local y is its length
+    table(b, tpose, length, width)
+    n = int(rng.integers(4, 7)) if n_chairs is None else n_chairs
+    seats = []
+    per_side = max(1, min(3, (n + 1) // 2))
+    for side in (-1, 1):
+        for k in range(per_side):
+            t = (k + 0.5) / per_side - 0.5
+            seats.append((side * (width / 2 + 0.12), t * (length - 0.3), math.pi if side > 0 else 0.0))
+    for end in (-1, 1):
+        seats.append((0.0, end * (length / 2 + 0.14), -end * math.pi / 2))
+    rng.shuffle(seats)
+    for dx, dy, yaw_local in seats[:n]:
+        jitter = rng.uniform(-0.15, 0.15)
+        px, py = _local(tpose, dx, dy)
+        chair(b, (px, py, tpose[2] + yaw_local + jitter))
+    return True
+
+
+def _desk_group(b, room):
+    rng = b.rng
+    length, width = rng.uniform(1.1, 1.5), 0.7
+    half = (width / 2 + 0.6, length / 2)  # desk + chair space in front
+    for _ in range(30):
+        try:
+            pose = _wall_pose(rng, room, half)
+        except ValueError:  # wall too short for the desk
+            continue
+        rect = _footprint(pose, half)
+        if room.free(rect):
+            break
+    else:
+        return False
+    room.taken.append(rect)
+    dpose = (*_local(pose, -0.6 + 0.0, 0), pose[2])  # desk centre: back part of the footprint
+    dpose = (*_local(pose, -half[0] + width / 2, 0), pose[2])
+    table(b, dpose, length, width, 0.74)  # table local y (its length) runs along the wall
+    monitor(b, (*_local(dpose, -0.12, rng.uniform(-0.2, 0.2)), dpose[2]), 0.74)
+    keyboard(b, (*_local(dpose, 0.18, rng.uniform(-0.1, 0.1)), dpose[2]), 0.74)
+    cpos = _local(dpose, width / 2 + 0.2, rng.uniform(-0.2, 0.2))
+    chair(b, (cpos[0], cpos[1], dpose[2] + math.pi + rng.uniform(-0.4, 0.4)))
+    return True
+
+
+def _furnish(b: MeshBuilder, room: Room, kind: str):
+    rng = b.rng
+    if kind == "dining":
+        _dining_group(b, room)
+        _try_place(b, room, (0.23, 0.5), lambda p: cabinet(b, p, 1.0, 0.45, rng.uniform(0.8, 1.6)))
+        _try_place(b, room, (0.3, 0.3), lambda p: plant(b, p))
+    elif kind == "living":
+        r = _try_place(b, room, (0.45, 1.0), lambda p: sofa(b, p, 2.0))
+        if r:
+            pose = r[0]
+            for k in range(int(rng.integers(1, 4))):
+                cushion(b, (*_local(pose, -0.2, -0.6 + 0.6 * k + rng.uniform(-0.05, 0.05)),
+                            pose[2] + rng.uniform(-0.2, 0.2)), 0.42)
+            # Coffee table in front of the sofa (partly hides the sofa's seat).
+            cpos = _local(pose, 1.0, 0)
+            rect = _footprint((cpos[0], cpos[1], pose[2]), (0.3, 0.55))
+            if room.free(rect, 0.0):
+                room.taken.append(rect)
+                table(b, (cpos[0], cpos[1], pose[2]), 1.1, 0.6, 0.45)
+        r = _try_place(b, room, (0.23, 0.6), lambda p: cabinet(b, p, 1.2, 0.45, 0.55))
+        if r:
+            pose, (_, _, h) = r
+            monitor(b, pose, h, big=True)
+        _try_place(b, room, (0.45, 0.45), lambda p: armchair(b, p))
+        _try_place(b, room, (0.3, 0.3), lambda p: plant(b, p))
+    elif kind == "bedroom":
+        r = _try_place(b, room, (1.03, 0.75), lambda p: bed(b, (*_local(p, 0, 0), p[2])))
+        if r:
+            pose = r[0]
+            cushion(b, (*_local(pose, -0.65, rng.uniform(-0.3, 0.3)), pose[2] + rng.uniform(-0.3, 0.3)), 0.52)
+        _try_place(b, room, (0.2, 0.25), lambda p: cabinet(b, p, 0.5, 0.4, 0.55))
+        _try_place(b, room, (0.2, 0.45), lambda p: cabinet(b, p, 0.9, 0.4, rng.uniform(1.2, 2.0)))
+        _try_place(b, room, (0.15, 0.17), lambda p: backpack(b, p))
+        _try_place(b, room, (0.25, 0.25), lambda p: chair(b, p))
+        _try_place(b, room, (0.3, 0.3), lambda p: plant(b, p))
+    elif kind == "office":
+        _desk_group(b, room)
+        if rng.random() < 0.6:
+            _desk_group(b, room)
+        _try_place(b, room, (0.23, 0.45), lambda p: cabinet(b, p, 0.9, 0.45, rng.uniform(0.8, 1.9)))
+        _try_place(b, room, (0.15, 0.17), lambda p: backpack(b, p))
+        _try_place(b, room, (0.3, 0.3), lambda p: plant(b, p))
+    elif kind == "studio":  # a single room holding a bit of everything
+        _dining_group(b, room, n_chairs=4)
+        r = _try_place(b, room, (0.45, 1.0), lambda p: sofa(b, p, 2.0))
+        if r:
+            cushion(b, (*_local(r[0], -0.2, 0.3), r[0][2]), 0.42)
+        r = _try_place(b, room, (0.23, 0.5), lambda p: cabinet(b, p, 1.0, 0.45, 0.55))
+        if r:
+            monitor(b, r[0], r[1][2], big=True)
+        _try_place(b, room, (0.15, 0.17), lambda p: backpack(b, p))
+        _try_place(b, room, (0.3, 0.3), lambda p: plant(b, p))
+
+
+def _wall_x(b, oid, color, y, x0, x1, h, openings=()):
+    """Wall along x at y from x0 to x1 with door openings [(a, b), ...]."""
+    cur = x0
+    for a, c in sorted(openings):
+        if a > cur:
+            b.box_minmax(oid, color, (cur, y - WALL_T / 2, 0), (a, y + WALL_T / 2, h))
+        b.box_minmax(oid, color, (a, y - WALL_T / 2, DOOR_H), (c, y + WALL_T / 2, h))
+        cur = c
+    if cur < x1:
+        b.box_minmax(oid, color, (cur, y - WALL_T / 2, 0), (x1, y + WALL_T / 2, h))
+
+
+def _wall_y(b, oid, color, x, y0, y1, h, openings=()):
+    cur = y0
+    for a, c in sorted(openings):
+        if a > cur:
+            b.box_minmax(oid, color, (x - WALL_T / 2, cur, 0), (x + WALL_T / 2, a, h))
+        b.box_minmax(oid, color, (x - WALL_T / 2, a, DOOR_H), (x + WALL_T / 2, c, h))
+        cur = c
+    if cur < y1:
+        b.box_minmax(oid, color, (x - WALL_T / 2, cur, 0), (x + WALL_T / 2, y1, h))
+
+
+def _split(rng, length, min_w=3.0, max_w=5.5):
+    """Splits [0, length] into room widths in [min_w, max_w] (one piece if too short)."""
+    n = max(1, int(round(length / rng.uniform(min_w + 0.5, max_w))))
+    while n > 1 and length / n < min_w:
+        n -= 1
+    cuts = np.sort(rng.uniform(0.35, 0.65, n - 1) + np.arange(1, n)) * length / n if n > 1 else np.array([])
+    return [0.0] + list(cuts) + [length]
+
+
+def generate(seed: int = 0, size_m=(15.0, 12.0, 3.0), name: Optional[str] = None) -> Scene:
+    """Generates a furnished house of ``size_m`` = (X, Y, H) m, deterministic in ``seed``."""
+    X, Y, H = (float(s) for s in size_m)
+    if X < 3 or Y < 3 or H < 2.2:
+        raise ValueError("house must be at least 3 x 3 x 2.2 m (got %s)" % (size_m,))
+    rng = np.random.default_rng(seed)
+    b = MeshBuilder(rng)
+    wall_col = _vary(rng, (225, 220, 205), 10)
+    floor_id, ceil_id, wall_id = b.new_object("floor"), b.new_object("ceiling"), b.new_object("wall")
+    b.box_minmax(floor_id, _vary(rng, (150, 120, 90), 15), (-WALL_T, -WALL_T, -0.05), (X + WALL_T, Y + WALL_T, 0.0))
+    b.box_minmax(ceil_id, (240, 240, 240), (-WALL_T, -WALL_T, H), (X + WALL_T, Y + WALL_T, H + 0.05))
+    rooms: List[Room] = []
+    windows: List[Tuple[str, float, float, float]] = []  # (axis, fixed coord, lo, hi) on exterior walls
+    if X < 6.0 or Y < 5.0:
+        rooms.append(Room(0, 0, X, Y, "studio"))
+        _wall_x(b, wall_id, wall_col, -WALL_T / 2, -WALL_T, X + WALL_T, H)
+        _wall_x(b, wall_id, wall_col, Y + WALL_T / 2, -WALL_T, X + WALL_T, H)
+        _wall_y(b, wall_id, wall_col, -WALL_T / 2, 0, Y, H)
+        _wall_y(b, wall_id, wall_col, X + WALL_T / 2, 0, Y, H)
+        start = (0.5, Y / 2, 1.2, 0.0)
+        rooms[0].taken.append((0.0, Y / 2 - 0.4, 0.85, Y / 2 + 0.4))
+        windows += [("x", 0.0, 0.5, X - 0.5), ("x", Y, 0.5, X - 0.5)]
+    else:
+        yc = Y / 2 - CORRIDOR_W / 2 + rng.uniform(-0.1, 0.1) * Y
+        y_s, y_n = yc, yc + CORRIDOR_W
+        # Exterior walls (the corridor ends get a window each).
+        _wall_x(b, wall_id, wall_col, -WALL_T / 2, -WALL_T, X + WALL_T, H)
+        _wall_x(b, wall_id, wall_col, Y + WALL_T / 2, -WALL_T, X + WALL_T, H)
+        _wall_y(b, wall_id, wall_col, -WALL_T / 2, 0, Y, H)
+        _wall_y(b, wall_id, wall_col, X + WALL_T / 2, 0, Y, H)
+        kinds = ["dining", "living", "office", "bedroom"]
+        rng.shuffle(kinds)
+        k = 0
+        corridor_doors = {"s": [], "n": []}
+        for side, (ya, yb) in (("s", (0.0, y_s)), ("n", (y_n, Y))):
+            xs = _split(rng, X)
+            for i in range(len(xs) - 1):
+                room = Room(xs[i], ya, xs[i + 1], yb, kinds[k % len(kinds)])
+                k += 1
+                rooms.append(room)
+                lo, hi = xs[i] + 0.3 + WALL_T, xs[i + 1] - 0.3 - WALL_T - DOOR_W
+                d0 = rng.uniform(lo, hi) if hi > lo else (xs[i] + xs[i + 1] - DOOR_W) / 2
+                corridor_doors[side].append((d0, d0 + DOOR_W))
+                # Keep the doorway clear on the room side.
+                if side == "s":
+                    room.taken.append((d0 - 0.2, yb - 1.1, d0 + DOOR_W + 0.2, yb))
+                else:
+                    room.taken.append((d0 - 0.2, ya, d0 + DOOR_W + 0.2, ya + 1.1))
+                if i > 0:
+                    # Partition wall, sometimes with a doorway to the neighbour.
+                    openings = []
+                    if rng.random() < 0.5 and yb - ya > DOOR_W + 1.0:
+                        a = rng.uniform(ya + 0.4, yb - 0.4 - DOOR_W)
+                        openings.append((a, a + DOOR_W))
+                        for r in (rooms[-2], room):
+                            r.taken.append((xs[i] - 1.0, a - 0.2, xs[i] + 1.0, a + DOOR_W + 0.2))
+                    _wall_y(b, wall_id, wall_col, xs[i], ya, yb, H, openings)
+                windows.append(("x", 0.0 if side == "s" else Y, xs[i] + 0.4, xs[i + 1] - 0.4))
+        _wall_x(b, wall_id, wall_col, y_s, 0.0, X, H, corridor_doors["s"])
+        _wall_x(b, wall_id, wall_col, y_n, 0.0, X, H, corridor_doors["n"])
+        corridor = Room(0, y_s, X, y_n, "corridor")
+        start = (0.8, (y_s + y_n) / 2, 1.2, 0.0)
+        for x in (0.1, X - 0.9):  # plants at the corridor ends, out of the way
+            if rng.random() < 0.7:
+                plant(b, (x + 0.4, y_n - WALL_T / 2 - 0.32, 0.0))
+                corridor.taken.append((x, y_n - 0.7, x + 0.8, y_n))
+    # A mirror on an interior wall of some rooms (partition or corridor side).
+    for room in rooms:
+        if room.kind in ("bedroom", "living", "studio") and rng.random() < 0.7:
+            oid = b.new_object("mirror")
+            x = room.x0 + (WALL_T / 2 if room.x0 > 0 else 0.0) + 0.003
+            yc = (room.y0 + room.y1) / 2 + rng.uniform(-0.3, 0.3)
+            b.box_minmax(oid, (200, 210, 215), (x, yc - 0.35, 0.8), (x + 0.01, yc + 0.35, 1.9))
+            room.taken.append((room.x0, yc - 0.4, room.x0 + 0.3, yc + 0.4))
+    for room in rooms:
+        _furnish(b, room, room.kind)
+    # Every house has chairs (the default class of interest): add some along walls if needed.
+    for room in rooms * 3:
+        if sum(1 for c in b.objects.values() if c == "chair") >= 2:
+            break
+        _try_place(b, room, (0.25, 0.25), lambda p: chair(b, p))
+    # Windows: thin non-returning panels 1 cm in front of exterior walls.
+    for axis, y, lo, hi in windows:
+        if hi - lo < 1.0:
+            continue
+        w = min(1.6, hi - lo - 0.2)
+        a = rng.uniform(lo, hi - w)
+        oid = b.new_object("window")
+        inset = 0.01 if y == 0.0 else -0.01
+        b.box_minmax(oid, (170, 200, 230), (a, min(y, y + inset) - 0.005, 0.9), (a + w, max(y, y + inset) + 0.005,
+                                                                                     min(H - 0.3, 2.2)))
+    if name is None:
+        name = "gen_s%d_%gx%g" % (seed, X, Y)
+    return b.scene(name, start)
