@@ -1,0 +1,98 @@
+#pragma once
+/// @file path_planner.hpp
+/// Paths from the current position to candidate positions (paper Section
+/// IV-D.2, DESIGN Section 5 step 2): OMPL InformedRRTstar on a 3-D state space
+/// within the bounds, a state being valid when a sphere around it is free.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "semantic_exploration/core/bounds.hpp"
+#include "semantic_exploration/core/planner_config.hpp"
+#include "semantic_exploration/core/planning/interfaces.hpp"
+
+namespace semexp {
+
+struct PlannedPath {
+  enum class Status {
+    kStraight,      ///< the straight segment was free; no planner run
+    kExact,         ///< the planner reached the (possibly projected) goal
+    kApproximate,   ///< the planner got as close as it could; the path ends there
+    kStartInvalid,  ///< the start sphere is not free and no escape was possible
+    kFailed,        ///< no path leaving the start
+  };
+  Status status = Status::kFailed;
+  /// Vertices in world, m; the first is the start, the last the position
+  /// actually reached (the candidate position from then on). Empty on failure.
+  std::vector<Eigen::Vector3d> path_W;
+  bool escaped = false;             ///< path_W[0] -> path_W[1] is an escape from an invalid start
+  double distance_to_goal_m = 0.0;  ///< from the path end to the requested goal, m
+  double time_s = 0.0;              ///< wall time spent on this path, s
+
+  bool ok() const { return !path_W.empty(); }
+  static const char* name(Status s);
+};
+
+/// Plans collision-free paths for a sphere of radius R (config.mav_radius_m).
+///
+/// Validity: inside the bounds shrunk by R, and `is_free(p, R_c)` with
+/// R_c = sqrt(R^2 + (resolution / 2)^2): motions are checked at points at
+/// most one map resolution apart, and every point within R of a checked
+/// segment lies within R_c of its nearest checked point, so the whole swept
+/// volume of radius R is known free, not only the sampled spheres.
+///
+/// Per goal: (1) if the straight segment is valid it is the path, no planner;
+/// (2) an invalid goal (e.g. a frontier touching unknown space) is moved to
+/// the nearest valid point within goal_search_radius = 2 R + 2 resolution,
+/// searched on shells of 26 directions; (3) InformedRRTstar with the path
+/// length objective and a cost threshold of cost_threshold_factor times the
+/// straight-line distance (so a solve stops early once near-optimal), within
+/// time_budget_s; approximate solutions are accepted; (4) the path is
+/// simplified (vertex reduction and shortcutting, collision-checked by OMPL)
+/// and re-checked densely here; a simplified path failing that check is
+/// replaced by the raw solution.
+///
+/// Invalid start: if `not_occupied` is given (sphere holds no occupied voxel,
+/// unknown allowed), the nearest valid point within escape_radius_m whose
+/// straight segment from the start passes not_occupied at R is used as an
+/// escape and planning continues from there; otherwise kStartInvalid.
+///
+/// plan_all() plans several goals in parallel (config.planning_threads, 0 =
+/// all hardware threads), each thread with its own OMPL instances. The
+/// queries must be thread-safe.
+class PathPlanner {
+ public:
+  PathPlanner(const PlannerConfig& config, const Bounds& bounds, double resolution_m, CollisionQuery is_free,
+              CollisionQuery not_occupied = {}, double escape_radius_m = 1.0);
+
+  PlannedPath plan(const Eigen::Vector3d& start_W, const Eigen::Vector3d& goal_W) const;
+  std::vector<PlannedPath> plan_all(const Eigen::Vector3d& start_W, const std::vector<Eigen::Vector3d>& goals_W) const;
+
+  /// State validity as used by the planner (bounds + inflated sphere).
+  bool valid(const Eigen::Vector3d& p_W) const;
+  /// Segment validity checked at points at most one resolution apart.
+  bool segment_valid(const Eigen::Vector3d& a_W, const Eigen::Vector3d& b_W) const;
+  /// Whole-path validity (segment_valid on every segment).
+  bool path_valid(const std::vector<Eigen::Vector3d>& path_W) const;
+  /// Nearest valid point within radius_m of p_W (shells of 26 directions,
+  /// step = resolution); false if none.
+  bool nearest_valid(const Eigen::Vector3d& p_W, double radius_m, Eigen::Vector3d& out_W) const;
+
+  double check_radius_m() const { return check_radius_m_; }
+  int threads() const;
+
+ private:
+  PlannedPath plan_from_valid_start(const Eigen::Vector3d& start_W, const Eigen::Vector3d& goal_W) const;
+
+  PlannerConfig config_;
+  Bounds bounds_;
+  Bounds state_bounds_;  ///< bounds shrunk by R
+  double resolution_m_;
+  double check_radius_m_;
+  CollisionQuery is_free_;
+  CollisionQuery not_occupied_;
+  double escape_radius_m_;
+};
+
+}  // namespace semexp

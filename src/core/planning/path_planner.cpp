@@ -1,0 +1,270 @@
+#include "semantic_exploration/core/planning/path_planner.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <thread>
+
+#include <ompl/base/ProblemDefinition.h>
+#include <ompl/base/ScopedState.h>
+#include <ompl/base/SpaceInformation.h>
+#include <ompl/base/objectives/PathLengthOptimizationObjective.h>
+#include <ompl/base/spaces/RealVectorStateSpace.h>
+#include <ompl/geometric/PathGeometric.h>
+#include <ompl/geometric/PathSimplifier.h>
+#include <ompl/geometric/planners/rrt/InformedRRTstar.h>
+#include <ompl/util/Console.h>
+
+namespace ob = ompl::base;
+namespace og = ompl::geometric;
+
+namespace semexp {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+Eigen::Vector3d to_eigen(const ob::State* s) {
+  const auto* v = s->as<ob::RealVectorStateSpace::StateType>();
+  return {v->values[0], v->values[1], v->values[2]};
+}
+
+// The 26 unit directions of the 3x3x3 neighbourhood, for shell searches.
+const std::vector<Eigen::Vector3d>& shell_directions() {
+  static const std::vector<Eigen::Vector3d> dirs = [] {
+    std::vector<Eigen::Vector3d> d;
+    for (int x = -1; x <= 1; ++x)
+      for (int y = -1; y <= 1; ++y)
+        for (int z = -1; z <= 1; ++z)
+          if (x || y || z) d.push_back(Eigen::Vector3d(x, y, z).normalized());
+    return d;
+  }();
+  return dirs;
+}
+
+}  // namespace
+
+const char* PlannedPath::name(Status s) {
+  switch (s) {
+    case Status::kStraight: return "straight";
+    case Status::kExact: return "exact";
+    case Status::kApproximate: return "approximate";
+    case Status::kStartInvalid: return "start_invalid";
+    case Status::kFailed: return "failed";
+  }
+  return "?";
+}
+
+PathPlanner::PathPlanner(const PlannerConfig& config, const Bounds& bounds, double resolution_m,
+                         CollisionQuery is_free, CollisionQuery not_occupied, double escape_radius_m)
+    : config_(config),
+      bounds_(bounds),
+      resolution_m_(resolution_m),
+      is_free_(std::move(is_free)),
+      not_occupied_(std::move(not_occupied)),
+      escape_radius_m_(escape_radius_m) {
+  config_.validate();
+  bounds_.validate();
+  if (!(std::isfinite(resolution_m_) && resolution_m_ > 0))
+    throw std::invalid_argument("PathPlanner: resolution_m must be > 0");
+  if (!is_free_) throw std::invalid_argument("PathPlanner: is_free query missing");
+  check_radius_m_ = std::sqrt(config_.mav_radius_m * config_.mav_radius_m + 0.25 * resolution_m_ * resolution_m_);
+  state_bounds_ = bounds_;
+  const Eigen::Vector3d r = Eigen::Vector3d::Constant(config_.mav_radius_m);
+  state_bounds_.min_m = bounds_.min_m + r;
+  state_bounds_.max_m = bounds_.max_m - r;
+  if (((state_bounds_.max_m - state_bounds_.min_m).array() <= 0).any())
+    throw std::invalid_argument("PathPlanner: bounds are too small for the MAV radius");
+  // OMPL logs every solve at INFO level; keep errors only.
+  ompl::msg::setLogLevel(ompl::msg::LOG_ERROR);
+}
+
+int PathPlanner::threads() const {
+  if (config_.planning_threads > 0) return config_.planning_threads;
+  return std::max(1u, std::thread::hardware_concurrency());
+}
+
+bool PathPlanner::valid(const Eigen::Vector3d& p) const {
+  return p.allFinite() && state_bounds_.contains(p) && is_free_(p, check_radius_m_);
+}
+
+bool PathPlanner::segment_valid(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
+  const double len = (b - a).norm();
+  const int n = std::max(1, static_cast<int>(std::ceil(len / resolution_m_)));
+  for (int i = 0; i <= n; ++i)
+    if (!valid(a + (b - a) * (static_cast<double>(i) / n))) return false;
+  return true;
+}
+
+bool PathPlanner::path_valid(const std::vector<Eigen::Vector3d>& path) const {
+  if (path.empty()) return false;
+  if (path.size() == 1) return valid(path[0]);
+  for (std::size_t i = 1; i < path.size(); ++i)
+    if (!segment_valid(path[i - 1], path[i])) return false;
+  return true;
+}
+
+bool PathPlanner::nearest_valid(const Eigen::Vector3d& p, double radius, Eigen::Vector3d& out) const {
+  if (valid(p)) {
+    out = p;
+    return true;
+  }
+  const int shells = static_cast<int>(std::ceil(radius / resolution_m_));
+  for (int k = 1; k <= shells; ++k) {
+    const double r = std::min(radius, k * resolution_m_);
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& d : shell_directions()) {
+      const Eigen::Vector3d q = p + r * d;
+      // Within one shell prefer points that stay closest to the bounds-clamped target.
+      if (valid(q)) {
+        const double dist = (q - p).norm();
+        if (dist < best) {
+          best = dist;
+          out = q;
+        }
+      }
+    }
+    if (std::isfinite(best)) return true;
+  }
+  return false;
+}
+
+PlannedPath PathPlanner::plan(const Eigen::Vector3d& start, const Eigen::Vector3d& goal) const {
+  const auto t0 = Clock::now();
+  PlannedPath out;
+  if (valid(start)) {
+    out = plan_from_valid_start(start, goal);
+  } else {
+    // Escape: nearest valid point whose straight segment holds no occupied voxel.
+    Eigen::Vector3d esc;
+    bool found = false;
+    if (not_occupied_ && nearest_valid(start, escape_radius_m_, esc)) {
+      const double len = (esc - start).norm();
+      const int n = std::max(1, static_cast<int>(std::ceil(len / resolution_m_)));
+      found = true;
+      for (int i = 0; i <= n && found; ++i) {
+        const Eigen::Vector3d q = start + (esc - start) * (static_cast<double>(i) / n);
+        found = bounds_.contains(q) && not_occupied_(q, check_radius_m_);
+      }
+    }
+    if (!found) {
+      out.status = PlannedPath::Status::kStartInvalid;
+      out.distance_to_goal_m = (goal - start).norm();
+    } else {
+      out = plan_from_valid_start(esc, goal);
+      out.escaped = true;
+      if (out.ok())
+        out.path_W.insert(out.path_W.begin(), start);
+      else
+        out.path_W = {start, esc};  // at least get out of the invalid spot
+      if (out.status == PlannedPath::Status::kFailed) out.status = PlannedPath::Status::kApproximate;
+      out.distance_to_goal_m = (goal - out.path_W.back()).norm();
+    }
+  }
+  out.time_s = seconds_since(t0);
+  return out;
+}
+
+PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, const Eigen::Vector3d& goal_in) const {
+  PlannedPath out;
+  // Goals outside the state bounds are pulled in; invalid goals moved to the
+  // nearest valid point near them (a frontier voxel always touches unknown).
+  Eigen::Vector3d goal = goal_in;
+  for (int i = 0; i < 3; ++i) goal[i] = std::clamp(goal[i], state_bounds_.min_m[i], state_bounds_.max_m[i]);
+  Eigen::Vector3d projected;
+  const bool goal_valid =
+      nearest_valid(goal, 2.0 * config_.mav_radius_m + 2.0 * resolution_m_, projected);
+  if (goal_valid) goal = projected;
+
+  if (goal_valid && segment_valid(start, goal)) {
+    out.status = PlannedPath::Status::kStraight;
+    out.path_W = {start, goal};
+    out.distance_to_goal_m = (goal_in - goal).norm();
+    return out;
+  }
+
+  auto space = std::make_shared<ob::RealVectorStateSpace>(3);
+  ob::RealVectorBounds b(3);
+  for (int i = 0; i < 3; ++i) {
+    b.setLow(i, state_bounds_.min_m[i]);
+    b.setHigh(i, state_bounds_.max_m[i]);
+  }
+  space->setBounds(b);
+  auto si = std::make_shared<ob::SpaceInformation>(space);
+  si->setStateValidityChecker([this](const ob::State* s) { return valid(to_eigen(s)); });
+  si->setStateValidityCheckingResolution(std::min(1.0, resolution_m_ / space->getMaximumExtent()));
+  si->setup();
+
+  ob::ScopedState<ob::RealVectorStateSpace> s(space), g(space);
+  for (int i = 0; i < 3; ++i) {
+    s[i] = start[i];
+    g[i] = goal[i];
+  }
+  auto pdef = std::make_shared<ob::ProblemDefinition>(si);
+  pdef->setStartAndGoalStates(s, g, 0.5 * resolution_m_);
+  auto objective = std::make_shared<ob::PathLengthOptimizationObjective>(si);
+  objective->setCostThreshold(ob::Cost(config_.cost_threshold_factor * (goal - start).norm()));
+  pdef->setOptimizationObjective(objective);
+
+  auto planner = std::make_shared<og::InformedRRTstar>(si);
+  planner->setProblemDefinition(pdef);
+  planner->setup();
+  const ob::PlannerStatus st = planner->solve(ob::timedPlannerTerminationCondition(config_.time_budget_s));
+  if (st != ob::PlannerStatus::EXACT_SOLUTION && st != ob::PlannerStatus::APPROXIMATE_SOLUTION) {
+    out.status = PlannedPath::Status::kFailed;
+    out.distance_to_goal_m = (goal_in - start).norm();
+    return out;
+  }
+  auto* geo = pdef->getSolutionPath()->as<og::PathGeometric>();
+  std::vector<Eigen::Vector3d> raw;
+  for (const ob::State* st_i : geo->getStates()) raw.push_back(to_eigen(st_i));
+
+  og::PathGeometric simplified(*geo);
+  if (config_.simplify_time_s > 0) {
+    og::PathSimplifier simplifier(si);
+    const auto ptc = ob::timedPlannerTerminationCondition(config_.simplify_time_s);
+    simplifier.reduceVertices(simplified);
+    if (!ptc()) simplifier.shortcutPath(simplified);
+  }
+  std::vector<Eigen::Vector3d> path;
+  for (const ob::State* st_i : simplified.getStates()) path.push_back(to_eigen(st_i));
+  // Defensive dense check independent of OMPL's motion validator.
+  if (!path_valid(path)) path = raw;
+  if (!path_valid(path) || path.empty()) {
+    out.status = PlannedPath::Status::kFailed;
+    out.distance_to_goal_m = (goal_in - start).norm();
+    return out;
+  }
+  path.front() = start;  // OMPL copies the start exactly; make it bit-exact anyway
+  out.path_W = std::move(path);
+  out.status = (st == ob::PlannerStatus::EXACT_SOLUTION) ? PlannedPath::Status::kExact
+                                                         : PlannedPath::Status::kApproximate;
+  out.distance_to_goal_m = (goal_in - out.path_W.back()).norm();
+  return out;
+}
+
+std::vector<PlannedPath> PathPlanner::plan_all(const Eigen::Vector3d& start,
+                                               const std::vector<Eigen::Vector3d>& goals) const {
+  std::vector<PlannedPath> out(goals.size());
+  std::atomic<std::size_t> next{0};
+  auto worker = [&]() {
+    for (std::size_t i = next++; i < goals.size(); i = next++) {
+      try {
+        out[i] = plan(start, goals[i]);
+      } catch (const std::exception&) {
+        out[i] = PlannedPath();  // kFailed: one bad goal must not end the iteration
+      }
+    }
+  };
+  const int n = std::min<int>(threads(), static_cast<int>(goals.size()));
+  std::vector<std::thread> pool;
+  for (int t = 1; t < n; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  return out;
+}
+
+}  // namespace semexp

@@ -1,0 +1,133 @@
+#pragma once
+// A small dense voxel grid (unknown / free / occupied) standing in for the
+// background map in planning tests and benchmarks: sphere queries and a
+// simple 360-degree entropy raycast in the SphericalGrid layout.
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "semantic_exploration/core/bounds.hpp"
+#include "semantic_exploration/core/planning/gain.hpp"
+#include "semantic_exploration/core/spherical_grid.hpp"
+
+namespace semexp_test {
+
+class TestGrid {
+ public:
+  enum State : std::int8_t { kUnknown = 0, kFree = 1, kOccupied = 2 };
+
+  TestGrid(const semexp::Bounds& bounds, double res, State fill)
+      : bounds_(bounds), res_(res),
+        dims_(((bounds.max_m - bounds.min_m) / res).array().round().cast<int>().matrix()),
+        cells_(static_cast<std::size_t>(dims_.prod()), fill) {}
+
+  const semexp::Bounds& bounds() const { return bounds_; }
+  double resolution() const { return res_; }
+
+  /// Sets every voxel whose centre lies in [lo, hi].
+  void fill_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, State s) {
+    for (int z = 0; z < dims_.z(); ++z)
+      for (int y = 0; y < dims_.y(); ++y)
+        for (int x = 0; x < dims_.x(); ++x) {
+          const Eigen::Vector3d c = center({x, y, z});
+          if ((c.array() >= lo.array()).all() && (c.array() <= hi.array()).all()) at({x, y, z}) = s;
+        }
+  }
+
+  Eigen::Vector3d center(const Eigen::Vector3i& i) const {
+    return bounds_.min_m + (i.cast<double>().array() + 0.5).matrix() * res_;
+  }
+  bool index(const Eigen::Vector3d& p, Eigen::Vector3i& i) const {
+    const Eigen::Vector3d f = ((p - bounds_.min_m) / res_).array().floor();
+    i = f.cast<int>();
+    return (i.array() >= 0).all() && (i.array() < dims_.array()).all();
+  }
+  State state(const Eigen::Vector3d& p) const {
+    Eigen::Vector3i i;
+    return index(p, i) ? at(i) : kUnknown;
+  }
+
+  /// Every voxel whose box meets the sphere has state `want` (or, with
+  /// allow_unknown, is not occupied); space outside the grid is unknown.
+  bool sphere_all(const Eigen::Vector3d& p, double r, bool allow_unknown) const {
+    Eigen::Vector3i lo, hi;
+    const bool in_lo = index(p - Eigen::Vector3d::Constant(r), lo);
+    const bool in_hi = index(p + Eigen::Vector3d::Constant(r), hi);
+    if ((!in_lo || !in_hi) && !allow_unknown) return false;
+    lo = lo.cwiseMax(0);
+    hi = hi.cwiseMin(dims_ - Eigen::Vector3i::Ones());
+    const double h = 0.5 * res_;
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int x = lo.x(); x <= hi.x(); ++x) {
+          const Eigen::Vector3d c = center({x, y, z});
+          const Eigen::Vector3d d = ((p - c).cwiseAbs().array() - h).cwiseMax(0.0);
+          if (d.squaredNorm() > r * r) continue;
+          const State s = at({x, y, z});
+          if (s == kOccupied || (s == kUnknown && !allow_unknown)) return false;
+        }
+    return true;
+  }
+  bool sphere_free(const Eigen::Vector3d& p, double r) const { return sphere_all(p, r, false); }
+  bool sphere_not_occupied(const Eigen::Vector3d& p, double r) const { return sphere_all(p, r, true); }
+
+  /// Entropy gain image: per ray, the unknown voxels (entropy 1, known 0)
+  /// passed until an occupied voxel or d_max, divided by (d_max - d_min) / res.
+  semexp::GainImage entropy_gain(const Eigen::Vector3d& p, const semexp::SphericalGrid& g, double d_min,
+                                 double d_max) const {
+    semexp::GainImage img(g.width, g.height);
+    const double norm = (d_max - d_min) / res_;
+    for (int v = 0; v < g.height; ++v)
+      for (int u = 0; u < g.width; ++u) {
+        const Eigen::Vector3d dir = g.direction(u, v);
+        double sum = 0.0;
+        for (double t = d_min; t <= d_max; t += res_) {
+          Eigen::Vector3i i;
+          if (!index(p + t * dir, i)) break;
+          const State s = at(i);
+          if (s == kOccupied) break;
+          if (s == kUnknown) sum += 1.0;
+        }
+        img.at(u, v) = static_cast<float>(std::min(1.0, sum / norm));
+      }
+    return img;
+  }
+
+  /// Centres of free voxels with an unknown 6-neighbour (inside the grid).
+  std::vector<Eigen::Vector3d> frontiers() const {
+    std::vector<Eigen::Vector3d> out;
+    const Eigen::Vector3i n6[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (int z = 0; z < dims_.z(); ++z)
+      for (int y = 0; y < dims_.y(); ++y)
+        for (int x = 0; x < dims_.x(); ++x) {
+          const Eigen::Vector3i i(x, y, z);
+          if (at(i) != kFree) continue;
+          for (const auto& d : n6) {
+            const Eigen::Vector3i j = i + d;
+            if ((j.array() >= 0).all() && (j.array() < dims_.array()).all() && at(j) == kUnknown) {
+              out.push_back(center(i));
+              break;
+            }
+          }
+        }
+    return out;
+  }
+
+ private:
+  State& at(const Eigen::Vector3i& i) {
+    return cells_[(static_cast<std::size_t>(i.z()) * dims_.y() + i.y()) * dims_.x() + i.x()];
+  }
+  State at(const Eigen::Vector3i& i) const {
+    return cells_[(static_cast<std::size_t>(i.z()) * dims_.y() + i.y()) * dims_.x() + i.x()];
+  }
+
+  semexp::Bounds bounds_;
+  double res_;
+  Eigen::Vector3i dims_;
+  std::vector<State> cells_;
+};
+
+}  // namespace semexp_test
