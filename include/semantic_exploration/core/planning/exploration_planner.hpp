@@ -1,0 +1,100 @@
+#pragma once
+/// @file exploration_planner.hpp
+/// One next-best-view planning iteration (paper Section IV-D, DESIGN Section
+/// 5): sample candidates, plan paths to them in parallel, evaluate their gains
+/// in one batched call, choose the highest utility, give the winner's path
+/// vertices their yaw, and decide when exploration is over.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "semantic_exploration/core/bounds.hpp"
+#include "semantic_exploration/core/camera.hpp"
+#include "semantic_exploration/core/exploration_config.hpp"
+#include "semantic_exploration/core/planner_config.hpp"
+#include "semantic_exploration/core/planning/gain.hpp"
+#include "semantic_exploration/core/planning/interfaces.hpp"
+#include "semantic_exploration/core/planning/path_planner.hpp"
+#include "semantic_exploration/core/planning/sampler.hpp"
+
+namespace semexp {
+
+/// The state of the world seen by one iteration.
+struct ExplorationInputs {
+  Eigen::Vector3d position_W = Eigen::Vector3d::Zero();  ///< current MAV position, m
+  double yaw_rad = 0.0;                                  ///< current MAV yaw, rad
+  double elapsed_s = 0.0;                                ///< time since exploration started, s
+  std::vector<Eigen::Vector3d> frontiers_W;              ///< frontier voxel centres, m
+  std::vector<ObjectSummary> objects;
+  /// Whether all of the background has been observed from <= d_bg. The
+  /// planner cannot know this from frontiers and objects; callers that do not
+  /// track it leave it true (candidates are only sampled at frontiers and
+  /// objects anyway, so nothing else could be planned for).
+  bool background_observed = true;
+};
+
+/// The map behind the planner.
+struct ExplorationProviders {
+  CollisionQuery is_free;       ///< required
+  CollisionQuery not_occupied;  ///< optional: enables escapes from an invalid start
+  GainProvider gains;           ///< required
+  HistoryProvider history;      ///< optional: no history = all directions valid
+};
+
+struct EvaluatedCandidate {
+  CandidateSample sample;
+  PlannedPath plan;
+  Eigen::Vector3d position_W = Eigen::Vector3d::Zero();  ///< path end (the view position), else the sample
+  bool reachable = false;  ///< a collision-free path was found
+  double yaw_rad = 0.0;    ///< best yaw from the sliding window
+  double gain_entropy = 0.0, gain_bg = 0.0, gain_obj = 0.0;  ///< window means of the three images
+  double gain = 0.0;         ///< window mean of the combined image G (Eq. 2)
+  double path_time_s = 0.0;  ///< estimated flight time, s
+  double utility = 0.0;      ///< gain / path time, 1/s
+};
+
+struct IterationResult {
+  std::vector<EvaluatedCandidate> candidates;
+  int winner = -1;                       ///< index into candidates, -1 if none
+  std::vector<Eigen::Vector3d> path_W;   ///< the winner's path (first vertex = current position)
+  std::vector<double> path_yaw_rad;      ///< yaw per path vertex
+  GainSet winner_gains;                  ///< the winner's three gain images
+  GainImage winner_combined;             ///< and G
+  bool finished = false;                 ///< exploration is over; see termination_reason
+  std::string termination_reason;        ///< "explored", "time_limit", "no_reachable_candidate" or ""
+  bool provider_error = false;           ///< a gain/history provider failed (e.g. a service timed out)
+  std::string message;                   ///< what happened, human readable
+  int candidates_reachable = 0;
+  double sampling_s = 0.0, path_planning_s = 0.0, gains_s = 0.0, yaw_s = 0.0, total_s = 0.0;  ///< wall times
+};
+
+class ExplorationPlanner {
+ public:
+  /// map_resolution_m: the background map's voxel edge (motion checks).
+  ExplorationPlanner(const PlannerConfig& planner, const ExplorationConfig& exploration, const Bounds& bounds,
+                     const PinholeCamera& camera, double map_resolution_m);
+
+  /// Runs one iteration. Never throws for provider failures (they are
+  /// reported in the result and do not count as failed iterations).
+  IterationResult plan(const ExplorationInputs& in, const ExplorationProviders& providers);
+
+  /// Consecutive iterations without a reachable candidate of positive utility.
+  int failed_iterations() const { return failed_iterations_; }
+  const PlannerConfig& config() const { return planner_; }
+  int window_columns() const { return window_columns_; }
+
+ private:
+  bool fail(IterationResult& r, const std::string& why);
+
+  PlannerConfig planner_;
+  ExplorationConfig exploration_;
+  Bounds bounds_;
+  PinholeCamera camera_;
+  double map_resolution_m_;
+  CandidateSampler sampler_;
+  int window_columns_;
+  int failed_iterations_ = 0;
+};
+
+}  // namespace semexp

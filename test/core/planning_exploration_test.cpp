@@ -1,0 +1,206 @@
+// One planning iteration end to end on synthetic maps and gain providers with
+// hand-computed utilities; termination reasons; provider failures.
+#include <gtest/gtest.h>
+
+#include <ompl/util/RandomNumbers.h>
+
+#include "planning_test_map.hpp"
+#include "semantic_exploration/core/planning/exploration_planner.hpp"
+
+namespace semexp {
+namespace {
+
+using semexp_test::TestGrid;
+
+const bool kSeeded = (ompl::RNG::setSeed(7), true);
+
+Bounds room_bounds() {
+  Bounds b;
+  b.min_m = {0.0, 0.0, 0.0};
+  b.max_m = {6.0, 4.0, 2.0};
+  return b;
+}
+
+// 36 x 10 image, `value` in the 6 columns centred on azimuth yaw_rad
+// (yaw 0: columns 15..20, centre coordinate 18), 0 elsewhere.
+GainImage window_image(double yaw_rad, float value) {
+  GainImage img(36, 10, 0.0f);
+  const int centre = static_cast<int>(std::lround((yaw_rad + M_PI) / (2 * M_PI) * 36));
+  for (int c = centre - 3; c < centre + 3; ++c)
+    for (int v = 0; v < 10; ++v) img.at((c % 36 + 36) % 36, v) = value;
+  return img;
+}
+
+struct ExplorationTest : ::testing::Test {
+  PlannerConfig config;
+  ExplorationConfig exploration;
+  PinholeCamera camera;  // hfov 1.097 rad -> 6 of 36 columns
+  TestGrid grid{room_bounds(), 0.05, TestGrid::kFree};
+  ExplorationProviders providers;
+  ExplorationTest() {
+    config.a_ent = 1.0;
+    config.a_bg = config.a_obj = 0.0;
+    config.p_frontier = 1.0;
+    config.time_budget_s = 0.2;
+    config.planning_threads = 2;
+    providers.is_free = [this](const Eigen::Vector3d& p, double r) { return grid.sphere_free(p, r); };
+    // Entropy 0.2 towards yaw 0 for x < 3, 0.6 for x >= 3.
+    providers.gains = [](const std::vector<Eigen::Vector3d>& ps) {
+      std::vector<GainSet> out(ps.size());
+      for (std::size_t i = 0; i < ps.size(); ++i) out[i].entropy = window_image(0.0, ps[i].x() < 3.0 ? 0.2f : 0.6f);
+      return out;
+    };
+  }
+  ExplorationInputs inputs() const {
+    ExplorationInputs in;
+    in.position_W = {1, 1, 1};
+    in.yaw_rad = 0.0;
+    in.frontiers_W = {{2, 1, 1}, {5, 1, 1}};
+    return in;
+  }
+};
+
+// A at (2,1,1): 1 m straight at 1.5 m/s = 0.667 s, gain 0.2 -> u = 0.3.
+// B at (5,1,1): 4 m = 2.667 s, gain 0.6 -> u = 0.225. A wins; yaw 0 both.
+TEST_F(ExplorationTest, UtilityPicksKnownWinner) {
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  EXPECT_EQ(planner.window_columns(), 6);
+  const IterationResult r = planner.plan(inputs(), providers);
+  ASSERT_EQ(r.candidates.size(), 2u);
+  ASSERT_GE(r.winner, 0) << r.message;
+  EXPECT_EQ(r.candidates_reachable, 2);
+  for (const auto& c : r.candidates) {
+    EXPECT_TRUE(c.reachable);
+    EXPECT_NEAR(c.yaw_rad, 0.0, 1e-9);
+    const bool a = c.position_W.x() < 3.0;
+    EXPECT_NEAR(c.gain, a ? 0.2 : 0.6, 1e-6);
+    EXPECT_NEAR(c.gain_entropy, c.gain, 1e-6);
+    EXPECT_NEAR(c.path_time_s, a ? 1.0 / 1.5 : 4.0 / 1.5, 1e-9);
+    EXPECT_NEAR(c.utility, a ? 0.3 : 0.225, 1e-6);
+  }
+  const auto& w = r.candidates[static_cast<std::size_t>(r.winner)];
+  EXPECT_TRUE(w.position_W.isApprox(Eigen::Vector3d(2, 1, 1)));
+  ASSERT_EQ(r.path_W.size(), 2u);
+  EXPECT_TRUE(r.path_W.front() == Eigen::Vector3d(1, 1, 1));
+  EXPECT_EQ(r.path_yaw_rad.size(), 2u);
+  EXPECT_FALSE(r.finished);
+  EXPECT_EQ(r.winner_combined.width, 36);
+  EXPECT_GE(r.total_s, r.path_planning_s);
+}
+
+// The history mask at A hides its only bright window: G_A = 0, B wins.
+TEST_F(ExplorationTest, HistoryMaskChangesWinner) {
+  providers.history = [](const std::vector<Eigen::Vector3d>& ps) {
+    std::vector<std::vector<std::uint8_t>> out;
+    for (const auto& p : ps) {
+      std::vector<std::uint8_t> m(360, 1);
+      if (p.x() < 3.0)
+        for (int v = 0; v < 10; ++v)
+          for (int u = 15; u <= 20; ++u) m[static_cast<std::size_t>(v * 36 + u)] = 0;
+      out.push_back(m);
+    }
+    return out;
+  };
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  const IterationResult r = planner.plan(inputs(), providers);
+  ASSERT_GE(r.winner, 0) << r.message;
+  EXPECT_TRUE(r.candidates[static_cast<std::size_t>(r.winner)].position_W.isApprox(Eigen::Vector3d(5, 1, 1)));
+  EXPECT_NEAR(r.candidates[static_cast<std::size_t>(r.winner)].utility, 0.225, 1e-6);
+}
+
+// Goal behind a wall: the path bends through the doorway; intermediate
+// vertices take the yaw of their own gain images (here pi/2 everywhere at
+// x < 4.5), the first keeps the current yaw, the last the candidate's.
+TEST_F(ExplorationTest, IntermediateVertexYaw) {
+  grid.fill_box({2.9, 0.0, 0.0}, {3.1, 2.6, 2.0}, TestGrid::kOccupied);
+  grid.fill_box({2.9, 3.4, 0.0}, {3.1, 4.0, 2.0}, TestGrid::kOccupied);
+  providers.gains = [](const std::vector<Eigen::Vector3d>& ps) {
+    std::vector<GainSet> out(ps.size());
+    for (std::size_t i = 0; i < ps.size(); ++i)
+      out[i].entropy = ps[i].x() > 4.5 ? window_image(-M_PI / 2, 0.5f) : window_image(M_PI / 2, 0.1f);
+    return out;
+  };
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  ExplorationInputs in = inputs();
+  in.yaw_rad = 0.3;
+  in.frontiers_W = {{5, 1, 1}};
+  const IterationResult r = planner.plan(in, providers);
+  ASSERT_GE(r.winner, 0) << r.message;
+  ASSERT_GT(r.path_W.size(), 2u);
+  ASSERT_EQ(r.path_yaw_rad.size(), r.path_W.size());
+  EXPECT_EQ(r.path_yaw_rad.front(), 0.3);
+  EXPECT_NEAR(r.path_yaw_rad.back(), -M_PI / 2, 1e-9);
+  for (std::size_t i = 1; i + 1 < r.path_W.size(); ++i)
+    EXPECT_NEAR(r.path_yaw_rad[i], r.path_W[i].x() > 4.5 ? -M_PI / 2 : M_PI / 2, 1e-9) << r.path_W[i].transpose();
+}
+
+TEST_F(ExplorationTest, TerminationExplored) {
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  ExplorationInputs in = inputs();
+  in.frontiers_W.clear();
+  ObjectSummary o;
+  o.id = 1;
+  o.observed_fraction = 0.95;
+  in.objects = {o};
+  IterationResult r = planner.plan(in, providers);
+  EXPECT_TRUE(r.finished);
+  EXPECT_EQ(r.termination_reason, "explored");
+  // An object not yet seen from <= d_obj keeps it going (semantic mode).
+  in.objects[0].observed_fraction = 0.5;
+  in.background_observed = true;
+  r = planner.plan(in, providers);
+  EXPECT_FALSE(r.finished && r.termination_reason == "explored");
+  in.objects[0].observed_fraction = 0.95;
+  in.background_observed = false;
+  r = planner.plan(in, providers);
+  EXPECT_NE(r.termination_reason, "explored");
+}
+
+TEST_F(ExplorationTest, TerminationTimeLimit) {
+  config.time_limit_s = 100.0;
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  ExplorationInputs in = inputs();
+  in.elapsed_s = 99.0;
+  EXPECT_FALSE(planner.plan(in, providers).finished);
+  in.elapsed_s = 100.0;
+  const IterationResult r = planner.plan(in, providers);
+  EXPECT_TRUE(r.finished);
+  EXPECT_EQ(r.termination_reason, "time_limit");
+}
+
+// Start inside an occupied block: nothing reachable, K = 3 iterations, then stop.
+TEST_F(ExplorationTest, TerminationNoReachableCandidate) {
+  config.max_failed_iterations = 3;
+  grid.fill_box({0.5, 0.5, 0.5}, {1.5, 1.5, 1.5}, TestGrid::kOccupied);
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  for (int it = 1; it <= 3; ++it) {
+    const IterationResult r = planner.plan(inputs(), providers);
+    EXPECT_EQ(r.winner, -1);
+    EXPECT_TRUE(r.path_W.empty());
+    EXPECT_EQ(planner.failed_iterations(), it);
+    EXPECT_EQ(r.finished, it == 3) << r.message;
+    if (it == 3) {
+      EXPECT_EQ(r.termination_reason, "no_reachable_candidate");
+    }
+    EXPECT_NE(r.message.find("not in free space"), std::string::npos) << r.message;
+  }
+}
+
+TEST_F(ExplorationTest, ProviderFailureIsReportedNotCounted) {
+  providers.gains = [](const std::vector<Eigen::Vector3d>&) -> std::vector<GainSet> {
+    throw std::runtime_error("service background_map/compute_gains timed out");
+  };
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  const IterationResult r = planner.plan(inputs(), providers);
+  EXPECT_TRUE(r.provider_error);
+  EXPECT_FALSE(r.finished);
+  EXPECT_EQ(r.winner, -1);
+  EXPECT_EQ(planner.failed_iterations(), 0);
+  EXPECT_NE(r.message.find("timed out"), std::string::npos);
+  // Wrong number of results is an error too.
+  providers.gains = [](const std::vector<Eigen::Vector3d>&) { return std::vector<GainSet>(1); };
+  EXPECT_TRUE(planner.plan(inputs(), providers).provider_error);
+}
+
+}  // namespace
+}  // namespace semexp
