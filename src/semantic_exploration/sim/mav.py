@@ -1,0 +1,207 @@
+"""Kinematic MAV: follows a path of (position, yaw) waypoints within speed, yaw-rate and
+acceleration limits, and checks a collision sphere against the scene.
+
+Motion: the velocity is steered towards "straight at the current waypoint" at
+a speed that lets the MAV stop (at a_max) at the next vertex where the path
+turns, and changed by at most a_max * dt per step; so |v| <= v_max and
+|dv/dt| <= a_max hold by construction and straight segments are tracked
+exactly. Yaw works the same way with omega_max and alpha_max. The yaw target
+of a segment is the yaw of the waypoint it leads to.
+"""
+
+import math
+from typing import List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from .config import MavConfig
+
+
+def wrap_angle(a: float) -> float:
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+class PathFollower:
+    #: Vertices where the path turns by less than this are passed without stopping, rad.
+    CORNER_ANGLE_RAD = math.radians(5.0)
+
+    def __init__(self, cfg: MavConfig, start: Sequence[float]):
+        cfg.validate()
+        self.cfg = cfg
+        self.p = np.array(start[:3], float)
+        self.v = np.zeros(3)
+        self.yaw = float(start[3])
+        self.omega = 0.0
+        self.path: List[Tuple[np.ndarray, float]] = []
+        self.i = 0
+        self._stop_after: List[int] = []
+
+    @property
+    def pose(self) -> Tuple[float, float, float, float]:
+        return (float(self.p[0]), float(self.p[1]), float(self.p[2]), self.yaw)
+
+    @property
+    def active(self) -> bool:
+        return bool(self.path)
+
+    def set_path(self, waypoints: Sequence[Sequence[float]]) -> None:
+        """Replaces the path; [] makes the MAV stop where it is (hover)."""
+        self.path = [(np.array(w[:3], float), float(w[3])) for w in waypoints]
+        self.i = 0
+        n = len(self.path)
+        # For each waypoint: index of the next vertex at which the MAV must stop.
+        stops = [n - 1] * n
+        nxt = n - 1
+        for k in range(n - 2, -1, -1):
+            a = self.path[k][0] - (self.path[k - 1][0] if k > 0 else self.p)
+            b = self.path[k + 1][0] - self.path[k][0]
+            na, nb = np.linalg.norm(a), np.linalg.norm(b)
+            if na < 1e-9 or nb < 1e-9 or math.acos(np.clip(a @ b / (na * nb), -1, 1)) > self.CORNER_ANGLE_RAD:
+                nxt = k
+            stops[k] = nxt
+        self._stop_after = stops
+
+    def _remaining_to_stop(self) -> float:
+        d = np.linalg.norm(self.path[self.i][0] - self.p)
+        for k in range(self.i, self._stop_after[self.i]):
+            d += np.linalg.norm(self.path[k + 1][0] - self.path[k][0])
+        return d
+
+    def step(self, dt: float) -> bool:
+        """Advances by dt seconds; returns True once when the path's end is reached."""
+        c = self.cfg
+        a_step = c.a_max_mps2 * dt
+        # Translation.
+        if self.path:
+            while True:
+                target, _ = self.path[self.i]
+                e = target - self.p
+                dist = float(np.linalg.norm(e))
+                last = self.i == len(self.path) - 1
+                pass_through = not last and self._stop_after[self.i] != self.i
+                # Pass-through vertices are passed once within a step; stop vertices are left
+                # only after the exact arrival below (v = 0), so corners are not cut.
+                if not last and ((pass_through and dist <= max(0.5 * c.position_tolerance_m,
+                                                               float(np.linalg.norm(self.v)) * dt))
+                                 or (not pass_through and dist <= 1e-9 and not self.v.any())):
+                    self.i += 1
+                    continue
+                break
+            if dist > 1e-12:
+                speed = min(c.v_max_mps, math.sqrt(2.0 * 0.9 * c.a_max_mps2 * self._remaining_to_stop()))
+                v_target = e / dist * speed
+            else:
+                v_target = np.zeros(3)
+            if self._stop_after[self.i] == self.i and dist <= np.linalg.norm(self.v) * dt + 1e-12 \
+                    and np.linalg.norm(self.v) <= a_step:
+                # Arrive exactly: the last bit of braking fits in one step.
+                self.v = np.zeros(3)
+                self.p = target.copy()
+            else:
+                self._accelerate(v_target, a_step)
+                self.p = self.p + self.v * dt
+        else:
+            self._accelerate(np.zeros(3), a_step)
+            self.p = self.p + self.v * dt
+        # Yaw.
+        yaw_target = self.path[self.i][1] if self.path else self.yaw
+        e_yaw = wrap_angle(yaw_target - self.yaw)
+        al_step = c.alpha_max_radps2 * dt
+        if abs(e_yaw) <= abs(self.omega) * dt + 1e-12 and abs(self.omega) <= al_step:
+            self.yaw = yaw_target if self.path else self.yaw
+            self.omega = 0.0
+        else:
+            w_target = math.copysign(min(c.omega_max_radps, math.sqrt(2.0 * 0.9 * c.alpha_max_radps2 * abs(e_yaw))),
+                                     e_yaw) if self.path else 0.0
+            dw = max(-al_step, min(al_step, w_target - self.omega))
+            self.omega = max(-c.omega_max_radps, min(c.omega_max_radps, self.omega + dw))
+            self.yaw = wrap_angle(self.yaw + self.omega * dt)
+        # Goal check.
+        if self.path and self.i == len(self.path) - 1:
+            target, yaw_t = self.path[-1]
+            if (np.linalg.norm(target - self.p) <= c.position_tolerance_m
+                    and abs(wrap_angle(yaw_t - self.yaw)) <= c.yaw_tolerance_rad
+                    and np.linalg.norm(self.v) <= c.speed_tolerance_mps):
+                self.path = []
+                return True
+        return False
+
+    def _accelerate(self, v_target: np.ndarray, a_step: float) -> None:
+        dv = v_target - self.v
+        n = float(np.linalg.norm(dv))
+        if n > a_step:
+            dv *= a_step / n
+        self.v = self.v + dv
+        s = float(np.linalg.norm(self.v))
+        if s > self.cfg.v_max_mps:
+            self.v *= self.cfg.v_max_mps / s
+
+
+def closest_points_on_triangles(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Closest point to p on each triangle (a, b, c are (n, 3)); Ericson's region tests, vectorised."""
+    ab, ac, ap = b - a, c - a, p - a
+    d1, d2 = np.einsum("ij,ij->i", ab, ap), np.einsum("ij,ij->i", ac, ap)
+    bp = p - b
+    d3, d4 = np.einsum("ij,ij->i", ab, bp), np.einsum("ij,ij->i", ac, bp)
+    cp = p - c
+    d5, d6 = np.einsum("ij,ij->i", ab, cp), np.einsum("ij,ij->i", ac, cp)
+    va = d3 * d6 - d5 * d4
+    vb = d5 * d2 - d1 * d6
+    vc = d1 * d4 - d3 * d2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denom = va + vb + vc
+        v = vb / denom
+        w = vc / denom
+        out = a + ab * v[:, None] + ac * w[:, None]  # inside the face
+        # Edge regions.
+        t_ab = d1 / (d1 - d3)
+        t_ac = d2 / (d2 - d6)
+        t_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+    m = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
+    out[m] = a[m] + ab[m] * t_ab[m, None]
+    m = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
+    out[m] = a[m] + ac[m] * t_ac[m, None]
+    m = (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0)
+    out[m] = b[m] + (c[m] - b[m]) * t_bc[m, None]
+    # Vertex regions.
+    m = (d1 <= 0) & (d2 <= 0)
+    out[m] = a[m]
+    m = (d3 >= 0) & (d4 <= d3)
+    out[m] = b[m]
+    m = (d6 >= 0) & (d5 <= d6)
+    out[m] = c[m]
+    # Degenerate triangles: nearest vertex.
+    bad = ~np.isfinite(out).all(1)
+    if bad.any():
+        cand = np.stack([a[bad], b[bad], c[bad]], 1)
+        k = np.argmin(np.linalg.norm(cand - p, axis=2), 1)
+        out[bad] = cand[np.arange(len(k)), k]
+    return out
+
+
+class CollisionChecker:
+    """Exact sphere-vs-triangle-mesh test (AABB prefilter, then closest points)."""
+
+    def __init__(self, triangles: np.ndarray, radius_m: float):
+        self.tri = np.asarray(triangles, float)
+        self.lo = self.tri.min(1)
+        self.hi = self.tri.max(1)
+        self.radius = float(radius_m)
+
+    def nearest(self, p: Sequence[float], radius: Optional[float] = None) -> Tuple[float, int]:
+        """(distance, triangle index) of the nearest triangle within ``radius`` of p; (inf, -1) if none."""
+        r = self.radius if radius is None else radius
+        p = np.asarray(p, float)
+        cand = np.flatnonzero(np.all(self.lo <= p + r, 1) & np.all(self.hi >= p - r, 1))
+        if len(cand) == 0:
+            return math.inf, -1
+        t = self.tri[cand]
+        q = closest_points_on_triangles(p, t[:, 0], t[:, 1], t[:, 2])
+        d = np.linalg.norm(q - p, axis=1)
+        k = int(np.argmin(d))
+        if d[k] > r:
+            return math.inf, -1
+        return float(d[k]), int(cand[k])
+
+    def collides(self, p: Sequence[float]) -> bool:
+        return self.nearest(p)[1] >= 0
