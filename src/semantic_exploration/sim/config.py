@@ -138,28 +138,49 @@ class SceneConfig:
 
 
 @dataclass
+class ClassesConfig:
+    names: List[str] = field(default_factory=lambda: ["chair", "table", "sofa", "bed", "cabinet", "plant",
+                                                       "tv_monitor", "backpack", "keyboard", "cushion"])
+    of_interest: List[str] = field(default_factory=lambda: ["chair"])  # what the detector reports
+
+    def validate(self, ns="classes/"):
+        from .classes import ClassTable
+        _req(isinstance(self.names, list) and isinstance(self.of_interest, list), ns + "names",
+             "names and of_interest must be lists")
+        ClassTable(self.names, self.of_interest).validate(ns)
+
+
+@dataclass
+class FramesConfig:
+    world: str = "world"
+    body: str = "body"
+    camera: str = "camera"
+
+    def validate(self, ns="frames/"):
+        for n in ("world", "body", "camera"):
+            _req(isinstance(getattr(self, n), str) and getattr(self, n), ns + n, "must be a non-empty frame name")
+        _req(len({self.world, self.body, self.camera}) == 3, ns + "camera", "frame names must differ")
+
+
+@dataclass
 class SimConfig:
     camera: CameraConfig = field(default_factory=CameraConfig)
     noise: NoiseConfig = field(default_factory=NoiseConfig)
     detector: DetectorConfig = field(default_factory=DetectorConfig)
     mav: MavConfig = field(default_factory=MavConfig)
     scene: SceneConfig = field(default_factory=SceneConfig)
-    class_names: List[str] = field(default_factory=lambda: ["chair", "table", "sofa", "bed", "cabinet", "plant",
-                                                             "tv_monitor", "backpack", "keyboard", "cushion"])
-    classes_of_interest: List[str] = field(default_factory=lambda: ["chair"])
+    classes: ClassesConfig = field(default_factory=ClassesConfig)
+    frames: FramesConfig = field(default_factory=FramesConfig)
     real_time_factor: float = 1.0    # sim seconds per wall second; 0 = as fast as possible
     lockstep: bool = False
     lockstep_nodes: List[str] = field(default_factory=list)
     lockstep_timeout_s: float = 5.0          # wall s to wait for one frame
-    lockstep_startup_timeout_s: float = 30.0  # wall s to wait for subscribers before the first frame
+    lockstep_startup_timeout_s: float = 30.0  # wall s to wait for a depth subscriber before the first frame
     start_pose: Optional[List[float]] = None  # [x, y, z, yaw] (m, rad); None = scene's start
-    bounds_min_m: Optional[List[float]] = None  # path bounds; None = scene bounds
+    bounds_min_m: Optional[List[float]] = None  # accepted path region; None = scene bounds
     bounds_max_m: Optional[List[float]] = None
     start_time_s: float = 1.0        # first sim time stamp, s (0 means "no time" in ROS)
     tf_rate_hz: float = 50.0         # world->body tf and mav/pose rate (sim time)
-    world_frame: str = "world"
-    body_frame: str = "body"
-    camera_frame: str = "camera"
 
     def validate(self):
         self.camera.validate()
@@ -167,8 +188,8 @@ class SimConfig:
         self.detector.validate()
         self.mav.validate()
         self.scene.validate()
-        from .classes import ClassTable
-        ClassTable(self.class_names, self.classes_of_interest).validate("")
+        self.classes.validate()
+        self.frames.validate()
         _req(_finite(self.real_time_factor) and self.real_time_factor >= 0, "real_time_factor", "must be >= 0")
         _req(isinstance(self.lockstep_nodes, list) and all(isinstance(n, str) and n for n in self.lockstep_nodes),
              "lockstep_nodes", "must be a list of node names")
@@ -183,30 +204,37 @@ class SimConfig:
             v = getattr(self, name)
             if v is not None:
                 _req(isinstance(v, list) and len(v) == 3 and all(map(_finite, v)), name, "must be 3 finite numbers (m)")
-        if self.bounds_min_m is not None and self.bounds_max_m is not None:
+        _req((self.bounds_min_m is None) == (self.bounds_max_m is None), "bounds_max_m",
+             "give both bounds_min_m and bounds_max_m, or neither")
+        if self.bounds_min_m is not None:
             _req(all(a < b for a, b in zip(self.bounds_min_m, self.bounds_max_m)), "bounds_max_m",
                  "must be > bounds_min_m on every axis")
         _req(_finite(self.start_time_s) and self.start_time_s > 0, "start_time_s", "must be > 0 s")
         _req(_finite(self.tf_rate_hz) and self.tf_rate_hz > 0, "tf_rate_hz", "must be > 0 Hz")
-        for n in ("world_frame", "body_frame", "camera_frame"):
-            _req(isinstance(getattr(self, n), str) and getattr(self, n), n, "must be a non-empty frame name")
         return self
 
 
-def from_dict(d: Dict[str, Any], cls=SimConfig, ns: str = ""):
-    """Builds a config dataclass from a nested dict (e.g. rosparam), rejecting unknown keys and wrong types."""
+def from_dict(d: Dict[str, Any], cls=SimConfig, ns: str = "", unknown: Optional[List[str]] = None):
+    """Builds a config dataclass from a nested dict (e.g. rosparam), rejecting wrong types.
+
+    Unknown keys raise ConfigError, or are appended to ``unknown`` if a list is
+    given (so that one parameter file can be shared with other nodes).
+    """
     if d is None:
         d = {}
     if not isinstance(d, dict):
         raise ConfigError(ns.rstrip("/") or "(root)", "must be a dictionary")
     obj = cls()
-    names = {f.name: f for f in fields(cls)}
+    names = {f.name for f in fields(cls)}
     for k, v in d.items():
         if k not in names:
-            raise ConfigError(ns + k, "unknown parameter")
+            if unknown is None:
+                raise ConfigError(ns + k, "unknown parameter")
+            unknown.append(ns + k)
+            continue
         cur = getattr(obj, k)
         if is_dataclass(cur):
-            setattr(obj, k, from_dict(v, type(cur), ns + k + "/"))
+            setattr(obj, k, from_dict(v, type(cur), ns + k + "/", unknown))
             continue
         if isinstance(cur, bool):
             _req(isinstance(v, bool), ns + k, "must be true or false")
@@ -218,14 +246,15 @@ def from_dict(d: Dict[str, Any], cls=SimConfig, ns: str = ""):
             _req(isinstance(v, int) and not isinstance(v, bool), ns + k, "must be an integer")
         elif isinstance(cur, str):
             _req(isinstance(v, str), ns + k, "must be a string")
-        elif isinstance(cur, list) or cur is None:
+        elif cur is None and isinstance(v, (int, float)) and not isinstance(v, bool):
+            v = float(v)  # Optional[float] setting given a number
+        elif cur is None or isinstance(cur, list):
             if cur is None and (v is None or v == [] or v == ""):
                 v = None
             elif v is not None:
                 _req(isinstance(v, list), ns + k, "must be a list")
-                v = [float(x) if isinstance(x, int) and not isinstance(x, bool) and isinstance(cur, list)
-                     and cur and isinstance(cur[0], float) else x for x in v]
-                if cur is None:
+                numeric = cur is None or (cur and isinstance(cur[0], float))
+                if numeric:
                     v = [float(x) if isinstance(x, int) and not isinstance(x, bool) else x for x in v]
         setattr(obj, k, v)
     return obj

@@ -1,0 +1,56 @@
+#!/usr/bin/env python3
+"""mav_sim: Habitat-style MAV simulator node (see src/semantic_exploration/sim/node.py).
+
+catkin installs this script with a /usr/bin/python3 shebang, which does not see
+the project's venv (embreex, trimesh). The launch file runs it with the venv's
+python through launch-prefix; if it is started some other way without those
+modules, it re-executes itself with $SEMEXP_VENV/bin/python, or with the venv
+next to the source tree (<repo>/.venv) found from this file or from rospack.
+"""
+import os
+import sys
+
+
+def _venv_candidates():
+    env = os.environ.get("SEMEXP_VENV")
+    if env:
+        yield env
+    here = os.path.dirname(os.path.realpath(__file__))
+    # Source tree (scripts/) and colcon install space (<repo>/.colcon/install/lib/<pkg>/).
+    yield os.path.join(here, "..", ".venv")
+    yield os.path.join(here, "..", "..", "..", "..", ".venv")
+    try:
+        import rospkg
+        share = rospkg.RosPack().get_path("semantic_exploration")
+        yield os.path.join(share, ".venv")
+        yield os.path.join(share, "..", "..", "..", "..", ".venv")
+    except Exception:  # rospkg missing or package not on ROS_PACKAGE_PATH
+        pass
+
+
+def _ensure_ray_tracer():
+    try:
+        import embreex  # noqa: F401
+        import trimesh  # noqa: F401
+        return
+    except ImportError:
+        pass
+    if os.environ.get("SEMEXP_SIM_REEXEC") != "1":
+        for venv in _venv_candidates():
+            py = os.path.abspath(os.path.join(venv, "bin", "python"))
+            if os.path.isfile(py) and os.access(py, os.X_OK):
+                os.environ["SEMEXP_SIM_REEXEC"] = "1"
+                os.execv(py, [py, os.path.realpath(__file__)] + sys.argv[1:])
+    sys.stderr.write("mav_sim: cannot import embreex/trimesh. Run scripts/setup.sh and set SEMEXP_VENV to its venv "
+                     "(or pass python:=<venv>/bin/python to sim_only.launch).\n")
+    sys.exit(1)
+
+
+if __name__ == "__main__":
+    _ensure_ray_tracer()
+    try:
+        from semantic_exploration.sim.node import main
+    except ImportError:  # running from the source tree without an install space
+        sys.path.insert(0, os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "src"))
+        from semantic_exploration.sim.node import main
+    main()

@@ -1,0 +1,314 @@
+"""The ``mav_sim`` ROS node: owns sim time and publishes what a MAV with an RGB-D camera and a
+detector would, for a scene rendered by :class:`Simulator`.
+
+Topics (relative names, resolved in the node's namespace):
+  sub  planner/path (nav_msgs/Path, yaw in orientation), frame_integrated (FrameIntegrated, lockstep),
+       ~load_scene (std_msgs/String: path of a scene file to switch to)
+  pub  camera/depth/image_raw (32FC1 m), camera/rgb/image_raw (rgb8), camera/camera_info,
+       camera/instance_gt (16UC1 object id), camera/class_gt (16UC1 class id), detections,
+       mav/pose, mav/goal_reached (PoseStamped), mav/collisions (UInt32, latched), /clock, tf
+
+Time: the node advances sim time in physics steps and publishes /clock; it
+never reads ROS time itself (stamps come from its own counter), so it works
+with use_sim_time on or off. Frames are rendered every 1/camera/rate_hz sim
+seconds; the world->body transform is published at every frame stamp (before
+the images) and at tf_rate_hz. In lockstep mode, sim time stops before each
+new frame until every node named in lockstep_nodes has reported the previous
+frame's stamp on frame_integrated (or lockstep_timeout_s wall seconds pass,
+which is logged).
+"""
+
+import queue
+import threading
+import time
+from typing import Dict, Optional
+
+import numpy as np
+
+import rospy
+import tf2_ros
+from geometry_msgs.msg import PoseStamped, TransformStamped
+from nav_msgs.msg import Path
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import CameraInfo, Image
+from std_msgs.msg import Header, String, UInt32
+
+from semantic_exploration.msg import Detection, Detections, FrameIntegrated
+
+from .config import ConfigError, SimConfig, from_dict
+from .scene import SceneError, export_ground_truth
+from .simulator import PathError, Simulator, load_simulator, quaternion_from_matrix, waypoints_from_poses
+
+NS = 1_000_000_000
+
+
+def _stamp(t_ns: int) -> rospy.Time:
+    return rospy.Time(t_ns // NS, t_ns % NS)
+
+
+def _image(arr: np.ndarray, encoding: str, header) -> Image:
+    m = Image()
+    m.header = header
+    m.height, m.width = arr.shape[:2]
+    m.encoding = encoding
+    m.is_bigendian = 0
+    arr = np.ascontiguousarray(arr)
+    m.step = arr.strides[0]
+    m.data = arr.tobytes()
+    return m
+
+
+def _short_name(n: str) -> str:
+    return n.rstrip("/").rsplit("/", 1)[-1]
+
+
+class MavSimNode:
+    def __init__(self):
+        unknown = []
+        params = rospy.get_param("~", {})
+        try:
+            self.cfg: SimConfig = from_dict(params, unknown=unknown).validate()
+        except ConfigError as e:
+            rospy.logfatal("mav_sim: %s", e)
+            raise
+        for u in unknown:
+            rospy.logdebug("mav_sim: ignoring parameter ~%s (not a simulator setting)", u)
+        c = self.cfg
+        self.sim: Optional[Simulator] = None
+        try:
+            self._install(load_simulator(c))
+        except (SceneError, ConfigError) as e:
+            rospy.logerr("mav_sim: cannot load scene: %s. Waiting for a valid scene on %s.", e,
+                         rospy.resolve_name("~load_scene"))
+
+        latch = dict(queue_size=2)
+        self.pub_depth = rospy.Publisher("camera/depth/image_raw", Image, **latch)
+        self.pub_rgb = rospy.Publisher("camera/rgb/image_raw", Image, **latch)
+        self.pub_info = rospy.Publisher("camera/camera_info", CameraInfo, **latch)
+        self.pub_inst = rospy.Publisher("camera/instance_gt", Image, **latch)
+        self.pub_cls = rospy.Publisher("camera/class_gt", Image, **latch)
+        self.pub_det = rospy.Publisher("detections", Detections, **latch)
+        self.pub_pose = rospy.Publisher("mav/pose", PoseStamped, queue_size=10)
+        self.pub_goal = rospy.Publisher("mav/goal_reached", PoseStamped, queue_size=10)
+        self.pub_coll = rospy.Publisher("mav/collisions", UInt32, queue_size=1, latch=True)
+        self.pub_clock = rospy.Publisher("/clock", Clock, queue_size=10)
+        self.tf = tf2_ros.TransformBroadcaster()
+        self.tf_static = tf2_ros.StaticTransformBroadcaster()
+
+        self._lock = threading.Condition()
+        self._reported: Dict[str, int] = {}
+        self._pending_path = None
+        self._requests: "queue.Queue" = queue.Queue()
+        rospy.Subscriber("planner/path", Path, self._on_path, queue_size=5)
+        rospy.Subscriber("frame_integrated", FrameIntegrated, self._on_integrated, queue_size=50)
+        rospy.Subscriber("~load_scene", String, lambda m: self._requests.put(m.data), queue_size=2)
+        self._lockstep_nodes = [_short_name(n) for n in c.lockstep_nodes]
+        self.pub_coll.publish(UInt32(0))
+
+    # ------------------------------------------------------------- callbacks
+    def _on_path(self, msg: Path) -> None:
+        frame = msg.header.frame_id.lstrip("/")
+        if frame and frame != self.cfg.frames.world:
+            rospy.logerr("mav_sim: rejected path in frame '%s' (expected '%s')", frame, self.cfg.frames.world)
+            return
+        try:
+            wps = waypoints_from_poses([((p.pose.position.x, p.pose.position.y, p.pose.position.z),
+                                         (p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z,
+                                          p.pose.orientation.w)) for p in msg.poses])
+            if self.sim is not None:
+                wps = self.sim.check_path(wps)
+        except PathError as e:
+            rospy.logerr("mav_sim: rejected path of %d poses: %s; keeping the previous one", len(msg.poses), e)
+            return
+        with self._lock:
+            self._pending_path = wps
+
+    def _on_integrated(self, msg: FrameIntegrated) -> None:
+        name = _short_name(msg.node)
+        with self._lock:
+            self._reported[name] = max(self._reported.get(name, 0), msg.header.stamp.to_nsec())
+            self._lock.notify_all()
+
+    # ---------------------------------------------------------------- helpers
+    def _install(self, sim: Simulator) -> None:
+        c = self.cfg
+        self.sim = sim
+        lo, hi = sim.bounds
+        rospy.loginfo("mav_sim: scene '%s': %d triangles, %d objects (%d of known classes), bounds [%s] - [%s], "
+                      "start (%.2f, %.2f, %.2f, yaw %.2f)", sim.scene.name, len(sim.scene.faces),
+                      len(sim.scene.objects), len(sim.scene.thing_ids(c.classes.names)),
+                      ", ".join("%.2f" % v for v in lo), ", ".join("%.2f" % v for v in hi), *sim.start)
+        unl = getattr(sim.scene, "unlabelled_ids", [])
+        if unl:
+            rospy.logwarn("mav_sim: %d face object ids have no entry in the label table; treated as background",
+                          len(unl))
+        if sim.start_collides():
+            rospy.logwarn("mav_sim: the start pose (%.2f, %.2f, %.2f) is within R = %.3f m of the scene",
+                          *sim.start[:3], c.mav.radius_m)
+        if c.scene.gt_dir:
+            try:
+                export_ground_truth(sim.scene, c.scene.gt_dir, c.classes.names)
+                rospy.loginfo("mav_sim: ground truth written to %s", c.scene.gt_dir)
+            except (OSError, SceneError) as e:
+                rospy.logerr("mav_sim: ground-truth export to '%s' failed: %s", c.scene.gt_dir, e)
+
+    def _transform(self, T: np.ndarray, parent: str, child: str, t_ns: int) -> TransformStamped:
+        m = TransformStamped()
+        m.header.stamp = _stamp(t_ns)
+        m.header.frame_id = parent
+        m.child_frame_id = child
+        m.transform.translation.x, m.transform.translation.y, m.transform.translation.z = T[:3, 3]
+        q = quaternion_from_matrix(T[:3, :3])
+        m.transform.rotation.x, m.transform.rotation.y, m.transform.rotation.z, m.transform.rotation.w = q
+        return m
+
+    def _pose_msg(self, t_ns: int) -> PoseStamped:
+        T = self.sim.T_WB()
+        m = PoseStamped()
+        m.header.stamp = _stamp(t_ns)
+        m.header.frame_id = self.cfg.frames.world
+        m.pose.position.x, m.pose.position.y, m.pose.position.z = T[:3, 3]
+        q = quaternion_from_matrix(T[:3, :3])
+        m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z, m.pose.orientation.w = q
+        return m
+
+    def _publish_body(self, t_ns: int) -> None:
+        f = self.cfg.frames
+        self.tf.sendTransform(self._transform(self.sim.T_WB(), f.world, f.body, t_ns))
+        self.pub_pose.publish(self._pose_msg(t_ns))
+
+    def _publish_frame(self, t_ns: int) -> None:
+        c = self.cfg
+        out = self.sim.render()
+        hdr = Header(stamp=_stamp(t_ns), frame_id=c.frames.camera)
+        info = CameraInfo(header=hdr, **self.sim.renderer.camera_info())
+        self.pub_info.publish(info)
+        self.pub_depth.publish(_image(out["depth"], "32FC1", hdr))
+        self.pub_rgb.publish(_image(out["rgb"], "rgb8", hdr))
+        self.pub_inst.publish(_image(out["instance"], "16UC1", hdr))
+        self.pub_cls.publish(_image(out["class"], "16UC1", hdr))
+        dets = Detections(header=hdr, instance_image=_image(out["detection_mask"], "16UC1", hdr))
+        dets.detections = [Detection(instance_id=d["instance_id"], class_id=d["class_id"],
+                                     class_name=d["class_name"], confidence=d["confidence"])
+                           for d in out["detections"]]
+        self.pub_det.publish(dets)
+
+    def _wait_lockstep(self, frame_ns: int) -> None:
+        """Blocks (wall time) until every lockstep node has reported frame_ns."""
+        deadline = time.monotonic() + self.cfg.lockstep_timeout_s
+        with self._lock:
+            while not rospy.is_shutdown():
+                missing = [n for n in self._lockstep_nodes if self._reported.get(n, -1) < frame_ns]
+                if not missing:
+                    return
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    rospy.logwarn("mav_sim: lockstep: no frame_integrated from %s for frame %.3f s after %.1f s; "
+                                  "continuing", ", ".join(missing), frame_ns / NS, self.cfg.lockstep_timeout_s)
+                    return
+                self._lock.wait(min(left, 0.1))
+
+    def _wait_for_subscribers(self) -> None:
+        deadline = time.monotonic() + self.cfg.lockstep_startup_timeout_s
+        while not rospy.is_shutdown() and self.pub_depth.get_num_connections() == 0:
+            if time.monotonic() > deadline:
+                rospy.logwarn("mav_sim: lockstep: nobody subscribes to %s after %.0f s; starting anyway",
+                              self.pub_depth.resolved_name, self.cfg.lockstep_startup_timeout_s)
+                return
+            time.sleep(0.05)
+        time.sleep(0.2)  # let the other subscribers of the suite connect too
+
+    def _handle_requests(self) -> bool:
+        """Applies queued scene switches; returns True if the scene changed."""
+        changed = False
+        while not self._requests.empty():
+            path = self._requests.get()
+            try:
+                cfg = from_dict(rospy.get_param("~", {}), unknown=[]).validate()
+                sim = load_simulator(cfg, path)
+            except (SceneError, ConfigError) as e:
+                rospy.logerr("mav_sim: rejected scene '%s': %s; keeping the current scene", path, e)
+                continue
+            self._install(sim)
+            changed = True
+        return changed
+
+    # ------------------------------------------------------------------ loop
+    def spin(self) -> None:
+        c = self.cfg
+        dt_ns = int(round(NS / c.mav.physics_rate_hz))
+        frame_ns = int(round(NS / c.camera.rate_hz))
+        tf_ns = int(round(NS / c.tf_rate_hz))
+        t_ns = int(round(c.start_time_s * NS))
+        next_frame, next_tf = t_ns, t_ns
+        last_frame: Optional[int] = None
+        anchor_wall, anchor_ns = time.monotonic(), t_ns
+        self.pub_clock.publish(Clock(clock=_stamp(t_ns)))
+        while not rospy.is_shutdown():
+            if self._handle_requests():
+                last_frame = None
+            if self.sim is None:
+                time.sleep(0.1)
+                anchor_wall, anchor_ns = time.monotonic(), t_ns
+                continue
+            sim = self.sim
+            if last_frame is None:
+                f = c.frames
+                self.tf_static.sendTransform(self._transform(sim.T_BC, f.body, f.camera, t_ns))
+            with self._lock:
+                path, self._pending_path = self._pending_path, None
+            if path is not None:
+                try:
+                    sim.set_path(path)
+                except PathError as e:  # checked against a scene that was replaced since
+                    rospy.logerr("mav_sim: rejected path: %s", e)
+                else:
+                    if path:
+                        rospy.loginfo("mav_sim: following a path of %d waypoints to (%.2f, %.2f, %.2f, yaw %.2f)",
+                                      len(path), *path[-1])
+                    else:
+                        rospy.loginfo("mav_sim: empty path: stopping")
+            if t_ns >= next_frame:
+                if c.lockstep:
+                    if last_frame is None:
+                        self._wait_for_subscribers()
+                    else:
+                        self._wait_lockstep(last_frame)
+                    anchor_wall, anchor_ns = time.monotonic(), t_ns
+                self._publish_body(t_ns)
+                self._publish_frame(t_ns)
+                last_frame = t_ns
+                next_frame += frame_ns
+                next_tf = t_ns + tf_ns
+            elif t_ns >= next_tf:
+                self._publish_body(t_ns)
+                next_tf += tf_ns
+            # Physics.
+            ev = sim.step(dt_ns / NS)
+            t_ns += dt_ns
+            self.pub_clock.publish(Clock(clock=_stamp(t_ns)))
+            if ev["goal_reached"]:
+                self.pub_goal.publish(self._pose_msg(t_ns))
+                rospy.loginfo("mav_sim: goal reached at (%.2f, %.2f, %.2f, yaw %.2f)", *sim.pose)
+            col = ev["collision"]
+            if col is not None:
+                self.pub_coll.publish(UInt32(col["count"]))
+                rospy.logwarn("mav_sim: collision #%d at (%.2f, %.2f, %.2f): the R = %.3f m sphere touches '%s' "
+                              "(object %d) at %.3f m", col["count"], *col["position"], c.mav.radius_m, col["label"],
+                              col["object_id"], col["distance_m"])
+            # Real-time pacing.
+            if c.real_time_factor > 0:
+                ahead = anchor_wall + (t_ns - anchor_ns) / NS / c.real_time_factor - time.monotonic()
+                if ahead > 0:
+                    time.sleep(ahead)
+                elif ahead < -1.0:  # cannot keep up: do not try to catch up later
+                    anchor_wall, anchor_ns = time.monotonic(), t_ns
+
+
+def main() -> None:
+    rospy.init_node("mav_sim")
+    try:
+        node = MavSimNode()
+    except ConfigError:
+        raise SystemExit(2)
+    node.spin()
