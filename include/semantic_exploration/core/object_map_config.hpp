@@ -11,27 +11,45 @@ namespace semexp {
 
 struct ObjectMapConfig {
   double truncation_voxels = 4.0;  ///< TSDF truncation distance in voxels of the object's resolution
-  double max_weight = 100.0;       ///< TSDF weight cap
+  double max_weight = 100.0;       ///< TSDF weight cap (one unit per observation; <= 4095, 1/16 fixed point)
   int block_size = 8;              ///< voxels per block edge
   double publish_period_s = 1.0;   ///< minimum period between mesh marker updates, s
+  /// How far behind the measured surface voxels are still updated, in voxels
+  /// (<= truncation_voxels); keeps free space hidden behind edges from being dug in.
+  double behind_surface_voxels = 2.0;
+  /// A rendered object surface farther than the measured depth plus this is hidden, m.
+  double render_depth_tolerance_m = 0.05;
 
   void validate(const std::string& ns = "object_map/") const {
     require(std::isfinite(truncation_voxels) && truncation_voxels >= 1, ns + "truncation_voxels", "must be >= 1");
-    require(std::isfinite(max_weight) && max_weight > 0, ns + "max_weight", "must be > 0");
+    require(std::isfinite(max_weight) && max_weight >= 1 && max_weight <= 4095, ns + "max_weight",
+            "must be in [1, 4095] (16-bit fixed-point weight)");
     require(block_size >= 2 && block_size <= 64 && (block_size & (block_size - 1)) == 0, ns + "block_size",
             "must be a power of two in [2, 64]");
     require(publish_period_s >= 0, ns + "publish_period_s", "must be >= 0 s");
+    require(std::isfinite(behind_surface_voxels) && behind_surface_voxels >= 1 &&
+                behind_surface_voxels <= truncation_voxels,
+            ns + "behind_surface_voxels", "must be in [1, truncation_voxels]");
+    require(std::isfinite(render_depth_tolerance_m) && render_depth_tolerance_m >= 0, ns + "render_depth_tolerance_m",
+            "must be >= 0 m");
   }
 };
 
 struct MatchingConfig {
   double iou_threshold = 0.25;  ///< minimum IoU to match a detection to a rendered object
   int min_mask_pixels = 100;    ///< detections with fewer pixels are dropped
+  /// A detection left without a match whose mask lies at least this much
+  /// (fraction of its pixels) on one rendered object is a fragment of it and
+  /// is matched to it too (a detector split the object, or it competes with a
+  /// better detection of the same object). In (0.5, 1].
+  double fragment_fraction = 0.8;
 
   void validate(const std::string& ns = "matching/") const {
     require(std::isfinite(iou_threshold) && iou_threshold > 0 && iou_threshold <= 1, ns + "iou_threshold",
             "must be in (0, 1]");
     require(min_mask_pixels >= 0, ns + "min_mask_pixels", "must be >= 0 px");
+    require(std::isfinite(fragment_fraction) && fragment_fraction > 0.5 && fragment_fraction <= 1, ns + "fragment_fraction",
+            "must be in (0.5, 1]");
   }
 };
 

@@ -1,0 +1,192 @@
+#pragma once
+/// @file tsdf.hpp
+/// Sparse voxel-block TSDF of one object (paper Section IV-B): projective
+/// truncated SDF, weight, colour, foreground probability and the minimum
+/// distance each voxel was observed from.
+///
+/// Two voxel layouts share one implementation: TsdfVoxel (fixed point, the
+/// one the object map uses, 10 bytes) and TsdfVoxelFloat (the float layout
+/// it is measured against, 20 bytes).
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <opencv2/core.hpp>
+#include <unordered_map>
+#include <vector>
+
+#include "semantic_exploration/core/camera.hpp"
+#include "semantic_exploration/core/marching_cubes.hpp"
+
+namespace semexp {
+
+/// Fixed-point voxel: SDF as int16 normalised by the truncation distance,
+/// foreground probability as uint8 (p = q / 254, so 0.5 is exact), weight as
+/// uint16 in 1/16 steps (so at most 4095.9), minimum observed distance in
+/// millimetres.
+struct TsdfVoxel {
+  std::int16_t sdf_q = 32767;           ///< sdf / truncation * 32767
+  std::uint16_t weight_q = 0;           ///< weight * 16 (capped), 0 = never observed
+  std::uint16_t min_distance_mm = 65535;///< closest camera distance this voxel was seen from, mm (65535 = none)
+  std::uint8_t foreground_q = 127;      ///< foreground probability * 254
+  std::uint8_t rgb[3] = {0, 0, 0};      ///< fused colour
+
+  float sdf(float truncation_m) const { return sdf_q * (truncation_m / 32767.f); }
+  void setSdf(float sdf_m, float truncation_m) {
+    const float q = std::round(sdf_m / truncation_m * 32767.f);
+    sdf_q = static_cast<std::int16_t>(std::max(-32767.f, std::min(32767.f, q)));
+  }
+  float weight() const { return weight_q * (1.f / 16.f); }
+  void setWeight(float w) { weight_q = static_cast<std::uint16_t>(std::max(0.f, std::min(65535.f, std::round(w * 16.f)))); }
+  static constexpr double kMaxWeight = 65535.0 / 16.0;  ///< largest representable weight
+  float foreground() const { return foreground_q / 254.f; }
+  void setForeground(float p) {
+    foreground_q = static_cast<std::uint8_t>(std::round(std::max(0.f, std::min(1.f, p)) * 254.f));
+  }
+  float minDistance() const {
+    return min_distance_mm == 65535 ? std::numeric_limits<float>::infinity() : min_distance_mm * 1e-3f;
+  }
+  void setMinDistance(float d_m) {
+    min_distance_mm = static_cast<std::uint16_t>(std::max(0.f, std::min(65534.f, std::round(d_m * 1e3f))));
+  }
+};
+
+/// Float voxel of the same content: the reference layout.
+struct TsdfVoxelFloat {
+  float sdf_m = 0.f;
+  float weight_f = 0.f;
+  float min_distance_m = std::numeric_limits<float>::infinity();
+  float foreground_p = 0.5f;
+  std::uint8_t rgb[3] = {0, 0, 0};
+
+  float sdf(float) const { return sdf_m; }
+  void setSdf(float sdf, float truncation_m) { sdf_m = std::max(-truncation_m, std::min(truncation_m, sdf)); }
+  float weight() const { return weight_f; }
+  void setWeight(float w) { weight_f = w; }
+  float foreground() const { return foreground_p; }
+  void setForeground(float p) { foreground_p = p; }
+  float minDistance() const { return min_distance_m; }
+  void setMinDistance(float d_m) { min_distance_m = d_m; }
+  static constexpr double kMaxWeight = 1e30;
+};
+
+/// Geometry of one TSDF.
+struct TsdfParams {
+  double resolution_m = 0.02;  ///< voxel edge, m
+  double truncation_m = 0.08;  ///< truncation distance, m
+  /// Voxels farther than this behind the measured surface are not updated
+  /// (clamped to truncation_m), m; the weight falls linearly from 1 at one
+  /// voxel behind to 0 here, so free space hidden behind edges is not dug in.
+  double behind_surface_m = 0.04;
+  int block_size = 8;          ///< voxels per block edge
+  double max_weight = 100.0;   ///< weight cap (one unit per observation at the surface)
+};
+
+/// First foreground surface crossing along a ray.
+struct TsdfRayHit {
+  float distance_m = 0.f;      ///< along the (unit) ray from its origin, m
+  float min_distance_m = 0.f;  ///< minimum distance the surface there was observed from, m (inf if never)
+};
+
+/// Summary of the surface of one TSDF (voxels with foreground probability >
+/// 0.5 and |sdf| < one voxel).
+struct TsdfSummary {
+  Eigen::Vector3d bbox_min_W = Eigen::Vector3d::Zero();  ///< m
+  Eigen::Vector3d bbox_max_W = Eigen::Vector3d::Zero();  ///< m
+  Eigen::Vector3d centroid_W = Eigen::Vector3d::Zero();  ///< m
+  std::size_t voxel_count = 0;                           ///< surface voxels
+  double observed_fraction = 0.0;  ///< fraction of surface voxels observed from <= d_obj, [0, 1]
+};
+
+struct VoxelIndexHash {
+  std::size_t operator()(const Eigen::Vector3i& v) const {
+    return (static_cast<std::size_t>(v.x()) * 73856093u) ^ (static_cast<std::size_t>(v.y()) * 19349669u) ^
+           (static_cast<std::size_t>(v.z()) * 83492791u);
+  }
+};
+
+template <class VoxelT>
+class TsdfMapT {
+ public:
+  using Voxel = VoxelT;
+  using Block = std::vector<VoxelT>;  ///< block_size^3 voxels, x fastest
+
+  explicit TsdfMapT(const TsdfParams& params);
+
+  const TsdfParams& params() const { return params_; }
+
+  /// Integrates one depth image through a binary mask.
+  /// @param depth_m   CV_32FC1 depth along the optical axis, m; 0, NaN, inf and
+  ///                  values outside [d_min_m, d_max_m] are invalid
+  /// @param rgb       CV_8UC3 rgb colour of the same size, or empty (no colour)
+  /// @param mask      CV_8UC1, non-zero where the pixel belongs to this object
+  /// @param update_foreground  true for a detection (foreground probability
+  ///                  rises inside the mask and falls where the measured
+  ///                  surface outside the mask passes through known voxels);
+  ///                  false for a visible but undetected object (SDF and
+  ///                  colour only)
+  /// @return number of voxels whose SDF was updated
+  std::size_t integrate(const PinholeCamera& camera, const Eigen::Isometry3d& T_WC, const cv::Mat& depth_m,
+                        const cv::Mat& rgb, const cv::Mat& mask, bool update_foreground);
+
+  /// Voxel with global index `index` (voxel centre (index + 0.5) * resolution), null if not allocated.
+  const VoxelT* voxel(const Eigen::Vector3i& index) const;
+  Eigen::Vector3i voxelIndex(const Eigen::Vector3f& p_W) const {
+    return (p_W / static_cast<float>(params_.resolution_m)).array().floor().template cast<int>();
+  }
+  Eigen::Vector3f voxelCentre(const Eigen::Vector3i& index) const {
+    return (index.cast<float>().array() + 0.5f) * static_cast<float>(params_.resolution_m);
+  }
+  /// Trilinearly interpolated SDF at p_W, m; false if one of the 8 voxels around it was never observed.
+  bool interpolate(const Eigen::Vector3f& p_W, float& sdf_m) const;
+
+  /// First zero crossing from positive to negative SDF, with foreground
+  /// probability > 0.5, along origin_W + t dir_W (dir_W unit), t in [t_min, t_max].
+  bool castRay(const Eigen::Vector3f& origin_W, const Eigen::Vector3f& dir_W, float t_min, float t_max,
+               TsdfRayHit& hit) const;
+
+  /// Marching-cubes mesh of the zero crossing where foreground probability > 0.5, with colour.
+  Mesh extractMesh() const;
+
+  /// Surface summary; observed_fraction counts voxels seen from <= d_obj_m.
+  TsdfSummary summarize(double d_obj_m) const;
+
+  /// Axis-aligned box of the allocated blocks in world, m; false if empty.
+  bool allocatedBox(Eigen::AlignedBox3f& box_W) const;
+  std::size_t blockCount() const { return blocks_.size(); }
+  std::size_t voxelCount() const { return blocks_.size() * voxels_per_block_; }
+  /// Bytes of voxel payload (excluding hash-map overhead).
+  std::size_t voxelBytes() const { return voxelCount() * sizeof(VoxelT); }
+
+  /// Calls f(global voxel index, voxel) for every allocated voxel.
+  template <class F>
+  void forEachVoxel(F&& f) const {
+    const int B = params_.block_size;
+    for (const auto& kv : blocks_) {
+      const Eigen::Vector3i base = kv.first * B;
+      for (int z = 0, i = 0; z < B; ++z)
+        for (int y = 0; y < B; ++y)
+          for (int x = 0; x < B; ++x, ++i) f(Eigen::Vector3i(base + Eigen::Vector3i(x, y, z)), kv.second[i]);
+    }
+  }
+
+ private:
+  Eigen::Vector3i blockOf(const Eigen::Vector3i& voxel_index) const;
+  Block& allocate(const Eigen::Vector3i& block_index);
+
+  TsdfParams params_;
+  int voxels_per_block_;
+  float truncation_m_;
+  std::unordered_map<Eigen::Vector3i, Block, VoxelIndexHash> blocks_;
+  Eigen::Vector3i block_min_{0, 0, 0}, block_max_{-1, -1, -1};  ///< inclusive range of allocated block indices
+};
+
+using TsdfMap = TsdfMapT<TsdfVoxel>;
+using TsdfMapFloat = TsdfMapT<TsdfVoxelFloat>;
+
+extern template class TsdfMapT<TsdfVoxel>;
+extern template class TsdfMapT<TsdfVoxelFloat>;
+
+}  // namespace semexp

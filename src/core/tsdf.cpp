@@ -1,0 +1,370 @@
+#include "semantic_exploration/core/tsdf.hpp"
+
+#include <climits>
+#include <stdexcept>
+
+namespace semexp {
+
+namespace {
+
+inline int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+inline bool validDepth(float d, const PinholeCamera& camera) {
+  return std::isfinite(d) && d > 0.f && d >= camera.d_min_m && d <= camera.d_max_m;
+}
+
+// Packs a global voxel index and an axis into one key (20 bits per axis).
+inline std::uint64_t edgeKey(const Eigen::Vector3i& v, int axis) {
+  const auto c = [](int x) { return static_cast<std::uint64_t>(x + (1 << 19)) & 0xfffff; };
+  return (c(v.x()) << 42) | (c(v.y()) << 22) | (c(v.z()) << 2) | static_cast<std::uint64_t>(axis);
+}
+
+}  // namespace
+
+template <class V>
+TsdfMapT<V>::TsdfMapT(const TsdfParams& params)
+    : params_(params),
+      voxels_per_block_(params.block_size * params.block_size * params.block_size),
+      truncation_m_(static_cast<float>(params.truncation_m)) {
+  if (!(params.resolution_m > 0) || !(params.truncation_m > 0) || params.block_size < 1)
+    throw std::invalid_argument("TsdfMap: resolution, truncation and block size must be > 0");
+}
+
+template <class V>
+Eigen::Vector3i TsdfMapT<V>::blockOf(const Eigen::Vector3i& v) const {
+  const int B = params_.block_size;
+  return {floorDiv(v.x(), B), floorDiv(v.y(), B), floorDiv(v.z(), B)};
+}
+
+template <class V>
+typename TsdfMapT<V>::Block& TsdfMapT<V>::allocate(const Eigen::Vector3i& b) {
+  auto it = blocks_.find(b);
+  if (it != blocks_.end()) return it->second;
+  if (blocks_.empty()) {
+    block_min_ = block_max_ = b;
+  } else {
+    block_min_ = block_min_.cwiseMin(b);
+    block_max_ = block_max_.cwiseMax(b);
+  }
+  return blocks_.emplace(b, Block(voxels_per_block_)).first->second;
+}
+
+template <class V>
+const V* TsdfMapT<V>::voxel(const Eigen::Vector3i& index) const {
+  const Eigen::Vector3i b = blockOf(index);
+  const auto it = blocks_.find(b);
+  if (it == blocks_.end()) return nullptr;
+  const int B = params_.block_size;
+  const Eigen::Vector3i l = index - b * B;
+  return &it->second[l.x() + B * (l.y() + B * l.z())];
+}
+
+template <class V>
+bool TsdfMapT<V>::allocatedBox(Eigen::AlignedBox3f& box_W) const {
+  if (blocks_.empty()) return false;
+  const float edge = static_cast<float>(params_.resolution_m * params_.block_size);
+  box_W = Eigen::AlignedBox3f(block_min_.cast<float>() * edge, (block_max_.cast<float>().array() + 1.f) * edge);
+  return true;
+}
+
+template <class V>
+std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Isometry3d& T_WC, const cv::Mat& depth_m,
+                                   const cv::Mat& rgb, const cv::Mat& mask, bool update_foreground) {
+  if (depth_m.type() != CV_32FC1 || mask.type() != CV_8UC1 || depth_m.size() != mask.size() ||
+      depth_m.cols != camera.width || depth_m.rows != camera.height)
+    throw std::invalid_argument("TsdfMap::integrate: depth (32FC1) and mask (8UC1) must match the camera size");
+  const bool use_rgb = !rgb.empty();
+  if (use_rgb && (rgb.type() != CV_8UC3 || rgb.size() != depth_m.size()))
+    throw std::invalid_argument("TsdfMap::integrate: rgb must be 8UC3 of the depth image's size");
+
+  const float res = static_cast<float>(params_.resolution_m);
+  const float trunc = truncation_m_;
+  const float behind = static_cast<float>(std::min(params_.behind_surface_m, params_.truncation_m));
+  const float max_w = static_cast<float>(params_.max_weight);
+  const Eigen::Isometry3f T_WCf = T_WC.cast<float>();
+  const Eigen::Isometry3f T_CWf = T_WCf.inverse();
+  const int B = params_.block_size;
+
+  // 1. Allocate the blocks of the truncation band around every masked measurement.
+  Eigen::Vector3i last(INT_MIN, INT_MIN, INT_MIN);
+  for (int v = 0; v < depth_m.rows; ++v) {
+    const float* drow = depth_m.ptr<float>(v);
+    const std::uint8_t* mrow = mask.ptr<std::uint8_t>(v);
+    for (int u = 0; u < depth_m.cols; ++u) {
+      if (!mrow[u] || !validDepth(drow[u], camera)) continue;
+      const Eigen::Vector3f ray = camera.ray_C(static_cast<float>(u), static_cast<float>(v));
+      const float n = ray.norm();
+      const Eigen::Vector3f dir_W = T_WCf.linear() * (ray / n);
+      const float D = drow[u] * n;
+      for (float s = std::max(D - trunc, 0.f);; s += res) {
+        const float sc = std::min(s, D + behind);
+        const Eigen::Vector3i b = blockOf(voxelIndex(T_WCf.translation() + dir_W * sc));
+        if (b != last) {
+          allocate(b);
+          last = b;
+        }
+        if (sc >= D + behind) break;
+      }
+    }
+  }
+
+  // 2. Projective update of every voxel of the blocks in front of the camera.
+  const float block_radius = 0.87f * B * res;
+  std::size_t updated = 0;
+  for (auto& kv : blocks_) {
+    const Eigen::Vector3i base = kv.first * B;
+    const Eigen::Vector3f centre_C = T_CWf * ((base.cast<float>().array() + 0.5f * B) * res).matrix();
+    if (centre_C.z() < -block_radius) continue;
+    Block& block = kv.second;
+    int i = 0;
+    for (int z = 0; z < B; ++z)
+      for (int y = 0; y < B; ++y)
+        for (int x = 0; x < B; ++x, ++i) {
+          const Eigen::Vector3f p_C = T_CWf * voxelCentre(base + Eigen::Vector3i(x, y, z));
+          if (p_C.z() <= 0.f) continue;
+          const int u = static_cast<int>(std::lround(camera.fx * p_C.x() / p_C.z() + camera.cx));
+          const int v = static_cast<int>(std::lround(camera.fy * p_C.y() / p_C.z() + camera.cy));
+          if (u < 0 || v < 0 || u >= depth_m.cols || v >= depth_m.rows) continue;
+          const float d = depth_m.at<float>(v, u);
+          if (!validDepth(d, camera)) continue;
+          const float dist = p_C.norm();
+          // Distance along the pixel's ray between the measured surface and the voxel.
+          const float sdf = (d - p_C.z()) * dist / p_C.z();
+          if (sdf < -behind) continue;
+          V& vx = block[i];
+          const float w = vx.weight();
+          if (mask.at<std::uint8_t>(v, u)) {
+            // Behind the surface the measurement says less (the voxel may be
+            // free space hidden by an edge): weight drops linearly from 1 one
+            // voxel behind to 0 at -behind_surface_m.
+            const float w_obs = sdf >= -res ? 1.f : (behind + sdf) / (behind - res + 1e-6f);
+            if (w_obs <= 0.f) continue;
+            const float w_new = w + w_obs;
+            const float s = std::min(sdf, trunc);
+            vx.setSdf((vx.sdf(trunc) * w + s * w_obs) / w_new, trunc);
+            vx.setWeight(std::min(w_new, max_w));
+            if (std::abs(sdf) < trunc) {
+              if (use_rgb) {
+                const cv::Vec3b c = rgb.at<cv::Vec3b>(v, u);
+                for (int k = 0; k < 3; ++k)
+                  vx.rgb[k] = static_cast<std::uint8_t>(std::lround((vx.rgb[k] * w + c[k] * w_obs) / w_new));
+              }
+              if (dist < vx.minDistance()) vx.setMinDistance(dist);
+            }
+            if (update_foreground) vx.setForeground((vx.foreground() * w + w_obs) / w_new);
+            ++updated;
+          } else if (update_foreground && w > 0.f && std::abs(sdf) < trunc) {
+            // A surface outside this detection's mask passes through the voxel: likely not the object.
+            vx.setForeground(vx.foreground() * w / (w + 1.f));
+          }
+        }
+  }
+  return updated;
+}
+
+template <class V>
+bool TsdfMapT<V>::interpolate(const Eigen::Vector3f& p_W, float& sdf_m) const {
+  const Eigen::Vector3f q = p_W / static_cast<float>(params_.resolution_m) - Eigen::Vector3f::Constant(0.5f);
+  const Eigen::Vector3f f0 = q.array().floor();
+  const Eigen::Vector3i i0 = f0.cast<int>();
+  const Eigen::Vector3f f = q - f0;
+  const int B = params_.block_size;
+  const Eigen::Vector3i b0 = blockOf(i0);
+  const Eigen::Vector3i l0 = i0 - b0 * B;
+  // Usually all 8 voxels lie in one block: one hash look-up instead of eight.
+  const Block* same = nullptr;
+  if (l0.x() < B - 1 && l0.y() < B - 1 && l0.z() < B - 1) {
+    const auto it = blocks_.find(b0);
+    if (it == blocks_.end()) return false;
+    same = &it->second;
+  }
+  float sum = 0.f;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3i o(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+    const V* vx;
+    if (same) {
+      const Eigen::Vector3i l = l0 + o;
+      vx = &(*same)[l.x() + B * (l.y() + B * l.z())];
+    } else {
+      vx = voxel(i0 + o);
+    }
+    if (!vx || vx->weight() <= 0.f) return false;
+    const float wgt = (o.x() ? f.x() : 1.f - f.x()) * (o.y() ? f.y() : 1.f - f.y()) * (o.z() ? f.z() : 1.f - f.z());
+    sum += wgt * vx->sdf(truncation_m_);
+  }
+  sdf_m = sum;
+  return true;
+}
+
+template <class V>
+bool TsdfMapT<V>::castRay(const Eigen::Vector3f& o, const Eigen::Vector3f& dir, float t_min, float t_max,
+                          TsdfRayHit& hit) const {
+  Eigen::AlignedBox3f box;
+  if (!allocatedBox(box)) return false;
+  for (int i = 0; i < 3; ++i) {  // clip to the allocated box (slab test)
+    if (std::abs(dir[i]) < 1e-9f) {
+      if (o[i] < box.min()[i] || o[i] > box.max()[i]) return false;
+      continue;
+    }
+    float a = (box.min()[i] - o[i]) / dir[i], b = (box.max()[i] - o[i]) / dir[i];
+    if (a > b) std::swap(a, b);
+    t_min = std::max(t_min, a);
+    t_max = std::min(t_max, b);
+  }
+  if (t_min > t_max) return false;
+
+  const int B = params_.block_size;
+  const float res = static_cast<float>(params_.resolution_m);
+  const float block_edge = res * B;
+  const float step_min = 0.5f * res;
+  Eigen::Vector3i key(INT_MIN, INT_MIN, INT_MIN);
+  const Block* block = nullptr;
+  const V* prev = nullptr;
+  float prev_sdf = 0.f, prev_t = 0.f;
+  for (float t = t_min; t <= t_max;) {
+    const Eigen::Vector3f p = o + t * dir;
+    const Eigen::Vector3i vi = voxelIndex(p);
+    const Eigen::Vector3i bk = blockOf(vi);
+    if (bk != key) {
+      key = bk;
+      const auto it = blocks_.find(bk);
+      block = it == blocks_.end() ? nullptr : &it->second;
+    }
+    if (!block) {  // skip the unallocated block in one step
+      float t_exit = t_max;
+      for (int i = 0; i < 3; ++i) {
+        if (std::abs(dir[i]) < 1e-9f) continue;
+        const float face = (dir[i] > 0 ? bk[i] + 1 : bk[i]) * block_edge;
+        t_exit = std::min(t_exit, (face - o[i]) / dir[i]);
+      }
+      t = std::max(t_exit, t) + 1e-3f * res;
+      prev = nullptr;
+      continue;
+    }
+    const Eigen::Vector3i l = vi - bk * B;
+    const V& vx = (*block)[l.x() + B * (l.y() + B * l.z())];
+    if (vx.weight() <= 0.f) {  // surfaces are bracketed by observed voxels: one voxel per step is enough
+      prev = nullptr;
+      t += res;
+      continue;
+    }
+    const float sdf = vx.sdf(truncation_m_);
+    if (prev && prev_sdf > 0.f && sdf <= 0.f && prev->foreground() + vx.foreground() > 1.f) {
+      float s0 = prev_sdf, s1 = sdf, i0, i1;
+      if (interpolate(o + prev_t * dir, i0) && interpolate(p, i1) && i0 > 0.f && i1 <= 0.f) {
+        s0 = i0;
+        s1 = i1;
+      }
+      hit.distance_m = prev_t + (t - prev_t) * s0 / (s0 - s1);
+      hit.min_distance_m = std::min(prev->minDistance(), vx.minDistance());
+      return true;
+    }
+    prev = &vx;
+    prev_sdf = sdf;
+    prev_t = t;
+    t += std::max(step_min, 0.5f * sdf);
+  }
+  return false;
+}
+
+template <class V>
+Mesh TsdfMapT<V>::extractMesh() const {
+  const auto& table = MarchingCubesTable::get();
+  const int B = params_.block_size;
+  const float res = static_cast<float>(params_.resolution_m);
+  Mesh mesh;
+  std::unordered_map<std::uint64_t, std::uint32_t> vertex_of_edge;
+  for (const auto& kv : blocks_) {
+    // The block and its +x/+y/+z neighbours hold the 8 corners of every cube starting in this block.
+    const Block* nb[8];
+    for (int c = 0; c < 8; ++c) {
+      const auto it = blocks_.find(kv.first + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1));
+      nb[c] = it == blocks_.end() ? nullptr : &it->second;
+    }
+    const Eigen::Vector3i base = kv.first * B;
+    for (int z = 0; z < B; ++z)
+      for (int y = 0; y < B; ++y)
+        for (int x = 0; x < B; ++x) {
+          const V* corner[8];
+          float sdf[8];
+          bool ok = true;
+          int mc_case = 0;
+          float fg = 0.f;
+          for (int c = 0; c < 8 && ok; ++c) {
+            const int cx = x + (c & 1), cy = y + ((c >> 1) & 1), cz = z + ((c >> 2) & 1);
+            const int which = (cx == B) | ((cy == B) << 1) | ((cz == B) << 2);
+            const Block* blk = nb[which];
+            if (!blk) {
+              ok = false;
+              break;
+            }
+            const V& vx = (*blk)[(cx % B) + B * ((cy % B) + B * (cz % B))];
+            if (vx.weight() <= 0.f) {
+              ok = false;
+              break;
+            }
+            corner[c] = &vx;
+            sdf[c] = vx.sdf(truncation_m_);
+            fg += vx.foreground();
+            if (sdf[c] < 0.f) mc_case |= 1 << c;
+          }
+          if (!ok || mc_case == 0 || mc_case == 255 || fg <= 4.f) continue;
+          const Eigen::Vector3i g = base + Eigen::Vector3i(x, y, z);
+          const auto& tris = table.triangles[mc_case];
+          for (int k = 0; tris[k] >= 0; k += 3) {
+            std::array<std::uint32_t, 3> tri;
+            for (int j = 0; j < 3; ++j) {
+              const int e = tris[k + j];
+              const int a = MarchingCubesTable::kEdgeCorners[e][0], b = MarchingCubesTable::kEdgeCorners[e][1];
+              const Eigen::Vector3i ga = g + Eigen::Vector3i(a & 1, (a >> 1) & 1, (a >> 2) & 1);
+              const int axis = (a ^ b) == 1 ? 0 : ((a ^ b) == 2 ? 1 : 2);
+              const auto ins = vertex_of_edge.emplace(edgeKey(ga, axis), static_cast<std::uint32_t>(mesh.vertices_W.size()));
+              if (ins.second) {
+                const float s = sdf[a] / (sdf[a] - sdf[b]);
+                Eigen::Vector3f p = voxelCentre(ga);
+                p[axis] += s * res;
+                mesh.vertices_W.push_back(p);
+                std::array<std::uint8_t, 3> col;
+                for (int ch = 0; ch < 3; ++ch)
+                  col[ch] = static_cast<std::uint8_t>(
+                      std::lround(corner[a]->rgb[ch] + s * (corner[b]->rgb[ch] - corner[a]->rgb[ch])));
+                mesh.colours.push_back(col);
+              }
+              tri[j] = ins.first->second;
+            }
+            mesh.triangles.push_back(tri);
+          }
+        }
+  }
+  return mesh;
+}
+
+template <class V>
+TsdfSummary TsdfMapT<V>::summarize(double d_obj_m) const {
+  TsdfSummary s;
+  const float res = static_cast<float>(params_.resolution_m);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  std::size_t observed = 0;
+  Eigen::AlignedBox3d box;
+  forEachVoxel([&](const Eigen::Vector3i& index, const V& vx) {
+    if (vx.weight() <= 0.f || vx.foreground() <= 0.5f || std::abs(vx.sdf(truncation_m_)) >= res) return;
+    const Eigen::Vector3d c = voxelCentre(index).template cast<double>();
+    box.extend(c);
+    sum += c;
+    ++s.voxel_count;
+    if (vx.minDistance() <= d_obj_m) ++observed;
+  });
+  if (s.voxel_count > 0) {
+    const Eigen::Vector3d half = Eigen::Vector3d::Constant(0.5 * params_.resolution_m);
+    s.bbox_min_W = box.min() - half;
+    s.bbox_max_W = box.max() + half;
+    s.centroid_W = sum / static_cast<double>(s.voxel_count);
+    s.observed_fraction = static_cast<double>(observed) / static_cast<double>(s.voxel_count);
+  }
+  return s;
+}
+
+template class TsdfMapT<TsdfVoxel>;
+template class TsdfMapT<TsdfVoxelFloat>;
+
+}  // namespace semexp

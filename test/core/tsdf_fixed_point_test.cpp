@@ -1,0 +1,136 @@
+// Fixed-point voxel against the float layout: size and mesh difference on the
+// same data; marching-cubes table and PLY round trip.
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <set>
+#include <unistd.h>
+
+#include "semantic_exploration/core/tsdf.hpp"
+#include "tsdf_test_scenes.hpp"
+
+using namespace semexp;
+using namespace semexp_test;
+
+namespace {
+
+TEST(TsdfFixedPoint, VoxelAtLeast35PercentSmallerThanFloatLayout) {
+  const double saving = 1.0 - static_cast<double>(sizeof(TsdfVoxel)) / sizeof(TsdfVoxelFloat);
+  std::printf("voxel bytes: fixed %zu, float %zu (%.0f%% smaller)\n", sizeof(TsdfVoxel), sizeof(TsdfVoxelFloat),
+              100 * saving);
+  EXPECT_GE(saving, 0.35);
+}
+
+TEST(TsdfFixedPoint, QuantisationRoundTrips) {
+  TsdfVoxel v;
+  const float trunc = 0.08f;
+  for (float s : {-0.08f, -0.0123f, 0.f, 0.0456f, 0.08f}) {
+    v.setSdf(s, trunc);
+    EXPECT_NEAR(v.sdf(trunc), s, trunc / 32767.f);
+  }
+  v.setSdf(1.f, trunc);  // clamped
+  EXPECT_FLOAT_EQ(v.sdf(trunc), trunc);
+  v.setForeground(0.5f);
+  EXPECT_EQ(v.foreground(), 0.5f);  // exact: q / 254
+  EXPECT_EQ(TsdfVoxel().foreground(), 0.5f);
+  v.setForeground(0.73f);
+  EXPECT_NEAR(v.foreground(), 0.73f, 0.5f / 254);
+  v.setWeight(37.3f);
+  EXPECT_NEAR(v.weight(), 37.3f, 1.f / 32);
+  EXPECT_TRUE(std::isinf(TsdfVoxel().minDistance()));
+  v.setMinDistance(1.2345f);
+  EXPECT_NEAR(v.minDistance(), 1.2345f, 0.0005f);
+}
+
+TEST(TsdfFixedPoint, MeshDiffersFromFloatLayoutByLessThanQuarterVoxel) {
+  PinholeCamera cam;
+  TsdfParams p;
+  p.resolution_m = 0.02;
+  p.truncation_m = 0.08;
+  p.behind_surface_m = 0.04;
+  TsdfMap fixed(p);
+  TsdfMapFloat flt(p);
+  const Sphere sphere(Eigen::Vector3d(0.0, 0.0, 0.0), 0.25);
+  const Box box(Eigen::Vector3d(0.0, 0.0, -0.4), Eigen::Vector3d(0.3, 0.3, 0.15));
+  for (const auto& T_WC : ring(Eigen::Vector3d(0, 0, -0.2), 1.2, 0.6, 12)) {
+    cv::Mat depth, labels;
+    renderShapes(cam, T_WC, {&sphere, &box}, depth, labels);
+    const cv::Mat mask = labels > 0;
+    fixed.integrate(cam, T_WC, depth, cv::Mat(), mask, true);
+    flt.integrate(cam, T_WC, depth, cv::Mat(), mask, true);
+  }
+  const Mesh a = fixed.extractMesh(), b = flt.extractMesh();
+  ASSERT_GT(a.vertices_W.size(), 1000u);
+  ASSERT_GT(b.vertices_W.size(), 1000u);
+  // RMS distance of every fixed-point vertex to the nearest float-layout vertex (hash grid search).
+  const float cell = static_cast<float>(p.resolution_m);
+  std::unordered_map<Eigen::Vector3i, std::vector<Eigen::Vector3f>, VoxelIndexHash> grid;
+  for (const auto& v : b.vertices_W) grid[(v / cell).array().floor().cast<int>()].push_back(v);
+  double sq = 0;
+  for (const auto& v : a.vertices_W) {
+    const Eigen::Vector3i c = (v / cell).array().floor().cast<int>();
+    float best = 2 * cell;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const auto it = grid.find(c + Eigen::Vector3i(dx, dy, dz));
+          if (it == grid.end()) continue;
+          for (const auto& w : it->second) best = std::min(best, (w - v).norm());
+        }
+    sq += best * best;
+  }
+  const double rms = std::sqrt(sq / a.vertices_W.size());
+  std::printf("fixed %zu / float %zu vertices, RMS distance %.6f m (voxel %.3f m); voxel bytes %zu vs %zu\n",
+              a.vertices_W.size(), b.vertices_W.size(), rms, p.resolution_m, fixed.voxelBytes(), flt.voxelBytes());
+  EXPECT_LT(rms, 0.25 * p.resolution_m);
+  EXPECT_EQ(fixed.blockCount(), flt.blockCount());
+  EXPECT_LT(fixed.voxelBytes(), 0.65 * flt.voxelBytes());
+}
+
+TEST(MarchingCubesTable, TrianglesUseExactlyTheCrossedEdges) {
+  const auto& table = MarchingCubesTable::get();
+  for (int c = 0; c < 256; ++c) {
+    std::set<int> crossed, used;
+    for (int e = 0; e < 12; ++e) {
+      const int a = MarchingCubesTable::kEdgeCorners[e][0], b = MarchingCubesTable::kEdgeCorners[e][1];
+      if (((c >> a) & 1) != ((c >> b) & 1)) crossed.insert(e);
+    }
+    int n = 0;
+    for (; table.triangles[c][n] >= 0; ++n) used.insert(table.triangles[c][n]);
+    EXPECT_EQ(n % 3, 0);
+    EXPECT_EQ(crossed, used) << "case " << c;
+  }
+  // One corner inside: one triangle whose normal points away from that corner.
+  const auto& t = table.triangles[1];
+  EXPECT_EQ(t[3], -1);
+  Eigen::Vector3f p[3];
+  for (int j = 0; j < 3; ++j) {
+    const int a = MarchingCubesTable::kEdgeCorners[t[j]][0], b = MarchingCubesTable::kEdgeCorners[t[j]][1];
+    const Eigen::Vector3f ca(a & 1, (a >> 1) & 1, (a >> 2) & 1), cb(b & 1, (b >> 1) & 1, (b >> 2) & 1);
+    p[j] = 0.5f * (ca + cb);
+  }
+  EXPECT_GT((p[1] - p[0]).cross(p[2] - p[0]).dot(Eigen::Vector3f(1, 1, 1)), 0.f);
+}
+
+TEST(Ply, BinaryRoundTrip) {
+  Mesh m;
+  m.vertices_W = {{0, 0, 0}, {1, 0, 0}, {0, 1.5f, -2}};
+  m.colours = {{{255, 0, 0}}, {{0, 255, 0}}, {{1, 2, 3}}};
+  m.triangles = {{{0, 1, 2}}};
+  const auto dir = std::filesystem::temp_directory_path() / ("semexp_ply_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "m.ply").string();
+  ASSERT_TRUE(writePly(m, path));
+  Mesh r;
+  ASSERT_TRUE(readPly(path, r));
+  ASSERT_EQ(r.vertices_W.size(), 3u);
+  EXPECT_EQ(r.vertices_W[2], m.vertices_W[2]);
+  EXPECT_EQ(r.colours[2], m.colours[2]);
+  ASSERT_EQ(r.triangles.size(), 1u);
+  EXPECT_EQ(r.triangles[0], m.triangles[0]);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
