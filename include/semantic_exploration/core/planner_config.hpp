@@ -42,6 +42,8 @@ struct PlannerConfig {
   double min_path_time_s = 0.1;           ///< floor of the path time in u = g / t, s (a view at the current pose stays finite)
   double cost_threshold_factor = 1.05;    ///< a solve stops once its path is within this factor of the straight-line distance
   double simplify_time_s = 0.02;          ///< time for path simplification per candidate, s
+  int convergence_solutions = 5;         ///< a solve also stops once the moving average cost of this many improving solutions settles; 0 = off
+  double convergence_epsilon = 0.05;      ///< ... i.e. changes by less than this fraction
   int planning_threads = 0;               ///< threads planning candidates in parallel; 0 = all hardware threads
 
   void validate(const std::string& ns = "planner/") const {
@@ -68,6 +70,9 @@ struct PlannerConfig {
     require(std::isfinite(cost_threshold_factor) && cost_threshold_factor >= 1, ns + "cost_threshold_factor",
             "must be >= 1");
     require(std::isfinite(simplify_time_s) && simplify_time_s >= 0, ns + "simplify_time_s", "must be >= 0 s");
+    require(convergence_solutions >= 0, ns + "convergence_solutions", "must be >= 0 (0 = off)");
+    require(std::isfinite(convergence_epsilon) && convergence_epsilon > 0 && convergence_epsilon < 1,
+            ns + "convergence_epsilon", "must be in (0, 1)");
     require(planning_threads >= 0, ns + "planning_threads", "must be >= 0 (0 = all hardware threads)");
   }
 };

@@ -12,6 +12,7 @@
 #include <ompl/base/SpaceInformation.h>
 #include <ompl/base/objectives/PathLengthOptimizationObjective.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
+#include <ompl/base/terminationconditions/CostConvergenceTerminationCondition.h>
 #include <ompl/geometric/PathGeometric.h>
 #include <ompl/geometric/PathSimplifier.h>
 #include <ompl/geometric/planners/rrt/InformedRRTstar.h>
@@ -212,7 +213,16 @@ PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, con
   auto planner = std::make_shared<og::InformedRRTstar>(si);
   planner->setProblemDefinition(pdef);
   planner->setup();
-  const ob::PlannerStatus st = planner->solve(ob::timedPlannerTerminationCondition(config_.time_budget_s));
+  // Stop at the time budget, or earlier once the solution cost has converged
+  // (a detour can never reach the straight-line cost threshold).
+  ob::PlannerTerminationCondition ptc = ob::timedPlannerTerminationCondition(config_.time_budget_s);
+  if (config_.convergence_solutions > 0) {
+    ob::ProblemDefinitionPtr pdef_base = pdef;
+    ptc = ob::plannerOrTerminationCondition(
+        ptc, ob::CostConvergenceTerminationCondition(pdef_base, static_cast<std::size_t>(config_.convergence_solutions),
+                                                     config_.convergence_epsilon));
+  }
+  const ob::PlannerStatus st = planner->solve(ptc);
   if (st != ob::PlannerStatus::EXACT_SOLUTION && st != ob::PlannerStatus::APPROXIMATE_SOLUTION) {
     out.status = PlannedPath::Status::kFailed;
     out.distance_to_goal_m = (goal_in - start).norm();
