@@ -1,0 +1,82 @@
+#pragma once
+/// @file map_replica.hpp
+/// The planner's copy of the background map, fed by MapBlocks updates
+/// (DESIGN Section 3 "Why a map replica"), answering the sphere queries of
+/// path planning without a service round trip.
+///
+/// Payload encoding (MapBlocks ENCODING_LOG_ODDS_I8): one int8 per voxel, x
+/// fastest, then y, then z; log-odds * 10 rounded; -128 = unknown. A voxel is
+/// free when its value is < free_below (default 0, i.e. log-odds < 0), else
+/// occupied. Missing blocks are unknown.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace semexp {
+
+class MapReplica {
+ public:
+  enum class State : std::uint8_t { kUnknown, kFree, kOccupied };
+  enum class Result {
+    kApplied,   ///< the update was applied
+    kGap,       ///< a sequence number was skipped (or the first update is incremental): resync with a full map
+    kStale,     ///< an old or repeated sequence number: ignored
+    kBadInput,  ///< inconsistent sizes or geometry: ignored (see last_error())
+  };
+
+  /// One MapBlocks message, without ROS types.
+  struct Update {
+    std::uint64_t sequence = 0;
+    bool full = false;
+    double resolution_m = 0.0;
+    int block_size = 8;
+    Eigen::Vector3d origin_W = Eigen::Vector3d::Zero();  ///< minimum corner of voxel (0, 0, 0), m
+    const std::int32_t* coords = nullptr;                ///< 3 per block
+    std::size_t coord_count = 0;                         ///< number of int32 values in coords
+    const std::uint8_t* payload = nullptr;               ///< block_size^3 per block
+    std::size_t payload_size = 0;
+  };
+
+  explicit MapReplica(int free_below = 0) : free_below_(free_below) {}
+
+  /// Applies an update. A full update always applies (it replaces
+  /// everything); an incremental one only if its sequence follows the last.
+  Result apply(const Update& u);
+
+  std::uint64_t sequence() const { return sequence_; }
+  bool empty() const { return blocks_.empty(); }
+  std::size_t block_count() const { return blocks_.size(); }
+  double resolution_m() const { return resolution_m_; }
+  const std::string& last_error() const { return last_error_; }
+
+  State state(const Eigen::Vector3d& p_W) const;
+  /// Every voxel meeting the sphere is free (unknown is not free).
+  bool sphere_free(const Eigen::Vector3d& p_W, double radius_m) const { return sphere_check(p_W, radius_m, false); }
+  /// No voxel meeting the sphere is occupied (unknown allowed).
+  bool sphere_not_occupied(const Eigen::Vector3d& p_W, double radius_m) const {
+    return sphere_check(p_W, radius_m, true);
+  }
+
+ private:
+  struct Block {
+    std::vector<std::int8_t> values;
+    int unknown = 0;   ///< voxels with -128
+    int occupied = 0;  ///< voxels >= free_below
+  };
+  static std::uint64_t key(const Eigen::Vector3i& b);
+  bool sphere_check(const Eigen::Vector3d& p, double r, bool allow_unknown) const;
+
+  int free_below_;
+  std::uint64_t sequence_ = 0;
+  double resolution_m_ = 0.0;
+  int block_size_ = 0;
+  Eigen::Vector3d origin_W_ = Eigen::Vector3d::Zero();
+  std::unordered_map<std::uint64_t, Block> blocks_;
+  std::string last_error_;
+};
+
+}  // namespace semexp

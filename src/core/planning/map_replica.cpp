@@ -1,0 +1,114 @@
+#include "semantic_exploration/core/planning/map_replica.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace semexp {
+
+namespace {
+constexpr std::int8_t kUnknownValue = -128;
+// Block coordinates are packed 21 bits each (+-1M blocks per axis).
+constexpr std::int64_t kOffset = 1 << 20;
+}  // namespace
+
+std::uint64_t MapReplica::key(const Eigen::Vector3i& b) {
+  return (static_cast<std::uint64_t>(b.x() + kOffset) << 42) | (static_cast<std::uint64_t>(b.y() + kOffset) << 21) |
+         static_cast<std::uint64_t>(b.z() + kOffset);
+}
+
+MapReplica::Result MapReplica::apply(const Update& u) {
+  if (!(std::isfinite(u.resolution_m) && u.resolution_m > 0) || u.block_size <= 0 || u.block_size > 64 ||
+      !u.origin_W.allFinite()) {
+    last_error_ = "bad geometry (resolution, block size or origin)";
+    return Result::kBadInput;
+  }
+  const std::size_t voxels = static_cast<std::size_t>(u.block_size) * u.block_size * u.block_size;
+  if (u.coord_count % 3 != 0 || u.payload_size != (u.coord_count / 3) * voxels) {
+    last_error_ = "coords/payload sizes disagree: " + std::to_string(u.coord_count) + " coords, " +
+                  std::to_string(u.payload_size) + " payload bytes";
+    return Result::kBadInput;
+  }
+  if (!u.full) {
+    if (sequence_ != 0 && u.sequence <= sequence_) return Result::kStale;
+    if (u.sequence != sequence_ + 1) return Result::kGap;
+    if (u.block_size != block_size_ || std::abs(u.resolution_m - resolution_m_) > 1e-9 ||
+        (u.origin_W - origin_W_).norm() > 1e-9) {
+      if (!blocks_.empty()) {
+        last_error_ = "geometry changed in an incremental update";
+        return Result::kGap;
+      }
+    }
+  } else {
+    blocks_.clear();
+  }
+  resolution_m_ = u.resolution_m;
+  block_size_ = u.block_size;
+  origin_W_ = u.origin_W;
+  for (std::size_t b = 0; b < u.coord_count / 3; ++b) {
+    const Eigen::Vector3i c(u.coords[3 * b], u.coords[3 * b + 1], u.coords[3 * b + 2]);
+    Block& blk = blocks_[key(c)];
+    const auto* src = reinterpret_cast<const std::int8_t*>(u.payload + b * voxels);
+    blk.values.assign(src, src + voxels);
+    blk.unknown = blk.occupied = 0;
+    for (const std::int8_t v : blk.values) {
+      if (v == kUnknownValue)
+        ++blk.unknown;
+      else if (v >= free_below_)
+        ++blk.occupied;
+    }
+  }
+  sequence_ = u.sequence;
+  return Result::kApplied;
+}
+
+MapReplica::State MapReplica::state(const Eigen::Vector3d& p) const {
+  if (blocks_.empty()) return State::kUnknown;
+  const Eigen::Vector3i v = ((p - origin_W_) / resolution_m_).array().floor().cast<int>();
+  const Eigen::Vector3i b = (v.cast<double>() / block_size_).array().floor().cast<int>();
+  const auto it = blocks_.find(key(b));
+  if (it == blocks_.end()) return State::kUnknown;
+  const Eigen::Vector3i l = v - b * block_size_;
+  const std::int8_t x = it->second.values[(static_cast<std::size_t>(l.z()) * block_size_ + l.y()) * block_size_ + l.x()];
+  if (x == kUnknownValue) return State::kUnknown;
+  return x < free_below_ ? State::kFree : State::kOccupied;
+}
+
+bool MapReplica::sphere_check(const Eigen::Vector3d& p, double r, bool allow_unknown) const {
+  if (blocks_.empty() || !p.allFinite()) return allow_unknown;
+  const double res = resolution_m_;
+  const Eigen::Vector3i lo = ((p.array() - r - origin_W_.array()) / res).floor().cast<int>();
+  const Eigen::Vector3i hi = ((p.array() + r - origin_W_.array()) / res).floor().cast<int>();
+  const int bs = block_size_;
+  auto floor_div = [bs](int a) { return a >= 0 ? a / bs : -((-a + bs - 1) / bs); };
+  const Eigen::Vector3i blo(floor_div(lo.x()), floor_div(lo.y()), floor_div(lo.z()));
+  const Eigen::Vector3i bhi(floor_div(hi.x()), floor_div(hi.y()), floor_div(hi.z()));
+  const double h = 0.5 * res, r2 = r * r;
+  for (int bz = blo.z(); bz <= bhi.z(); ++bz)
+    for (int by = blo.y(); by <= bhi.y(); ++by)
+      for (int bx = blo.x(); bx <= bhi.x(); ++bx) {
+        const Eigen::Vector3i b(bx, by, bz);
+        const auto it = blocks_.find(key(b));
+        if (it == blocks_.end()) {
+          if (allow_unknown) continue;
+          return false;
+        }
+        const Block& blk = it->second;
+        if (blk.occupied == 0 && (allow_unknown || blk.unknown == 0)) continue;  // nothing here can fail
+        const Eigen::Vector3i base = b * bs;
+        const Eigen::Vector3i from = (lo - base).cwiseMax(0), to = (hi - base).cwiseMin(bs - 1);
+        for (int z = from.z(); z <= to.z(); ++z)
+          for (int y = from.y(); y <= to.y(); ++y)
+            for (int x = from.x(); x <= to.x(); ++x) {
+              const std::int8_t v = blk.values[(static_cast<std::size_t>(z) * bs + y) * bs + x];
+              const bool bad = v == kUnknownValue ? !allow_unknown : v >= free_below_;
+              if (!bad) continue;
+              const Eigen::Vector3d c =
+                  origin_W_ + ((base + Eigen::Vector3i(x, y, z)).cast<double>().array() + 0.5).matrix() * res;
+              const Eigen::Vector3d d = ((p - c).cwiseAbs().array() - h).cwiseMax(0.0);
+              if (d.squaredNorm() <= r2) return false;
+            }
+      }
+  return true;
+}
+
+}  // namespace semexp
