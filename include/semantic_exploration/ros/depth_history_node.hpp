@@ -2,15 +2,28 @@
 /// @file depth_history_node.hpp
 /// ROS shell of the invalid-depth history (paper Section IV-C).
 ///
-/// Subscribes `camera/depth/image_raw`, `camera/camera_info`; pose from tf2.
-/// Publishes `~markers` (MarkerArray); serves `~get_masks` (GetHistoryMasks).
+/// Subscribes `camera/depth/image_raw` (32FC1 m or 16UC1 mm),
+/// `camera/camera_info`; pose from tf2 (world <- depth frame at the image
+/// stamp). Publishes `~markers` (MarkerArray: one cube per grid cell holding
+/// invalid directions, redder with more of them; at most once per
+/// marker_period_s) and `frame_integrated` (FrameIntegrated, node
+/// "depth_history", for the simulator's lockstep); serves `~get_masks`
+/// (GetHistoryMasks).
+///
+/// The history's image layout uses the camera's vertical field of view, so
+/// it is built from the first camera_info (or, if a depth image comes first
+/// and matches the `camera/*` parameters, from those) and kept for the run.
 
 #include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <memory>
+
 #include "semantic_exploration/GetHistoryMasks.h"
+#include "semantic_exploration/core/depth_history.hpp"
 #include "semantic_exploration/ros/node_common.hpp"
 #include "semantic_exploration/ros/params.hpp"
 
@@ -21,18 +34,27 @@ class DepthHistoryNode {
   DepthHistoryNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
 
  private:
+  void infoCallback(const sensor_msgs::CameraInfoConstPtr& msg);
   void depthCallback(const sensor_msgs::ImageConstPtr& msg);
   bool getMasks(semantic_exploration::GetHistoryMasks::Request& req,
                 semantic_exploration::GetHistoryMasks::Response& res);
+  void publishMarkers(const ros::Time& stamp);
+  void reportFrame(const std_msgs::Header& header, bool integrated, double time_ms);
 
   semexp::DepthHistoryConfig config_;
   semexp::PinholeCamera camera_;
   semexp::Bounds bounds_;
   FrameNames frames_;
+  double tf_timeout_s_ = 0.1;
+  double marker_period_s_ = 1.0;
+  std::unique_ptr<semexp::DepthHistory> history_;
+  uint64_t frames_integrated_ = 0;
+  bool markers_dirty_ = false;
+  ros::WallTime last_markers_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  ros::Subscriber depth_sub_;
-  ros::Publisher markers_pub_;
+  ros::Subscriber depth_sub_, info_sub_;
+  ros::Publisher markers_pub_, integrated_pub_;
   ros::ServiceServer masks_srv_;
   DropCounter drops_;
 };
