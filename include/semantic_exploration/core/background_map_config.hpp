@@ -16,8 +16,10 @@ struct BackgroundMapConfig {
   double log_odds_occupied = 0.85; ///< log-odds added to voxels in the surface band
   double log_odds_min = -2.0;      ///< clamping minimum (free)
   double log_odds_max = 3.5;       ///< clamping maximum (occupied)
-  double surface_band_m = 0.08;    ///< thickness of the occupied band behind the measured depth, m
+  double surface_band_m = 0.02;    ///< occupied band behind the measured depth (besides the voxel holding the endpoint), m
   bool integrate_colour = true;    ///< fuse colour into leaves
+  bool integrate_min_distance = true;  ///< keep the minimum distance each leaf was observed from (needed by Eq. 1)
+  double surface_front_m = 0.0;    ///< voxels whose centre lies less than this in front of the measured depth are not carved free, m
   double publish_period_s = 1.0;   ///< minimum period between ~occupied point clouds, s
 
   void validate(const std::string& ns = "background_map/") const {
@@ -29,6 +31,9 @@ struct BackgroundMapConfig {
     require(log_odds_min < 0, ns + "log_odds_min", "must be < 0");
     require(log_odds_max > 0, ns + "log_odds_max", "must be > 0");
     require(surface_band_m > 0, ns + "surface_band_m", "must be > 0 m");
+    require(std::isfinite(surface_front_m) && surface_front_m >= 0, ns + "surface_front_m", "must be >= 0 m");
+    require(log_odds_min > -30 && log_odds_max < 30 && log_odds_free > -30 && log_odds_occupied < 30,
+            ns + "log_odds_min", "log-odds parameters must lie in (-30, 30)");
     require(publish_period_s >= 0, ns + "publish_period_s", "must be >= 0 s");
   }
 };

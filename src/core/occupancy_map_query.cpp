@@ -1,0 +1,339 @@
+// Background occupancy map: point, sphere and ray queries, gain raycasts.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "semantic_exploration/core/gains.hpp"
+#include "semantic_exploration/core/occupancy_map.hpp"
+
+namespace semexp {
+
+namespace {
+constexpr std::uint16_t kNoDist = 0xFFFF;
+
+// Entropy (bits) of every stored log-odds value; index = value + 32768, the
+// unknown sentinel (index 0) has entropy 1.
+const std::vector<float>& entropyTable() {
+  static const std::vector<float> table = [] {
+    std::vector<float> t(65536);
+    for (int i = 0; i < 65536; ++i) t[i] = static_cast<float>(logOddsEntropy((i - 32768) / OccupancyMap::kScale));
+    t[0] = 1.f;
+    return t;
+  }();
+  return table;
+}
+
+inline VoxelState stateOf(std::int16_t l) {
+  if (l == OccupancyMap::kUnknown) return VoxelState::kUnknown;
+  return l >= 0 ? VoxelState::kOccupied : VoxelState::kFree;
+}
+}  // namespace
+
+std::int16_t OccupancyMap::voxelValue(int x, int y, int z) const {
+  if (x < 0 || y < 0 || z < 0 || x >= nb_.x() * bs_ || y >= nb_.y() * bs_ || z >= nb_.z() * bs_) return kUnknown;
+  const int cell = cellIndex(x >> bshift_, y >> bshift_, z >> bshift_);
+  const int b = cell_block_[cell];
+  if (b < 0) return cell_value_[cell];
+  const int m = bs_ - 1;
+  return block_l_[static_cast<std::size_t>(b) * bs3_ + ((x & m) + bs_ * ((y & m) + bs_ * (z & m)))];
+}
+
+namespace {
+struct Leaf {
+  int cell = -1;
+  int vox = -1;
+};
+}  // namespace
+
+static bool locate(const Eigen::Vector3d& p_W, const Eigen::Vector3d& origin, double res, const Eigen::Vector3i& nb,
+                   int bs, Eigen::Vector3i& v) {
+  const Eigen::Vector3d q = (p_W - origin) / res;
+  for (int i = 0; i < 3; ++i) {
+    if (!(q[i] >= 0.0) || q[i] >= static_cast<double>(nb[i]) * bs) return false;
+    v[i] = static_cast<int>(std::floor(q[i]));
+  }
+  return true;
+}
+
+VoxelState OccupancyMap::state(const Eigen::Vector3d& p_W) const {
+  Eigen::Vector3i v;
+  if (!locate(p_W, origin_, res_, nb_, bs_, v)) return VoxelState::kUnknown;
+  return stateOf(voxelValue(v.x(), v.y(), v.z()));
+}
+
+bool OccupancyMap::logOdds(const Eigen::Vector3d& p_W, double& l) const {
+  Eigen::Vector3i v;
+  if (!locate(p_W, origin_, res_, nb_, bs_, v)) return false;
+  const std::int16_t s = voxelValue(v.x(), v.y(), v.z());
+  if (s == kUnknown) return false;
+  l = s / kScale;
+  return true;
+}
+
+bool OccupancyMap::colour(const Eigen::Vector3d& p_W, std::uint8_t rgb[3]) const {
+  Eigen::Vector3i v;
+  if (!cfg_.integrate_colour || !locate(p_W, origin_, res_, nb_, bs_, v)) return false;
+  const int cell = cellIndex(v.x() >> bshift_, v.y() >> bshift_, v.z() >> bshift_);
+  const int b = cell_block_[cell];
+  if (b < 0) return false;
+  const int m = bs_ - 1;
+  const std::uint8_t* c =
+      block_rgbw_.data() + 4 * (static_cast<std::size_t>(b) * bs3_ + ((v.x() & m) + bs_ * ((v.y() & m) + bs_ * (v.z() & m))));
+  if (c[3] == 0) return false;
+  std::copy(c, c + 3, rgb);
+  return true;
+}
+
+double OccupancyMap::minObservedDistance(const Eigen::Vector3d& p_W) const {
+  Eigen::Vector3i v;
+  const double inf = std::numeric_limits<double>::infinity();
+  if (!locate(p_W, origin_, res_, nb_, bs_, v)) return inf;
+  const int cell = cellIndex(v.x() >> bshift_, v.y() >> bshift_, v.z() >> bshift_);
+  const int b = cell_block_[cell];
+  const int m = bs_ - 1;
+  const std::uint16_t d =
+      b < 0 ? cell_dist_[cell]
+            : block_dist_[static_cast<std::size_t>(b) * bs3_ + ((v.x() & m) + bs_ * ((v.y() & m) + bs_ * (v.z() & m)))];
+  return d == kNoDist ? inf : d / 1000.0;
+}
+
+// ---------------------------------------------------------------- sphere
+
+bool OccupancyMap::isSphereFree(const Eigen::Vector3d& centre_W, double radius_m) const {
+  const Eigen::Vector3d c = (centre_W - origin_) / res_;
+  const double rad = radius_m / res_;
+  if (!c.allFinite() || !(rad >= 0.0)) return false;
+  for (int i = 0; i < 3; ++i)
+    if (c[i] - rad < 0.0 || c[i] + rad > static_cast<double>(nb_[i]) * bs_) return false;  // reaches outside the map
+  if (rad == 0.0) return state(centre_W) == VoxelState::kFree;
+  return sphereFreeRec(static_cast<int>(levels_.size()) - 1, 0, 0, 0, c, rad);
+}
+
+bool OccupancyMap::sphereFreeRec(int k, int ix, int iy, int iz, const Eigen::Vector3d& c, double rad) const {
+  const int S = bs_ << k;
+  const Eigen::Vector3i lo(ix * S, iy * S, iz * S);
+  const Eigen::Vector3i hi = (lo.array() + S).min(nb_.array() * bs_);
+  double d2 = 0.0, far2 = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    const double a = lo[i] - c[i], b = c[i] - hi[i];
+    const double e = std::max({a, 0.0, b});
+    d2 += e * e;
+    const double f = std::max(std::abs(a), std::abs(b));
+    far2 += f * f;
+  }
+  const double r2 = rad * rad;
+  if (d2 >= r2) return true;  // does not intersect
+  const Level& L = levels_[k];
+  const Summary& s = L.s[ix + L.dims.x() * (iy + L.dims.y() * iz)];
+  if (s.known_any && !s.unknown_any && s.max_l < 0) return true;  // all free below
+  if (far2 <= r2) return false;                                    // wholly inside and not all free
+  if (k == 0) {
+    const int cell = cellIndex(ix, iy, iz);
+    const int b = cell_block_[cell];
+    if (b < 0) return false;  // uniform, not free
+    const std::int16_t* Lv = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
+    int vlo[3], vhi[3];
+    for (int i = 0; i < 3; ++i) {
+      vlo[i] = std::max(lo[i], static_cast<int>(std::floor(c[i] - rad)));
+      vhi[i] = std::min(hi[i] - 1, static_cast<int>(std::floor(c[i] + rad)));
+    }
+    for (int z = vlo[2]; z <= vhi[2]; ++z) {
+      const double ez = std::max({z - c.z(), 0.0, c.z() - (z + 1)});
+      for (int y = vlo[1]; y <= vhi[1]; ++y) {
+        const double ey = std::max({y - c.y(), 0.0, c.y() - (y + 1)});
+        for (int x = vlo[0]; x <= vhi[0]; ++x) {
+          const double ex = std::max({x - c.x(), 0.0, c.x() - (x + 1)});
+          if (ex * ex + ey * ey + ez * ez >= r2) continue;
+          const std::int16_t l = Lv[(x - lo[0]) + bs_ * ((y - lo[1]) + bs_ * (z - lo[2]))];
+          if (l == kUnknown || l >= 0) return false;
+        }
+      }
+    }
+    return true;
+  }
+  const Eigen::Vector3i& cd = levels_[k - 1].dims;
+  for (int dz = 0; dz < 2; ++dz)
+    for (int dy = 0; dy < 2; ++dy)
+      for (int dx = 0; dx < 2; ++dx) {
+        const int cx = 2 * ix + dx, cy = 2 * iy + dy, cz = 2 * iz + dz;
+        if (cx < cd.x() && cy < cd.y() && cz < cd.z() && !sphereFreeRec(k - 1, cx, cy, cz, c, rad)) return false;
+      }
+  return true;
+}
+
+// ------------------------------------------------------------------- rays
+
+// Calls f(t_in_m, t_out_m, log-odds, cell, voxel-in-block or -1) for each leaf
+// (voxel, or the largest uniform octree node) the ray crosses between t0 and
+// t1, in order, until f returns false or the ray leaves the map.
+template <class F>
+void OccupancyMap::march(const Eigen::Vector3d& o_W, const Eigen::Vector3d& dir_W, double t0, double t1, F&& f) const {
+  const Eigen::Vector3d d = dir_W.normalized();
+  const Eigen::Vector3d o = (o_W - origin_) / res_;
+  const double inf = std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d inv(d.x() != 0 ? 1.0 / d.x() : inf, d.y() != 0 ? 1.0 / d.y() : inf,
+                            d.z() != 0 ? 1.0 / d.z() : inf);
+  const Eigen::Vector3i nv = nb_ * bs_;
+  const int m = bs_ - 1;
+  double t = t0 / res_;
+  const double tend = t1 / res_;
+  while (t < tend) {
+    const Eigen::Vector3d p = o + d * (t + 1e-7);
+    int v[3];
+    for (int i = 0; i < 3; ++i) {
+      if (!(p[i] >= 0.0) || p[i] >= nv[i]) return;
+      v[i] = static_cast<int>(p[i]);
+    }
+    const int cx = v[0] >> bshift_, cy = v[1] >> bshift_, cz = v[2] >> bshift_;
+    const int cell = cellIndex(cx, cy, cz);
+    const int b = cell_block_[cell];
+    std::int16_t l;
+    int vox = -1;
+    int size = 1;
+    int lo[3];
+    if (b >= 0) {
+      vox = (v[0] & m) + bs_ * ((v[1] & m) + bs_ * (v[2] & m));
+      l = block_l_[static_cast<std::size_t>(b) * bs3_ + vox];
+      lo[0] = v[0], lo[1] = v[1], lo[2] = v[2];
+    } else {
+      l = cell_value_[cell];
+      int k = 0;
+      for (int kk = 1; kk < static_cast<int>(levels_.size()); ++kk) {
+        const Level& L = levels_[kk];
+        const Summary& s = L.s[(cx >> kk) + L.dims.x() * ((cy >> kk) + L.dims.y() * (cz >> kk))];
+        const bool same = l == kUnknown ? !s.known_any : (!s.unknown_any && s.min_l == l && s.max_l == l);
+        if (!same) break;
+        k = kk;
+      }
+      size = bs_ << k;
+      const int sh = bshift_ + k;
+      for (int i = 0; i < 3; ++i) lo[i] = (v[i] >> sh) << sh;
+    }
+    double texit = inf;
+    for (int i = 0; i < 3; ++i) {
+      if (d[i] > 0)
+        texit = std::min(texit, (lo[i] + size - o[i]) * inv[i]);
+      else if (d[i] < 0)
+        texit = std::min(texit, (lo[i] - o[i]) * inv[i]);
+    }
+    if (!(texit > t)) texit = t + 1e-6;
+    if (!f(t * res_, std::min(texit, tend) * res_, l, cell, vox)) return;
+    t = texit;
+  }
+}
+
+RaycastHit OccupancyMap::raycast(const Eigen::Vector3d& origin_W, const Eigen::Vector3d& dir_W, double max_range_m,
+                                 bool stop_at_unknown) const {
+  RaycastHit hit;
+  hit.distance_m = max_range_m;
+  if (!(dir_W.squaredNorm() > 0.0)) return hit;
+  const Eigen::Vector3d d = dir_W.normalized();
+  march(origin_W, d, 0.0, max_range_m, [&](double t_in, double, std::int16_t l, int cell, int vox) {
+    const bool occ = l != kUnknown && l >= 0;
+    if (!occ && !(stop_at_unknown && l == kUnknown)) return true;
+    hit.hit = true;
+    hit.state = stateOf(l);
+    hit.distance_m = t_in;
+    if (vox >= 0) {
+      const int bz = cell / (nb_.x() * nb_.y()), by = (cell / nb_.x()) % nb_.y(), bx = cell % nb_.x();
+      const Eigen::Vector3i vi(bx * bs_ + vox % bs_, by * bs_ + (vox / bs_) % bs_, bz * bs_ + vox / (bs_ * bs_));
+      hit.voxel_centre_W = origin_ + (vi.cast<double>() + Eigen::Vector3d::Constant(0.5)) * res_;
+    } else {
+      // centre of the finest voxel at the entry point
+      const Eigen::Vector3d p = ((origin_W + d * (t_in + 1e-7 * res_)) - origin_) / res_;
+      hit.voxel_centre_W = origin_ + (p.array().floor() + 0.5).matrix() * res_;
+    }
+    return false;
+  });
+  return hit;
+}
+
+std::vector<GainImages> OccupancyMap::computeGains(const std::vector<Eigen::Vector3d>& positions_W,
+                                                   const SphericalGrid& grid, const GainSettings& st,
+                                                   const std::vector<float>& max_depth_m) const {
+  const std::vector<float>& H = entropyTable();
+  const int W = grid.width, Hh = grid.height, n = W * Hh;
+  const bool have_max = max_depth_m.size() == positions_W.size() * static_cast<std::size_t>(n) && n > 0;
+  const double norm = st.d_max_m - st.d_min_m;
+  std::vector<Eigen::Vector3d> dirs(static_cast<std::size_t>(n));
+  for (int v = 0; v < Hh; ++v)
+    for (int u = 0; u < W; ++u) dirs[v * W + u] = grid.direction(u, v);
+  std::vector<GainImages> out(positions_W.size());
+  for (std::size_t j = 0; j < positions_W.size(); ++j) {
+    GainImages& g = out[j];
+    g.width = W;
+    g.height = Hh;
+    g.entropy.assign(n, 0.f);
+    g.distance.assign(n, 0.f);
+    g.hit_depth_m.assign(n, static_cast<float>(st.d_max_m));
+    const Eigen::Vector3d& pos = positions_W[j];
+    for (int i = 0; i < n; ++i) {
+      double t_end = st.d_max_m;
+      if (have_max) {
+        const float md = max_depth_m[j * n + i];
+        if (std::isfinite(md) && md >= 0.f) t_end = std::min(t_end, static_cast<double>(md));
+      }
+      double ent = 0.0;
+      march(pos, dirs[i], 0.0, t_end, [&](double a, double b, std::int16_t l, int cell, int vox) {
+        if (l != kUnknown && l >= 0) {
+          g.hit_depth_m[i] = static_cast<float>(a);
+          // leaf centre and its minimum observed distance
+          const int bz = cell / (nb_.x() * nb_.y()), by = (cell / nb_.x()) % nb_.y(), bx = cell % nb_.x();
+          Eigen::Vector3d centre;
+          std::uint16_t dmm;
+          if (vox >= 0) {
+            const Eigen::Vector3i vi(bx * bs_ + vox % bs_, by * bs_ + (vox / bs_) % bs_, bz * bs_ + vox / (bs_ * bs_));
+            centre = origin_ + (vi.cast<double>() + Eigen::Vector3d::Constant(0.5)) * res_;
+            dmm = block_dist_[static_cast<std::size_t>(cell_block_[cell]) * bs3_ + vox];
+          } else {
+            centre = origin_ + (Eigen::Vector3d(bx, by, bz) * bs_ + Eigen::Vector3d::Constant(0.5 * bs_)) * res_;
+            dmm = cell_dist_[cell];
+          }
+          const double d_node = dmm == kNoDist ? std::numeric_limits<double>::infinity() : dmm / 1000.0;
+          const double d_exp = (centre - pos).norm();
+          const double gain = std::isfinite(d_node) ? distanceGain(d_node, d_exp, st.d_desired_m, st.d_max_m) : 0.0;
+          g.distance[i] = static_cast<float>(gain);
+          return false;
+        }
+        const double s = std::max(a, st.d_min_m), e = b;
+        if (e > s) ent += H[static_cast<std::size_t>(l + 32768)] * (e - s);
+        return true;
+      });
+      g.entropy[i] = static_cast<float>(std::clamp(ent / norm, 0.0, 1.0));
+    }
+  }
+  return out;
+}
+
+// ------------------------------------------------------------- iteration
+
+void OccupancyMap::forEachOccupied(
+    const std::function<void(const Eigen::Vector3d&, double, const std::uint8_t*)>& f) const {
+  const std::uint8_t grey[3] = {128, 128, 128};
+  for (int cell = 0; cell < static_cast<int>(cell_block_.size()); ++cell) {
+    const Summary& s = levels_[0].s[cell];
+    if (!s.known_any || s.max_l < 0) continue;
+    const int bz = cell / (nb_.x() * nb_.y()), by = (cell / nb_.x()) % nb_.y(), bx = cell % nb_.x();
+    const int b = cell_block_[cell];
+    if (b < 0) {
+      f(origin_ + (Eigen::Vector3d(bx, by, bz) * bs_ + Eigen::Vector3d::Constant(0.5 * bs_)) * res_, bs_ * res_, grey);
+      continue;
+    }
+    const std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
+    int i = 0;
+    for (int z = 0; z < bs_; ++z)
+      for (int y = 0; y < bs_; ++y)
+        for (int x = 0; x < bs_; ++x, ++i) {
+          if (L[i] == kUnknown || L[i] < 0) continue;
+          const std::uint8_t* c = grey;
+          if (cfg_.integrate_colour) {
+            const std::uint8_t* cc = block_rgbw_.data() + 4 * (static_cast<std::size_t>(b) * bs3_ + i);
+            if (cc[3] > 0) c = cc;
+          }
+          f(origin_ + (Eigen::Vector3d(bx * bs_ + x, by * bs_ + y, bz * bs_ + z) + Eigen::Vector3d::Constant(0.5)) * res_,
+            res_, c);
+        }
+  }
+}
+
+}  // namespace semexp

@@ -1,0 +1,358 @@
+// Hand-computed answers for the background map: Eq. 1, entropy, frontiers,
+// colour and distance fusion, sphere queries, raycasts, bad input, save/load
+// and the OctoMap export.
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <opencv2/core.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "occupancy_test_scene.hpp"
+#include "semantic_exploration/core/gains.hpp"
+#include "semantic_exploration/core/occupancy_map.hpp"
+
+using namespace semexp;
+using semexp_test::BoxRoom;
+using semexp_test::lookPose;
+
+namespace {
+
+std::string tempPath(const std::string& name) {
+  const char* d = std::getenv("TMPDIR");
+  return std::string(d ? d : "/tmp") + "/semexp_occ_" + std::to_string(::getpid()) + "_" + name;
+}
+
+// A wall facing -x at x = 2.013 m inside a generous box.
+BoxRoom wallScene() {
+  BoxRoom s;
+  s.room = {{-8.0, -6.0, -4.0}, {2.013, 6.0, 4.0}};
+  return s;
+}
+
+Bounds smallBounds() {
+  Bounds b;
+  b.min_m = {-4.0, -2.0, -1.6};
+  b.max_m = {3.0, 2.0, 1.6};
+  return b;
+}
+
+std::vector<std::uint8_t> constantRgb(const PinholeCamera& cam, std::uint8_t r, std::uint8_t g, std::uint8_t b) {
+  std::vector<std::uint8_t> c(static_cast<std::size_t>(cam.width) * cam.height * 3);
+  for (std::size_t i = 0; i < c.size(); i += 3) c[i] = r, c[i + 1] = g, c[i + 2] = b;
+  return c;
+}
+
+std::string readFile(const std::string& p) {
+  std::ifstream f(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+}
+
+}  // namespace
+
+TEST(DistanceGain, Eq1EachCase) {
+  // d_node <= d_bg: already seen close enough.
+  EXPECT_DOUBLE_EQ(distanceGain(2.0, 1.0, 3.0, 10.0), 0.0);
+  EXPECT_DOUBLE_EQ(distanceGain(3.0, 1.0, 3.0, 10.0), 0.0);
+  // d_node <= d_exp: the candidate would not see it closer.
+  EXPECT_DOUBLE_EQ(distanceGain(5.0, 6.0, 3.0, 10.0), 0.0);
+  EXPECT_DOUBLE_EQ(distanceGain(5.0, 5.0, 3.0, 10.0), 0.0);
+  // otherwise (d_node - max(d_exp, d_bg)) / d_max
+  EXPECT_DOUBLE_EQ(distanceGain(6.0, 2.0, 3.0, 10.0), 0.3);  // d_exp < d_bg
+  EXPECT_DOUBLE_EQ(distanceGain(8.0, 5.0, 3.0, 10.0), 0.3);  // d_exp > d_bg
+}
+
+TEST(Entropy, HalfAndClamped) {
+  EXPECT_DOUBLE_EQ(binaryEntropy(0.5), 1.0);
+  EXPECT_DOUBLE_EQ(logOddsEntropy(0.0), 1.0);
+  // clamped free voxel, l = -2: p = 1/(1+e^2) = 0.119203;
+  // H = 0.119203*3.068520 + 0.880797*0.183118 = 0.365777 + 0.161290 = 0.527066 bits
+  EXPECT_NEAR(logOddsEntropy(-2.0), 0.527066, 2e-6);
+  // clamped occupied voxel, l = 3.5: p = 0.970688; H = 0.970688*0.042921 + 0.029312*5.092347 = 0.191...
+  EXPECT_NEAR(logOddsEntropy(3.5), 0.970688 * 0.0429208 + 0.0293122 * 5.0923467, 1e-4);
+}
+
+TEST(Gains, EntropyOfUnknownAndOfClampedFreeSpace) {
+  BackgroundMapConfig cfg;
+  cfg.resolution_m = 0.2;  // large voxels: a big map stays small
+  Bounds b;
+  b.min_m = {-12, -12, -6};
+  b.max_m = {12, 12, 6};
+  OccupancyMap map(cfg, b);
+  SphericalGrid grid;
+  GainSettings gs;  // d_min 0.1, d_max 10
+  auto g = map.computeGains({Eigen::Vector3d(0.1, 0.1, 0.1)}, grid, gs);
+  ASSERT_EQ(g.size(), 1u);
+  for (int i = 0; i < grid.width * grid.height; ++i) {
+    EXPECT_NEAR(g[0].entropy[i], 1.0, 1e-5);   // all unknown: maximal entropy
+    EXPECT_FLOAT_EQ(g[0].hit_depth_m[i], 10.f);  // nothing hit
+    EXPECT_FLOAT_EQ(g[0].distance[i], 0.f);
+  }
+  // Everything free at the clamp (log-odds -2.0 = -20 tenths in the message encoding).
+  MapBlocksData all = map.snapshot();
+  all.coords.clear();
+  all.payload.clear();
+  const Eigen::Vector3i nb = ((map.extentMax() - map.extentMin()) / (cfg.resolution_m * cfg.block_size)).array().round().cast<int>();
+  for (int z = 0; z < nb.z(); ++z)
+    for (int y = 0; y < nb.y(); ++y)
+      for (int x = 0; x < nb.x(); ++x) {
+        all.coords.insert(all.coords.end(), {x, y, z});
+        all.payload.insert(all.payload.end(), 512, static_cast<std::int8_t>(-20));
+      }
+  ASSERT_TRUE(map.applyBlocks(all));
+  g = map.computeGains({Eigen::Vector3d(0.1, 0.1, 0.1)}, grid, gs);
+  for (int i = 0; i < grid.width * grid.height; ++i) EXPECT_NEAR(g[0].entropy[i], 0.527066, 1e-4);
+  // A per-ray maximum depth of 5.05 m stops accumulation half way.
+  std::vector<float> maxd(grid.width * grid.height, 5.05f);
+  g = map.computeGains({Eigen::Vector3d(0.1, 0.1, 0.1)}, grid, gs, maxd);
+  for (int i = 0; i < grid.width * grid.height; ++i) EXPECT_NEAR(g[0].entropy[i], 0.527066 * 0.5, 1e-4);
+}
+
+TEST(Gains, BackgroundDistanceGainOnASingleWall) {
+  BackgroundMapConfig cfg;
+  PinholeCamera cam;
+  const BoxRoom scene = wallScene();
+  Bounds b;
+  b.min_m = {-7.0, -2.0, -1.6};
+  b.max_m = {3.0, 2.0, 1.6};
+  OccupancyMap map(cfg, b);
+  const Eigen::Isometry3d T = lookPose({-4.0, 0.0, 0.0}, 0.0, 0.0);  // 6.013 m from the wall
+  map.integrate(scene.render(cam, T).data(), nullptr, cam, T);
+  SphericalGrid grid;
+  GainSettings gs;
+  // Column 18 looks at azimuth +5 degrees, row 4 at elevation +4.3 degrees (both towards the wall).
+  const int u = 18, v = 4;
+  auto check = [&](const Eigen::Vector3d& pos, double expected, double tol) {
+    auto g = map.computeGains({pos}, grid, gs);
+    const int i = v * grid.width + u;
+    const RaycastHit h = map.raycast(pos, grid.direction(u, v), gs.d_max_m);
+    ASSERT_TRUE(h.hit);
+    EXPECT_NEAR(g[0].hit_depth_m[i], h.distance_m, 1e-4);
+    // same formula from the map's own numbers, and the hand value
+    const double d_node = map.minObservedDistance(h.voxel_centre_W);
+    const double d_exp = (h.voxel_centre_W - pos).norm();
+    EXPECT_NEAR(g[0].distance[i], distanceGain(d_node, d_exp, gs.d_desired_m, gs.d_max_m), 1e-5);
+    EXPECT_NEAR(g[0].distance[i], expected, tol);
+  };
+  // The hit voxel was observed from ~6.06 m (the camera at x=-4, ray 5 deg off axis).
+  // From x = -1 (d_exp ~3.04 > d_bg): (6.06 - 3.04) / 10 ~ 0.30
+  check({-1.0, 0.0, 0.0}, 0.30, 0.01);
+  // From x = 0 (d_exp ~2.03 < d_bg = 3): (6.06 - 3) / 10 ~ 0.306
+  check({0.0, 0.0, 0.0}, 0.306, 0.01);
+  // From x = -6.5 (farther than it was observed from): 0
+  check({-6.5, 0.0, 0.0}, 0.0, 1e-9);
+  // After a close look from x = 0.5 (~1.5 m < d_bg): 0 from anywhere
+  const Eigen::Isometry3d T2 = lookPose({0.5, 0.0, 0.0}, 0.0, 0.0);
+  map.integrate(scene.render(cam, T2).data(), nullptr, cam, T2);
+  check({-1.0, 0.0, 0.0}, 0.0, 1e-9);
+}
+
+TEST(OccupancyMap, StatesAndRaycastOnAWall) {
+  BackgroundMapConfig cfg;
+  PinholeCamera cam;
+  const BoxRoom scene = wallScene();
+  OccupancyMap map(cfg, smallBounds());
+  const Eigen::Isometry3d T = lookPose({0.0, 0.0, 0.0}, 0.0, 0.0);
+  const IntegrationStats st = map.integrate(scene.render(cam, T).data(), nullptr, cam, T);
+  EXPECT_EQ(st.invalid_pixels, 0u);
+  EXPECT_EQ(map.state({1.0, 0.1, 0.1}), VoxelState::kFree);
+  EXPECT_EQ(map.state({2.02, 0.1, 0.1}), VoxelState::kOccupied);  // voxel [2.00, 2.04) holds the wall
+  EXPECT_EQ(map.state({2.5, 0.1, 0.1}), VoxelState::kUnknown);   // behind the wall
+  EXPECT_EQ(map.state({-1.0, 0.1, 0.1}), VoxelState::kUnknown);  // behind the camera
+  EXPECT_EQ(map.state({50.0, 0.0, 0.0}), VoxelState::kUnknown);  // outside the map
+  double l = 0;
+  ASSERT_TRUE(map.logOdds({1.0, 0.1, 0.1}, l));
+  EXPECT_NEAR(l, cfg.log_odds_free, 1e-3);
+  ASSERT_TRUE(map.logOdds({2.02, 0.1, 0.1}, l));
+  EXPECT_NEAR(l, cfg.log_odds_occupied, 1e-3);
+  const RaycastHit h = map.raycast({0.0, 0.01, 0.01}, {1.0, 0.0, 0.0}, 10.0);
+  ASSERT_TRUE(h.hit);
+  EXPECT_EQ(h.state, VoxelState::kOccupied);
+  EXPECT_NEAR(h.distance_m, 2.0, 1e-6);
+  EXPECT_NEAR(h.voxel_centre_W.x(), 2.02, 1e-9);
+  // Stops on unknown space when asked (behind the camera).
+  const RaycastHit hu = map.raycast({0.0, 0.01, 0.01}, {-1.0, 0.0, 0.0}, 10.0, true);
+  ASSERT_TRUE(hu.hit);
+  EXPECT_EQ(hu.state, VoxelState::kUnknown);
+  EXPECT_LT(hu.distance_m, 0.1);
+  EXPECT_FALSE(map.raycast({0.0, 0.01, 0.01}, {-1.0, 0.0, 0.0}, 10.0).hit);
+  EXPECT_GT(map.freeVolume(), 1.0);
+  EXPECT_GT(map.occupiedVolume(), 0.0);
+  EXPECT_GT(map.memoryBytes(), 0u);
+}
+
+TEST(OccupancyMap, BadDepthIsCountedAndCarvesNothing) {
+  BackgroundMapConfig cfg;
+  PinholeCamera cam;
+  OccupancyMap map(cfg, smallBounds());
+  std::vector<float> depth(cam.width * cam.height, 0.f);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const float bad[] = {0.f, nan, inf, -inf, -1.f, 0.05f /* < d_min */, 20.f /* > d_max */};
+  for (std::size_t i = 0; i < depth.size(); ++i) depth[i] = bad[i % 7];
+  const Eigen::Isometry3d T = lookPose({0.0, 0.0, 0.0}, 0.0, 0.0);
+  const IntegrationStats st = map.integrate(depth.data(), nullptr, cam, T);
+  EXPECT_EQ(st.invalid_pixels, depth.size());
+  EXPECT_EQ(map.exploredVolume(), 0.0);
+  EXPECT_EQ(map.blockCount(), 0u);
+  // OpenCV input: wrong size and wrong type are rejected, 16UC1 millimetres accepted.
+  cv::Mat small(10, 10, CV_32FC1, cv::Scalar(1.0));
+  EXPECT_THROW(map.integrate(small, cv::Mat(), cam, T), std::invalid_argument);
+  cv::Mat wrong(cam.height, cam.width, CV_8UC1, cv::Scalar(1));
+  EXPECT_THROW(map.integrate(wrong, cv::Mat(), cam, T), std::invalid_argument);
+  cv::Mat mm(cam.height, cam.width, CV_16UC1, cv::Scalar(1500));
+  const IntegrationStats st2 = map.integrate(mm, cv::Mat(), cam, T);
+  EXPECT_EQ(st2.invalid_pixels, 0u);
+  EXPECT_EQ(map.state({1.0, 0.0, 0.0}), VoxelState::kFree);
+  EXPECT_EQ(map.state({1.5, 0.0, 0.02}), VoxelState::kOccupied);  // voxel [1.48, 1.52)
+}
+
+TEST(OccupancyMap, ColourAndMinDistanceFuseOverTwoObservations) {
+  BackgroundMapConfig cfg;
+  PinholeCamera cam;
+  const BoxRoom scene = wallScene();
+  OccupancyMap map(cfg, smallBounds());
+  const Eigen::Vector3d voxel(2.02, 0.02, 0.02);  // voxel [2.00,2.04) x [0,0.04) x [0,0.04) holds the wall
+  const Eigen::Isometry3d T1 = lookPose({0.0, 0.0, 0.0}, 0.0, 0.0);
+  const Eigen::Isometry3d T2 = lookPose({1.0, 0.0, 0.0}, 0.0, 0.0);
+  auto red = constantRgb(cam, 200, 0, 0), blue = constantRgb(cam, 0, 0, 100);
+  map.integrate(scene.render(cam, T1).data(), red.data(), cam, T1);
+  std::uint8_t c[3];
+  ASSERT_TRUE(map.colour(voxel, c));
+  EXPECT_EQ(c[0], 200);
+  EXPECT_EQ(c[2], 0);
+  EXPECT_NEAR(map.minObservedDistance(voxel), std::sqrt(2.02 * 2.02 + 2 * 0.02 * 0.02), 1e-3);
+  map.integrate(scene.render(cam, T2).data(), blue.data(), cam, T2);
+  ASSERT_TRUE(map.colour(voxel, c));
+  EXPECT_EQ(c[0], 100);  // (200 * 1 + 0) / 2
+  EXPECT_EQ(c[1], 0);
+  EXPECT_EQ(c[2], 50);  // (0 * 1 + 100) / 2
+  EXPECT_NEAR(map.minObservedDistance(voxel), std::sqrt(1.02 * 1.02 + 2 * 0.02 * 0.02), 1e-3);
+  // A farther third look does not raise it.
+  map.integrate(scene.render(cam, T1).data(), red.data(), cam, T1);
+  EXPECT_NEAR(map.minObservedDistance(voxel), std::sqrt(1.02 * 1.02 + 2 * 0.02 * 0.02), 1e-3);
+}
+
+TEST(OccupancyMap, SphereFreeNearAWall) {
+  BackgroundMapConfig cfg;
+  PinholeCamera cam;
+  const BoxRoom scene = wallScene();
+  OccupancyMap map(cfg, smallBounds());
+  for (int i = 0; i < 6; ++i) {
+    const Eigen::Isometry3d T = lookPose({-0.3 * i, 0.0, 0.0}, 0.0, 0.0);
+    map.integrate(scene.render(cam, T).data(), nullptr, cam, T);
+  }
+  // Centre 0.5 m in front of the first occupied voxel face (x = 2.00).
+  const Eigen::Vector3d c(1.5, 0.02, 0.02);
+  EXPECT_TRUE(map.isSphereFree(c, 0.0));
+  EXPECT_TRUE(map.isSphereFree(c, 0.1));
+  EXPECT_TRUE(map.isSphereFree(c, 0.3));
+  EXPECT_TRUE(map.isSphereFree(c, 0.49));
+  EXPECT_FALSE(map.isSphereFree(c, 0.51));  // reaches into the wall voxels
+  EXPECT_FALSE(map.isSphereFree(c, 1.0));
+  EXPECT_FALSE(map.isSphereFree({2.5, 0.0, 0.0}, 0.1));   // unknown behind the wall
+  EXPECT_FALSE(map.isSphereFree({1.5, 0.0, 1.55}, 0.1));  // leaves the map
+}
+
+TEST(OccupancyMap, FrontierAppearsAndDisappears) {
+  BackgroundMapConfig cfg;
+  PinholeCamera cam;
+  const BoxRoom scene = wallScene();
+  OccupancyMap map(cfg, smallBounds());
+  const Eigen::Isometry3d T = lookPose({-1.0, 0.0, 0.0}, 0.0, 0.0);  // image right = world -y
+  std::vector<float> depth = scene.render(cam, T);
+  std::vector<float> half = depth;
+  for (int v = 0; v < cam.height; ++v)
+    for (int u = cam.width / 2; u < cam.width; ++u) half[v * cam.width + u] = 0.f;  // world y < 0 unseen
+  auto near_cut = [&] {
+    int n = 0;
+    map.forEachFrontier([&](const Eigen::Vector3d& p, double) {
+      n += p.x() > 0.5 && p.x() < 1.5 && std::abs(p.y()) < 0.1 && std::abs(p.z()) < 0.3;
+    });
+    return n;
+  };
+  map.integrate(half.data(), nullptr, cam, T);
+  map.updateFrontiers();
+  EXPECT_GT(near_cut(), 20);  // free (y > 0) next to unknown (y < 0)
+  const Eigen::Vector3d p(1.0, 0.06, 0.02);
+  EXPECT_EQ(map.state(p), VoxelState::kFree);
+  EXPECT_EQ(map.state({1.0, -0.3, 0.02}), VoxelState::kUnknown);
+  map.integrate(depth.data(), nullptr, cam, T);
+  map.updateFrontiers();
+  EXPECT_EQ(near_cut(), 0);  // the unknown side was observed
+  EXPECT_GT(map.frontierCount(), 0u);  // the frustum's outer border is still a frontier
+  // Every reported frontier is free with an unknown neighbour.
+  const double r = cfg.resolution_m;
+  map.forEachFrontier([&](const Eigen::Vector3d& q, double size) {
+    ASSERT_EQ(map.state(q), VoxelState::kFree);
+    bool unk = false;
+    for (int a = 0; a < 3; ++a)
+      for (int s = -1; s <= 1; s += 2) {
+        Eigen::Vector3d n = q;
+        n[a] += s * 0.5 * (size + r);
+        unk = unk || map.state(n) == VoxelState::kUnknown;
+      }
+    EXPECT_TRUE(unk);
+  });
+}
+
+TEST(OccupancyMap, SaveLoadRoundTripIsBitIdentical) {
+  BackgroundMapConfig cfg;
+  PinholeCamera cam;
+  const BoxRoom scene = semexp_test::standardRoom();
+  Bounds b;
+  b.min_m = scene.room.lo - Eigen::Vector3d::Constant(0.2);
+  b.max_m = scene.room.hi + Eigen::Vector3d::Constant(0.2);
+  OccupancyMap map(cfg, b);
+  auto rgb = constantRgb(cam, 10, 200, 30);
+  for (int i = 0; i < 5; ++i) {
+    const Eigen::Isometry3d T = lookPose({0.3 * i, 0.2, 1.2}, 0.9 * i, 0.2);
+    map.integrate(scene.render(cam, T).data(), rgb.data(), cam, T);
+    map.updateFrontiers();
+  }
+  map.takeUpdate();
+  const std::string p1 = tempPath("a.semexpmap"), p2 = tempPath("b.semexpmap");
+  map.save(p1);
+  OccupancyMap loaded = OccupancyMap::load(p1);
+  loaded.save(p2);
+  const std::string a = readFile(p1), bb = readFile(p2);
+  EXPECT_GT(a.size(), 1000u);
+  EXPECT_TRUE(a == bb);
+  EXPECT_EQ(loaded.frontierCount(), map.frontierCount());
+  EXPECT_EQ(loaded.exploredVolume(), map.exploredVolume());
+  EXPECT_EQ(loaded.lastSequence(), map.lastSequence());
+  const MapBlocksData s1 = map.snapshot(), s2 = loaded.snapshot();
+  EXPECT_EQ(s1.coords, s2.coords);
+  EXPECT_EQ(s1.payload, s2.payload);
+  std::uint8_t c[3], c0[3];
+  std::size_t coloured = 0;
+  map.forEachOccupied([&](const Eigen::Vector3d& q, double, const std::uint8_t*) {
+    const bool has = map.colour(q, c0);
+    ASSERT_EQ(loaded.colour(q, c), has);
+    if (has) {
+      EXPECT_EQ(c[1], c0[1]);
+      EXPECT_EQ(c0[1], 200);
+      ++coloured;
+    }
+    EXPECT_EQ(loaded.minObservedDistance(q), map.minObservedDistance(q));
+  });
+  EXPECT_GT(coloured, 1000u);
+  // The OctoMap export reads back with the same occupied voxels.
+  const std::string bt = tempPath("c.bt");
+  map.exportOctomap(bt);
+  octomap::OcTree tree(bt);
+  std::size_t checked = 0, same = 0;
+  map.forEachOccupied([&](const Eigen::Vector3d& q, double, const std::uint8_t*) {
+    const octomap::OcTreeNode* n = tree.search(q.x(), q.y(), q.z());
+    ++checked;
+    same += n && tree.isNodeOccupied(n);
+  });
+  EXPECT_EQ(same, checked);
+  std::remove(p1.c_str());
+  std::remove(p2.c_str());
+  std::remove(bt.c_str());
+}
