@@ -2,12 +2,98 @@
 
 #include <nav_msgs/Path.h>
 #include <sensor_msgs/Image.h>
+#include <sensor_msgs/image_encodings.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
 #include "semantic_exploration/CandidateViewArray.h"
+#include "semantic_exploration/ComputeGains.h"
 #include "semantic_exploration/ExplorationStatus.h"
+#include "semantic_exploration/GetHistoryMasks.h"
+#include "semantic_exploration/GetMap.h"
 
 namespace semexp_ros {
+
+using semantic_exploration::ExplorationStatus;
+
+namespace {
+
+geometry_msgs::Quaternion yawQuaternion(double yaw) {
+  geometry_msgs::Quaternion q;
+  q.w = std::cos(0.5 * yaw);
+  q.z = std::sin(0.5 * yaw);
+  return q;
+}
+
+geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
+  geometry_msgs::Point m;
+  m.x = p.x();
+  m.y = p.y();
+  m.z = p.z();
+  return m;
+}
+
+nav_msgs::Path toPath(const std::vector<Eigen::Vector3d>& path, const std::vector<double>& yaw,
+                      const std::string& frame, const ros::Time& stamp) {
+  nav_msgs::Path out;
+  out.header.frame_id = frame;
+  out.header.stamp = stamp;
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    geometry_msgs::PoseStamped ps;
+    ps.header = out.header;
+    ps.pose.position = toPoint(path[i]);
+    ps.pose.orientation = yawQuaternion(i < yaw.size() ? yaw[i] : (yaw.empty() ? 0.0 : yaw.back()));
+    out.poses.push_back(ps);
+  }
+  return out;
+}
+
+// 32FC1 image -> GainImage of the expected size; throws on anything else.
+semexp::GainImage toGainImage(const sensor_msgs::Image& img, int w, int h, const char* what) {
+  if (img.width == 0 && img.height == 0) return semexp::GainImage();  // "no such gain"
+  if (img.encoding != sensor_msgs::image_encodings::TYPE_32FC1 || static_cast<int>(img.width) != w ||
+      static_cast<int>(img.height) != h || img.step < img.width * 4 ||
+      img.data.size() < static_cast<std::size_t>(img.step) * img.height || img.is_bigendian)
+    throw std::runtime_error(std::string(what) + " image is not a " + std::to_string(w) + "x" + std::to_string(h) +
+                             " 32FC1 image (got " + std::to_string(img.width) + "x" + std::to_string(img.height) +
+                             " " + img.encoding + ")");
+  semexp::GainImage out(w, h);
+  for (int v = 0; v < h; ++v)
+    std::memcpy(&out.values[static_cast<std::size_t>(v) * w], &img.data[static_cast<std::size_t>(v) * img.step],
+                static_cast<std::size_t>(w) * sizeof(float));
+  return out;
+}
+
+sensor_msgs::Image fromGainImage(const semexp::GainImage& g, int w, int h, const std::string& frame,
+                                 const ros::Time& stamp) {
+  sensor_msgs::Image img;
+  img.header.frame_id = frame;
+  img.header.stamp = stamp;
+  img.width = static_cast<uint32_t>(w);
+  img.height = static_cast<uint32_t>(h);
+  img.encoding = sensor_msgs::image_encodings::TYPE_32FC1;
+  img.step = img.width * 4;
+  img.data.assign(static_cast<std::size_t>(img.step) * img.height, 0);
+  if (!g.empty() && g.width == w && g.height == h) std::memcpy(img.data.data(), g.values.data(), img.data.size());
+  return img;
+}
+
+std_msgs::ColorRGBA colour(float r, float g, float b, float a) {
+  std_msgs::ColorRGBA c;
+  c.r = r;
+  c.g = g;
+  c.b = b;
+  c.a = a;
+  return c;
+}
+
+}  // namespace
 
 PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listener_(tf_buffer_) {
   const auto p = ParamReader::fromNodeHandle(pnh);
@@ -16,26 +102,41 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listene
   camera_ = loadCamera(p);
   bounds_ = loadBounds(p);
   frames_ = loadFrames(p);
+  p.get("tf_timeout_s", tf_timeout_s_);
+  if (!(tf_timeout_s_ >= 0)) throw semexp::ConfigError("tf_timeout_s", "must be >= 0 s");
+  p.get("planner/service_timeout_s", service_timeout_s_);
+  if (!(service_timeout_s_ > 0)) throw semexp::ConfigError("planner/service_timeout_s", "must be > 0 s");
+  p.get("planner/retry_period_s", retry_period_s_);
+  if (!(retry_period_s_ > 0)) throw semexp::ConfigError("planner/retry_period_s", "must be > 0 s");
+  p.get("planner/goal_timeout_factor", goal_timeout_factor_);
+  if (!(goal_timeout_factor_ >= 1)) throw semexp::ConfigError("planner/goal_timeout_factor", "must be >= 1");
+
   path_pub_ = pnh.advertise<nav_msgs::Path>("path", 1, true);
   candidates_pub_ = pnh.advertise<semantic_exploration::CandidateViewArray>("candidates", 1, true);
   markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("candidate_markers", 1, true);
-  status_pub_ = pnh.advertise<semantic_exploration::ExplorationStatus>("status", 10, true);
+  status_pub_ = pnh.advertise<ExplorationStatus>("status", 10, true);
   const char* gains[4] = {"gain_images/entropy", "gain_images/background", "gain_images/object",
                           "gain_images/combined"};
   for (int i = 0; i < 4; ++i) gain_pubs_[i] = pnh.advertise<sensor_msgs::Image>(gains[i], 1, true);
+  bg_gains_client_ = nh.serviceClient<semantic_exploration::ComputeGains>("background_map/compute_gains");
+  obj_gains_client_ = nh.serviceClient<semantic_exploration::ComputeGains>("object_map/compute_gains");
+  masks_client_ = nh.serviceClient<semantic_exploration::GetHistoryMasks>("depth_history/get_masks");
+  get_map_client_ = nh.serviceClient<semantic_exploration::GetMap>("background_map/get_map");
   plan_srv_ = pnh.advertiseService("plan_once", &PlannerNode::planOnce, this);
   update_sub_ = nh.subscribe("background_map/map_update", 50, &PlannerNode::mapUpdateCallback, this);
   frontiers_sub_ = nh.subscribe("background_map/frontiers", 1, &PlannerNode::frontiersCallback, this);
   objects_sub_ = nh.subscribe("object_map/objects", 1, &PlannerNode::objectsCallback, this);
   goal_sub_ = nh.subscribe("mav/goal_reached", 1, &PlannerNode::goalReachedCallback, this);
+  timer_ = nh.createTimer(ros::Duration(0.2), &PlannerNode::timerCallback, this);
   ROS_INFO("planner: n %d, P_fr %.2f, a_ent/a_bg/a_obj %.2f/%.2f/%.2f, d_bg %.1f m, d_obj %.1f m",
            config_.n_candidates, config_.p_frontier, config_.a_ent, config_.a_bg, config_.a_obj,
            exploration_.d_bg_m, exploration_.d_obj_m);
-  publishStatus(semantic_exploration::ExplorationStatus::STATE_WAITING, "waiting for the map");
+  state_ = ExplorationStatus::STATE_WAITING;
+  publishStatus(state_, "waiting for the map");
 }
 
 void PlannerNode::publishStatus(uint8_t state, const std::string& message) {
-  semantic_exploration::ExplorationStatus s;
+  ExplorationStatus s;
   s.header.stamp = ros::Time::now();
   s.header.frame_id = frames_.world;
   s.state = state;
@@ -44,17 +145,404 @@ void PlannerNode::publishStatus(uint8_t state, const std::string& message) {
   status_pub_.publish(s);
 }
 
-void PlannerNode::mapUpdateCallback(const semantic_exploration::MapBlocksConstPtr& msg) {
-  last_sequence_ = msg->sequence;
+// ---------------------------------------------------------------- map input
+
+bool PlannerNode::applyBlocks(const semantic_exploration::MapBlocks& msg, bool& gap) {
+  gap = false;
+  if (msg.encoding != semantic_exploration::MapBlocks::ENCODING_LOG_ODDS_I8) {
+    drops_.drop("bad_map_encoding", "MapBlocks encoding " + std::to_string(msg.encoding) + " unsupported");
+    return false;
+  }
+  semexp::MapReplica::Update u;
+  u.sequence = msg.sequence;
+  u.full = msg.full;
+  u.resolution_m = msg.resolution_m;
+  u.block_size = msg.block_size;
+  u.origin_W = {msg.origin.x, msg.origin.y, msg.origin.z};
+  u.coords = msg.coords.data();
+  u.coord_count = msg.coords.size();
+  u.payload = msg.payload.data();
+  u.payload_size = msg.payload.size();
+  switch (replica_.apply(u)) {
+    case semexp::MapReplica::Result::kApplied: return true;
+    case semexp::MapReplica::Result::kStale: return false;
+    case semexp::MapReplica::Result::kGap: gap = true; return false;
+    case semexp::MapReplica::Result::kBadInput: drops_.drop("bad_map_update", replica_.last_error()); return false;
+  }
+  return false;
 }
-void PlannerNode::frontiersCallback(const sensor_msgs::PointCloud2ConstPtr&) {}
-void PlannerNode::objectsCallback(const semantic_exploration::ObjectArrayConstPtr&) {}
-void PlannerNode::goalReachedCallback(const geometry_msgs::PoseStampedConstPtr&) {}
+
+bool PlannerNode::resync() {
+  semantic_exploration::GetMap srv;
+  if (!get_map_client_.waitForExistence(ros::Duration(service_timeout_s_)) || !get_map_client_.call(srv)) {
+    drops_.drop("resync_failed", "background_map/get_map unavailable or failed; the replica may be stale");
+    return false;
+  }
+  bool gap = false;
+  srv.response.map.full = true;
+  const bool ok = applyBlocks(srv.response.map, gap);
+  if (ok) ROS_INFO("planner: map replica resynced at sequence %lu (%zu blocks)",
+                   static_cast<unsigned long>(replica_.sequence()), replica_.block_count());
+  return ok;
+}
+
+void PlannerNode::mapUpdateCallback(const semantic_exploration::MapBlocksConstPtr& msg) {
+  bool gap = false;
+  if (!applyBlocks(*msg, gap) && gap) {
+    ROS_WARN("planner: map update %lu after %lu: resyncing", static_cast<unsigned long>(msg->sequence),
+             static_cast<unsigned long>(replica_.sequence()));
+    resync();
+  }
+}
+
+void PlannerNode::frontiersCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
+  bool has_x = false, has_y = false, has_z = false;
+  for (const auto& f : msg->fields) {
+    if (f.datatype != sensor_msgs::PointField::FLOAT32) continue;
+    has_x = has_x || f.name == "x";
+    has_y = has_y || f.name == "y";
+    has_z = has_z || f.name == "z";
+  }
+  if (!has_x || !has_y || !has_z ||
+      msg->data.size() < static_cast<std::size_t>(msg->row_step) * msg->height) {
+    drops_.drop("bad_frontiers", "frontier cloud without float x, y, z or with a short buffer");
+    return;
+  }
+  std::vector<Eigen::Vector3d> f;
+  f.reserve(static_cast<std::size_t>(msg->width) * msg->height);
+  for (sensor_msgs::PointCloud2ConstIterator<float> x(*msg, "x"), y(*msg, "y"), z(*msg, "z"); x != x.end();
+       ++x, ++y, ++z) {
+    const Eigen::Vector3d p(*x, *y, *z);
+    if (p.allFinite()) f.push_back(p);
+  }
+  frontiers_W_ = std::move(f);
+  have_frontiers_ = true;
+}
+
+void PlannerNode::objectsCallback(const semantic_exploration::ObjectArrayConstPtr& msg) {
+  std::vector<semexp::ObjectSummary> objs;
+  for (const auto& o : msg->objects) {
+    semexp::ObjectSummary s;
+    s.id = o.id;
+    s.bbox_min_W = {o.bbox_min.x, o.bbox_min.y, o.bbox_min.z};
+    s.bbox_max_W = {o.bbox_max.x, o.bbox_max.y, o.bbox_max.z};
+    s.centroid_W = {o.centroid.x, o.centroid.y, o.centroid.z};
+    s.observed_fraction = o.observed_fraction;
+    if (s.bbox_min_W.allFinite() && s.bbox_max_W.allFinite() && s.centroid_W.allFinite()) objs.push_back(s);
+  }
+  objects_ = std::move(objs);
+}
+
+// ---------------------------------------------------------------- triggers
+
+void PlannerNode::goalReachedCallback(const geometry_msgs::PoseStampedConstPtr&) {
+  if (finished_ || state_ != ExplorationStatus::STATE_EXECUTING) return;
+  std::string message;
+  iterate(message);
+}
+
+void PlannerNode::timerCallback(const ros::TimerEvent&) {
+  if (finished_) return;
+  if (state_ == ExplorationStatus::STATE_EXECUTING) {
+    const double waited = (ros::Time::now() - executing_since_).toSec();
+    if (waited < goal_timeout_factor_ * expected_duration_s_ + 10.0) return;
+    ROS_WARN("planner: goal not reached after %.1f s (expected %.1f s); replanning", waited, expected_duration_s_);
+  } else if ((ros::WallTime::now() - last_attempt_).toSec() < retry_period_s_) {
+    return;
+  }
+  std::string message;
+  iterate(message);  // reports "waiting for the map" itself while the replica is empty
+}
 
 bool PlannerNode::planOnce(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  res.success = false;
-  res.message = "planner: the planning core is not wired into this node";
+  std::string message;
+  res.success = iterate(message);
+  res.message = message;
   return true;
+}
+
+// ---------------------------------------------------------------- providers
+
+std::vector<semexp::GainSet> PlannerNode::computeGains(const std::vector<Eigen::Vector3d>& positions) {
+  const int w = config_.raycast_width, h = config_.raycast_height;
+  semantic_exploration::ComputeGains bg;
+  bg.request.width = static_cast<uint16_t>(w);
+  bg.request.height = static_cast<uint16_t>(h);
+  for (const auto& p : positions) bg.request.positions.push_back(toPoint(p));
+  if (!bg_gains_client_.waitForExistence(ros::Duration(service_timeout_s_)))
+    throw std::runtime_error("service background_map/compute_gains not available after " +
+                             std::to_string(service_timeout_s_) + " s");
+  if (!bg_gains_client_.call(bg)) throw std::runtime_error("background_map/compute_gains failed");
+  const auto& r = bg.response;
+  if (r.entropy_gain.size() != positions.size() || r.distance_gain.size() != positions.size())
+    throw std::runtime_error("background_map/compute_gains returned " + std::to_string(r.entropy_gain.size()) +
+                             " images for " + std::to_string(positions.size()) + " positions");
+  std::vector<semexp::GainSet> out(positions.size());
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    out[i].entropy = toGainImage(r.entropy_gain[i], w, h, "entropy gain");
+    out[i].background = toGainImage(r.distance_gain[i], w, h, "background gain");
+  }
+  if (config_.a_obj <= 0) return out;  // classic mode: no object raycast needed
+
+  // Object gains, occluded by the background: rays stop at its hit depth.
+  semantic_exploration::ComputeGains obj;
+  obj.request = bg.request;
+  if (r.hit_depth.size() == positions.size()) {
+    obj.request.max_depth_m.reserve(positions.size() * static_cast<std::size_t>(w) * h);
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+      const semexp::GainImage d = toGainImage(r.hit_depth[i], w, h, "hit depth");
+      if (d.empty()) {
+        obj.request.max_depth_m.clear();
+        break;
+      }
+      obj.request.max_depth_m.insert(obj.request.max_depth_m.end(), d.values.begin(), d.values.end());
+    }
+  }
+  if (!obj_gains_client_.waitForExistence(ros::Duration(service_timeout_s_)) || !obj_gains_client_.call(obj) ||
+      obj.response.distance_gain.size() != positions.size()) {
+    drops_.drop("no_object_gains", "object_map/compute_gains unavailable or failed; planning without object gains");
+    return out;
+  }
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    out[i].object = toGainImage(obj.response.distance_gain[i], w, h, "object gain");
+  return out;
+}
+
+std::vector<std::vector<std::uint8_t>> PlannerNode::historyMasks(const std::vector<Eigen::Vector3d>& positions) {
+  const int w = config_.raycast_width, h = config_.raycast_height;
+  semantic_exploration::GetHistoryMasks srv;
+  srv.request.width = static_cast<uint16_t>(w);
+  srv.request.height = static_cast<uint16_t>(h);
+  for (const auto& p : positions) srv.request.positions.push_back(toPoint(p));
+  if (!masks_client_.waitForExistence(ros::Duration(service_timeout_s_)) || !masks_client_.call(srv) ||
+      srv.response.masks.size() != positions.size()) {
+    drops_.drop("no_history", "depth_history/get_masks unavailable or failed; planning without the history");
+    return {};
+  }
+  std::vector<std::vector<std::uint8_t>> out(positions.size());
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    const auto& m = srv.response.masks[i];
+    if (static_cast<int>(m.width) != w || static_cast<int>(m.height) != h || m.step < m.width ||
+        m.data.size() < static_cast<std::size_t>(m.step) * m.height) {
+      drops_.drop("bad_history_mask", "history mask of the wrong size ignored");
+      continue;
+    }
+    out[i].resize(static_cast<std::size_t>(w) * h);
+    for (int v = 0; v < h; ++v)
+      std::memcpy(&out[i][static_cast<std::size_t>(v) * w], &m.data[static_cast<std::size_t>(v) * m.step],
+                  static_cast<std::size_t>(w));
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- iteration
+
+bool PlannerNode::pathSafe(const std::vector<Eigen::Vector3d>& path) const {
+  // Last guard before publishing: no point of the path within R of an
+  // occupied voxel (unknown allowed for an escape from an invalid start).
+  const double step = std::max(0.5 * replica_.resolution_m(), 1e-3);
+  for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+    const double len = (path[i + 1] - path[i]).norm();
+    const int n = std::max(1, static_cast<int>(std::ceil(len / step)));
+    for (int k = 0; k <= n; ++k)
+      if (!replica_.sphere_not_occupied(path[i] + (path[i + 1] - path[i]) * (static_cast<double>(k) / n),
+                                        config_.mav_radius_m))
+        return false;
+  }
+  return !path.empty();
+}
+
+bool PlannerNode::iterate(std::string& message) {
+  last_attempt_ = ros::WallTime::now();
+  const ros::Time now = ros::Time::now();
+  if (replica_.empty()) {
+    message = "waiting for the map (the replica is empty)";
+    publishStatus(ExplorationStatus::STATE_WAITING, message);
+    return false;
+  }
+  Eigen::Isometry3d T_WB;
+  const std::string err = lookupPose(tf_buffer_, frames_.world, frames_.body, ros::Time(0), tf_timeout_s_, T_WB);
+  if (!err.empty()) {
+    message = "waiting for the MAV pose: " + err;
+    publishStatus(ExplorationStatus::STATE_WAITING, message);
+    return false;
+  }
+  if (!planner_ || planner_resolution_m_ != replica_.resolution_m()) {
+    planner_ = std::make_unique<semexp::ExplorationPlanner>(config_, exploration_, bounds_, camera_,
+                                                             replica_.resolution_m());
+    planner_resolution_m_ = replica_.resolution_m();
+  }
+  if (!have_frontiers_) {
+    message = "waiting for the first frontier cloud";
+    publishStatus(ExplorationStatus::STATE_WAITING, message);
+    return false;
+  }
+  if (!started_) {
+    started_ = true;
+    start_time_ = now;
+  }
+  ++iteration_;
+  state_ = ExplorationStatus::STATE_PLANNING;
+  publishStatus(state_, "planning");
+
+  semexp::ExplorationInputs in;
+  in.position_W = T_WB.translation();
+  in.yaw_rad = std::atan2(T_WB.linear()(1, 0), T_WB.linear()(0, 0));
+  in.elapsed_s = (now - start_time_).toSec();
+  in.frontiers_W = frontiers_W_;
+  in.objects = objects_;
+
+  semexp::ExplorationProviders prov;
+  const semexp::MapReplica& replica = replica_;
+  const semexp::Bounds bounds = bounds_;
+  prov.is_free = [&replica, bounds](const Eigen::Vector3d& p, double r) {
+    return bounds.contains(p) && replica.sphere_free(p, r);
+  };
+  prov.not_occupied = [&replica](const Eigen::Vector3d& p, double r) { return replica.sphere_not_occupied(p, r); };
+  prov.gains = [this](const std::vector<Eigen::Vector3d>& ps) { return computeGains(ps); };
+  prov.history = [this](const std::vector<Eigen::Vector3d>& ps) { return historyMasks(ps); };
+
+  semexp::IterationResult r;
+  try {
+    r = planner_->plan(in, prov);
+  } catch (const std::exception& e) {
+    r = semexp::IterationResult();
+    r.provider_error = true;
+    r.message = std::string("planning failed: ") + e.what();
+  }
+  bool published = false;
+  if (r.winner >= 0 && !pathSafe(r.path_W)) {
+    r.message = "the chosen path failed the final occupancy check and was not published; " + r.message;
+    r.winner = -1;
+  }
+  if (r.winner >= 0) {
+    path_pub_.publish(toPath(r.path_W, r.path_yaw_rad, frames_.world, now));
+    published = true;
+    const auto& w = r.candidates[static_cast<std::size_t>(r.winner)];
+    expected_duration_s_ = w.path_time_s;
+    executing_since_ = now;
+  }
+  publishResult(r, now, in.yaw_rad);
+
+  if (r.finished) {
+    finished_ = true;
+    state_ = ExplorationStatus::STATE_FINISHED;
+    ROS_INFO("planner: exploration finished after %u iterations: %s (%s)", iteration_,
+             r.termination_reason.c_str(), r.message.c_str());
+  } else {
+    state_ = published ? ExplorationStatus::STATE_EXECUTING : ExplorationStatus::STATE_WAITING;
+    if (!published) ROS_WARN("planner: iteration %u: %s", iteration_, r.message.c_str());
+  }
+  ExplorationStatus s;
+  s.header.stamp = now;
+  s.header.frame_id = frames_.world;
+  s.state = state_;
+  s.iteration = iteration_;
+  s.termination_reason = r.termination_reason;
+  s.message = r.message;
+  s.candidates_sampled = static_cast<uint32_t>(r.candidates.size());
+  s.candidates_reachable = static_cast<uint32_t>(r.candidates_reachable);
+  s.planning_time_s = static_cast<float>(r.total_s);
+  s.sampling_time_s = static_cast<float>(r.sampling_s);
+  s.path_planning_time_s = static_cast<float>(r.path_planning_s);
+  s.gains_time_s = static_cast<float>(r.gains_s);
+  s.yaw_time_s = static_cast<float>(r.yaw_s);
+  status_pub_.publish(s);
+  message = r.message;
+  return published;
+}
+
+void PlannerNode::publishResult(const semexp::IterationResult& r, const ros::Time& stamp, double current_yaw) {
+  const int w = config_.raycast_width, h = config_.raycast_height;
+  semantic_exploration::CandidateViewArray arr;
+  arr.header.stamp = stamp;
+  arr.header.frame_id = frames_.world;
+  arr.winner = r.winner;
+  double max_u = 0.0;
+  for (const auto& c : r.candidates) max_u = std::max(max_u, c.utility);
+
+  visualization_msgs::MarkerArray markers;
+  visualization_msgs::Marker clear;
+  clear.header = arr.header;
+  clear.action = visualization_msgs::Marker::DELETEALL;
+  markers.markers.push_back(clear);
+  int id = 0;
+  for (std::size_t i = 0; i < r.candidates.size(); ++i) {
+    const auto& c = r.candidates[i];
+    semantic_exploration::CandidateView v;
+    v.position = toPoint(c.position_W);
+    v.yaw_rad = static_cast<float>(c.yaw_rad);
+    v.gain_entropy = static_cast<float>(c.gain_entropy);
+    v.gain_bg = static_cast<float>(c.gain_bg);
+    v.gain_obj = static_cast<float>(c.gain_obj);
+    v.gain = static_cast<float>(c.gain);
+    v.path_time_s = static_cast<float>(c.path_time_s);
+    v.utility = static_cast<float>(c.utility);
+    v.source = c.sample.source == semexp::CandidateSource::kObject ? semantic_exploration::CandidateView::SOURCE_OBJECT
+                                                                   : semantic_exploration::CandidateView::SOURCE_FRONTIER;
+    v.object_id = c.sample.object_id;
+    v.reachable = c.reachable;
+    std::vector<double> yaws(c.plan.path_W.size(), c.yaw_rad);
+    if (!yaws.empty()) yaws.front() = current_yaw;
+    if (static_cast<int>(i) == r.winner) yaws = r.path_yaw_rad;
+    v.path = toPath(c.plan.path_W, yaws, frames_.world, stamp);
+    arr.candidates.push_back(v);
+
+    // Sphere coloured by utility (red low, green high; grey unreachable),
+    // an arrow along its yaw and its utility as text.
+    const float f = max_u > 0 ? static_cast<float>(c.utility / max_u) : 0.f;
+    visualization_msgs::Marker m;
+    m.header = arr.header;
+    m.ns = "candidates";
+    m.id = id++;
+    m.type = visualization_msgs::Marker::SPHERE;
+    m.pose.position = v.position;
+    m.pose.orientation.w = 1.0;
+    m.scale.x = m.scale.y = m.scale.z = static_cast<int>(i) == r.winner ? 0.3 : 0.15;
+    m.color = c.reachable ? colour(1.f - f, f, 0.f, 0.9f) : colour(0.5f, 0.5f, 0.5f, 0.5f);
+    markers.markers.push_back(m);
+    if (c.reachable) {
+      visualization_msgs::Marker a = m;
+      a.ns = "candidate_yaw";
+      a.id = id++;
+      a.type = visualization_msgs::Marker::ARROW;
+      a.pose.orientation = yawQuaternion(c.yaw_rad);
+      a.scale.x = 0.4;
+      a.scale.y = a.scale.z = 0.04;
+      markers.markers.push_back(a);
+      visualization_msgs::Marker t = m;
+      t.ns = "candidate_utility";
+      t.id = id++;
+      t.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
+      t.pose.position.z += 0.25;
+      t.scale.x = t.scale.y = t.scale.z = 0.15;
+      t.color = colour(1.f, 1.f, 1.f, 1.f);
+      char buf[32];
+      std::snprintf(buf, sizeof(buf), "%.3f", c.utility);
+      t.text = buf;
+      markers.markers.push_back(t);
+    }
+  }
+  if (r.winner >= 0) {
+    visualization_msgs::Marker line;
+    line.header = arr.header;
+    line.ns = "winner_path";
+    line.id = id++;
+    line.type = visualization_msgs::Marker::LINE_STRIP;
+    line.pose.orientation.w = 1.0;
+    line.scale.x = 0.04;
+    line.color = colour(0.2f, 0.4f, 1.f, 1.f);
+    for (const auto& p : r.path_W) line.points.push_back(toPoint(p));
+    markers.markers.push_back(line);
+  }
+  candidates_pub_.publish(arr);
+  markers_pub_.publish(markers);
+  if (r.winner >= 0) {
+    gain_pubs_[0].publish(fromGainImage(r.winner_gains.entropy, w, h, frames_.world, stamp));
+    gain_pubs_[1].publish(fromGainImage(r.winner_gains.background, w, h, frames_.world, stamp));
+    gain_pubs_[2].publish(fromGainImage(r.winner_gains.object, w, h, frames_.world, stamp));
+    gain_pubs_[3].publish(fromGainImage(r.winner_combined, w, h, frames_.world, stamp));
+  }
 }
 
 }  // namespace semexp_ros

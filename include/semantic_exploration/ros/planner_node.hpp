@@ -2,11 +2,25 @@
 /// @file planner_node.hpp
 /// ROS shell of the next-best-view planner (paper Section IV-D).
 ///
-/// Subscribes `background_map/map_update`, `background_map/frontiers`,
-/// `object_map/objects`, `mav/goal_reached`; pose from tf2. Publishes
-/// `~path` (nav_msgs/Path, yaw in orientation), `~candidates`
-/// (CandidateViewArray), `~candidate_markers`, `~gain_images/*`, `~status`
-/// (ExplorationStatus); serves `~plan_once` (std_srvs/Trigger).
+/// Subscribes `background_map/map_update` (MapBlocks, kept in a replica;
+/// a sequence gap triggers a `background_map/get_map` resync),
+/// `background_map/frontiers` (PointCloud2 xyz), `object_map/objects`,
+/// `mav/goal_reached`; pose from tf2 (world <- body, latest). Calls
+/// `background_map/compute_gains`, `object_map/compute_gains` (with the
+/// background hit depths for occlusion) and `depth_history/get_masks`, one
+/// batched call each per iteration. Publishes `~path` (nav_msgs/Path, yaw in
+/// orientation), `~candidates` (CandidateViewArray), `~candidate_markers`,
+/// `~gain_images/{entropy,background,object,combined}` (32FC1, the winner's)
+/// and `~status` (ExplorationStatus); serves `~plan_once` (std_srvs/Trigger).
+///
+/// An iteration runs when the MAV reports its goal reached, on `~plan_once`,
+/// and (while no path is being flown) every `planner/retry_period_s` once the
+/// map has arrived. Object gains and history masks are optional: if their
+/// services are missing the iteration goes on without them (logged);
+/// background gains are required. Node parameters besides the core's
+/// PlannerConfig: `planner/service_timeout_s` (wait for a service to appear),
+/// `planner/retry_period_s`, `planner/goal_timeout_factor` (replan if the
+/// goal is not reached within factor * estimated path time + 10 s).
 
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
@@ -15,8 +29,14 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <memory>
+#include <string>
+#include <vector>
+
 #include "semantic_exploration/MapBlocks.h"
 #include "semantic_exploration/ObjectArray.h"
+#include "semantic_exploration/core/planning/exploration_planner.hpp"
+#include "semantic_exploration/core/planning/map_replica.hpp"
 #include "semantic_exploration/ros/node_common.hpp"
 #include "semantic_exploration/ros/params.hpp"
 
@@ -31,22 +51,54 @@ class PlannerNode {
   void frontiersCallback(const sensor_msgs::PointCloud2ConstPtr& msg);
   void objectsCallback(const semantic_exploration::ObjectArrayConstPtr& msg);
   void goalReachedCallback(const geometry_msgs::PoseStampedConstPtr& msg);
+  void timerCallback(const ros::TimerEvent& ev);
   bool planOnce(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   void publishStatus(uint8_t state, const std::string& message);
+
+  bool applyBlocks(const semantic_exploration::MapBlocks& msg, bool& gap);
+  bool resync();
+  /// One planning iteration; true if a path was published. `message` says what happened.
+  bool iterate(std::string& message);
+  std::vector<semexp::GainSet> computeGains(const std::vector<Eigen::Vector3d>& positions_W);
+  std::vector<std::vector<std::uint8_t>> historyMasks(const std::vector<Eigen::Vector3d>& positions_W);
+  void publishResult(const semexp::IterationResult& r, const ros::Time& stamp, double current_yaw);
+  bool pathSafe(const std::vector<Eigen::Vector3d>& path_W) const;
 
   semexp::PlannerConfig config_;
   semexp::ExplorationConfig exploration_;
   semexp::PinholeCamera camera_;
   semexp::Bounds bounds_;
   FrameNames frames_;
+  double tf_timeout_s_ = 0.1;
+  double service_timeout_s_ = 5.0;
+  double retry_period_s_ = 1.0;
+  double goal_timeout_factor_ = 3.0;
+
+  semexp::MapReplica replica_;
+  std::unique_ptr<semexp::ExplorationPlanner> planner_;
+  double planner_resolution_m_ = 0.0;
+  std::vector<Eigen::Vector3d> frontiers_W_;
+  std::vector<semexp::ObjectSummary> objects_;
+  bool have_frontiers_ = false;
+
+  uint8_t state_ = 0;
+  bool finished_ = false;
+  bool started_ = false;
+  ros::Time start_time_;
+  ros::Time executing_since_;
+  double expected_duration_s_ = 0.0;
+  ros::WallTime last_attempt_;
+
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   ros::Subscriber update_sub_, frontiers_sub_, objects_sub_, goal_sub_;
   ros::Publisher path_pub_, candidates_pub_, markers_pub_, status_pub_;
   ros::Publisher gain_pubs_[4];
   ros::ServiceServer plan_srv_;
+  ros::ServiceClient bg_gains_client_, obj_gains_client_, masks_client_, get_map_client_;
+  ros::Timer timer_;
   uint32_t iteration_ = 0;
-  uint64_t last_sequence_ = 0;
+  DropCounter drops_;
 };
 
 }  // namespace semexp_ros
