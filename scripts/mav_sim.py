@@ -4,8 +4,8 @@
 catkin installs this script with a /usr/bin/python3 shebang, which does not see
 the project's venv (embreex, trimesh). The launch file runs it with the venv's
 python through launch-prefix; if it is started some other way without those
-modules, it re-executes itself with $SEMEXP_VENV/bin/python, or with the venv
-next to the source tree (<repo>/.venv) found from this file or from rospack.
+modules, it re-executes itself with $SEMEXP_VENV/bin/python, or with the
+nearest .venv above this file (<repo>/.venv, also from <repo>/.colcon/install).
 """
 import os
 import sys
@@ -15,17 +15,14 @@ def _venv_candidates():
     env = os.environ.get("SEMEXP_VENV")
     if env:
         yield env
-    here = os.path.dirname(os.path.realpath(__file__))
-    # Source tree (scripts/) and colcon install space (<repo>/.colcon/install/lib/<pkg>/).
-    yield os.path.join(here, "..", ".venv")
-    yield os.path.join(here, "..", "..", "..", "..", ".venv")
-    try:
-        import rospkg
-        share = rospkg.RosPack().get_path("semantic_exploration")
-        yield os.path.join(share, ".venv")
-        yield os.path.join(share, "..", "..", "..", "..", ".venv")
-    except Exception:  # rospkg missing or package not on ROS_PACKAGE_PATH
-        pass
+    # <repo>/.venv seen from the source tree (scripts/) or from a build/install space inside the repo.
+    d = os.path.dirname(os.path.realpath(__file__))
+    for _ in range(8):
+        yield os.path.join(d, ".venv")
+        parent = os.path.dirname(d)
+        if parent == d:
+            break
+        d = parent
 
 
 def _ensure_ray_tracer():
