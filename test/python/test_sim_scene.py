@@ -71,6 +71,25 @@ def test_example_scene_loads_with_its_house_table():
     assert np.array_equal(s.face_colors, g.face_colors)
 
 
+def test_matterport_object_indices_start_at_zero(tmp_path):
+    """Habitat's files: face object_id = .house object index (0-based), -1 = no object."""
+    import struct
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+    body = b"".join(struct.pack("<fffBBB", *p, 10, 20, 30) for p in v)
+    faces = [(0, 1, 2, 0), (0, 2, 1, 1), (1, 2, 0, -1)]
+    body += b"".join(struct.pack("<Biiii", 3, a, b, c, o) for a, b, c, o in faces)
+    header = ("ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+              "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nelement face 3\n"
+              "property list uchar int vertex_indices\nproperty int object_id\nend_header\n")
+    (tmp_path / "m_semantic.ply").write_bytes(header.encode() + body)
+    (tmp_path / "m.house").write_text("ASCII 1.1\nC 0 3 chair 3 chair 0 0 0 0 0\nC 1 1 wall 1 wall 0 0 0 0 0\n"
+                                      "O 0 0 0 0 0 0\nO 1 0 1 0 0 0\n")
+    s = load_scene(str(tmp_path / "m_semantic.ply"))
+    assert s.objects == {1: "chair", 2: "wall"}
+    assert s.face_object.tolist() == [1, 2, 0]
+    assert s.face_colors.tolist() == [[10, 20, 30]] * 3
+
+
 def test_habitat_round_trip(tmp_path):
     g = generate(3, (8, 6, 3))
     ply = save_habitat(g, str(tmp_path))
@@ -86,7 +105,7 @@ def test_unknown_face_ids_become_background(tmp_path):
     ply = save_habitat(g, str(tmp_path))
     lines = open(str(tmp_path / "x.house")).read().splitlines()
     chair_ids = [k for k, v in g.objects.items() if v == "chair"]
-    lines = [ln for ln in lines if not (ln.startswith("O %d " % chair_ids[0]))]
+    lines = [ln for ln in lines if not (ln.startswith("O %d " % (chair_ids[0] - 1)))]
     open(str(tmp_path / "x.house"), "w").write("\n".join(lines) + "\n")
     s = load_habitat(ply)
     assert chair_ids[0] not in s.objects and not np.any(s.face_object == chair_ids[0])
@@ -122,7 +141,7 @@ def test_mesh_with_json_labels(tmp_path, fmt):
 
 def test_ply_with_flat_json_labels(tmp_path):
     g = generate(0, (3.5, 3, 2.5), "flat")
-    write_semantic_ply(str(tmp_path / "flat.ply"), g)
+    write_semantic_ply(str(tmp_path / "flat.ply"), g, matterport_ids=False)
     (tmp_path / "flat.json").write_text(json.dumps({str(k): v for k, v in g.objects.items()}))
     s = load_scene(str(tmp_path / "flat.ply"))
     assert s.objects == g.objects and np.array_equal(s.face_object, g.face_object)
@@ -158,6 +177,12 @@ def test_bad_scene_files_are_rejected_with_reason(tmp_path):
     good = house.read_text()
     house.write_text(good.replace("ASCII 1.1", "ASCII 9"))
     with pytest.raises(SceneError, match="ASCII 1.1"):
+        load_scene(ply)
+    house.write_text(good + "O 99 0 1234 0 0 0\n")
+    with pytest.raises(SceneError, match="unknown category 1234"):
+        load_scene(ply)
+    house.write_text(good + "O 70000 0 1 0 0 0\n")
+    with pytest.raises(SceneError, match="outside"):
         load_scene(ply)
     house.write_text(good + "O 99 0 1234 0 0 0\n")
     with pytest.raises(SceneError, match="unknown category 1234"):

@@ -256,8 +256,12 @@ def _read_ply_ascii(path, body, elements):
     return out
 
 
-def write_semantic_ply(path: str, scene: Scene) -> None:
+def write_semantic_ply(path: str, scene: Scene, matterport_ids: bool = True) -> None:
     """Writes a binary little-endian PLY with vertex colours and a per-face ``object_id``.
+
+    The layout is byte-for-byte Habitat's semantic PLY. With ``matterport_ids``
+    the face ids are Matterport object indices (our id - 1; -1 = no object),
+    as in Habitat's files; otherwise our ids are written as they are.
 
     Vertices are duplicated per face colour so that the vertex colours carry
     the face colours exactly (as Habitat's semantic PLYs do for their id colours).
@@ -272,7 +276,7 @@ def write_semantic_ply(path: str, scene: Scene) -> None:
     fd = np.empty(m, dtype=[("n", "u1"), ("idx", "<i4", (3,)), ("object_id", "<i4")])
     fd["n"] = 3
     fd["idx"] = np.arange(3 * m, dtype=np.int32).reshape(-1, 3)
-    fd["object_id"] = scene.face_object
+    fd["object_id"] = scene.face_object - 1 if matterport_ids else scene.face_object
     header = ("ply\nformat binary_little_endian 1.0\ncomment semantic_exploration scene %s\n"
               "element vertex %d\nproperty float x\nproperty float y\nproperty float z\n"
               "property uchar red\nproperty uchar green\nproperty uchar blue\n"
@@ -321,7 +325,12 @@ def write_mesh_ply(path: str, vertices, faces, face_colors=None) -> None:
 # Matterport .house (ASCII 1.1): C and O records.
 # ---------------------------------------------------------------------------
 def read_house(path: str) -> Dict[int, str]:
-    """Object index -> mpcat40 class name from a Matterport ``.house`` file."""
+    """Object id -> mpcat40 class name from a Matterport ``.house`` file.
+
+    Matterport object indices start at 0 and the faces of Habitat's semantic
+    PLY carry them (-1 = no object); in memory ids are index + 1 so that 0 can
+    mean "no object" in the 16-bit instance images.
+    """
     try:
         with open(path, "r", encoding="utf-8", errors="replace") as f:
             lines = f.read().splitlines()
@@ -354,10 +363,10 @@ def read_house(path: str) -> Dict[int, str]:
             continue  # Matterport marks unassigned objects with category -1
         if cat not in categories:
             raise SceneError("%s:%d: object %d refers to unknown category %d" % (path, ln, oid, cat))
-        if oid <= 0 or oid > 65535:
-            # Object index 0 collides with "unlabelled"; ids above 16 bits do not fit the images.
-            raise SceneError("%s:%d: object index %d outside [1, 65535]" % (path, ln, oid))
-        objects[oid] = categories[cat]
+        if oid < 0 or oid >= 65535:
+            # Ids above 16 bits do not fit the instance images.
+            raise SceneError("%s:%d: object index %d outside [0, 65534]" % (path, ln, oid))
+        objects[oid + 1] = categories[cat]  # file indices are 0-based; ours start at 1 (0 = none)
     return objects
 
 
@@ -381,7 +390,7 @@ def write_house(path: str, scene: Scene) -> None:
         else:
             c, r = np.zeros(3), np.zeros(3)
         lines.append("O %d 0 %d %.4f %.4f %.4f 1 0 0 0 1 0 %.4f %.4f %.4f 0 0 0 0 0 0 0 0"
-                     % (oid, cat_index[scene.objects[oid]], *c, *r))
+                     % (oid - 1, cat_index[scene.objects[oid]], *c, *r))
     with open(path, "w") as f:
         f.write("\n".join(lines) + "\n")
 
@@ -429,7 +438,8 @@ def load_habitat(ply_path: str, house_path: Optional[str] = None, up_axis: str =
         vc = np.stack([vx["red"], vx["green"], vx["blue"]], 1).astype(np.float64)
         colors = vc[faces].mean(1).round().astype(np.uint8)
     objects = read_house(house_path)
-    unknown = set(np.unique(obj).tolist()) - set(objects) - {0, -1}
+    obj = obj + 1  # Matterport/Habitat 0-based object index (-1 = none) -> our 1-based id (0 = none)
+    unknown = set(np.unique(obj).tolist()) - set(objects) - {0}
     obj = np.where(np.isin(obj, list(objects)), obj, 0).astype(np.int32)
     name = os.path.basename(ply_path)
     name = name[:-len("_semantic.ply")] if name.endswith("_semantic.ply") else os.path.splitext(name)[0]
