@@ -122,6 +122,24 @@ def test_collision_distance_to_a_box_is_analytic():
     assert not cc.collides((0.5, 2.0, 1.2))  # the start pose is free
 
 
+def test_collision_grid_matches_brute_force():
+    s = generate(2, (8, 6, 3))
+    tri = s.triangles()
+    cc = CollisionChecker(tri, 0.3, cell_m=0.4)
+    rng = np.random.default_rng(1)
+    hits = 0
+    for p in rng.uniform([-0.5, -0.5, -0.3], [8.5, 6.5, 3.3], (300, 3)):
+        q = closest_points_on_triangles(p, tri[:, 0], tri[:, 1], tri[:, 2])
+        d = np.linalg.norm(q - p, axis=1)
+        got_d, got_k = cc.nearest(p)
+        if d.min() <= 0.3:
+            hits += 1
+            assert got_k >= 0 and got_d == pytest.approx(d.min(), abs=1e-12)
+        else:
+            assert got_k == -1
+    assert 30 < hits < 270
+
+
 def test_path_through_a_wall_is_reported_as_collision():
     s = generate(0, (8, 6, 3))
     cfg = MavConfig()

@@ -180,19 +180,54 @@ def closest_points_on_triangles(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: 
 
 
 class CollisionChecker:
-    """Exact sphere-vs-triangle-mesh test (AABB prefilter, then closest points)."""
+    """Exact sphere-vs-triangle-mesh test.
 
-    def __init__(self, triangles: np.ndarray, radius_m: float):
+    Triangles are binned once into a uniform grid (by their bounding boxes),
+    so a query touches only the few cells around the sphere: the cost does not
+    grow with the scene (Matterport scenes have ~10^6 triangles).
+    """
+
+    def __init__(self, triangles: np.ndarray, radius_m: float, cell_m: float = 0.5):
         self.tri = np.asarray(triangles, float)
-        self.lo = self.tri.min(1)
-        self.hi = self.tri.max(1)
         self.radius = float(radius_m)
+        self.cell = float(cell_m)
+        lo, hi = self.tri.min(1), self.tri.max(1)
+        self.origin = lo.min(0) - self.cell
+        cmin = np.floor((lo - self.origin) / self.cell).astype(np.int64)
+        cmax = np.floor((hi - self.origin) / self.cell).astype(np.int64)
+        self.dims = cmax.max(0) + 2
+        ext = cmax - cmin + 1
+        count = ext.prod(1)
+        tri_of = np.repeat(np.arange(len(self.tri)), count)
+        k = np.arange(len(tri_of)) - np.repeat(np.cumsum(count) - count, count)  # entry within its triangle
+        e = ext[tri_of]
+        cells = cmin[tri_of] + np.stack([k % e[:, 0], (k // e[:, 0]) % e[:, 1], k // (e[:, 0] * e[:, 1])], 1)
+        keys = (cells[:, 0] * self.dims[1] + cells[:, 1]) * self.dims[2] + cells[:, 2]
+        order = np.argsort(keys, kind="stable")
+        self._tris = tri_of[order]
+        self._keys, self._start, self._count = np.unique(keys[order], return_index=True, return_counts=True)
+
+    def _candidates(self, p: np.ndarray, r: float) -> np.ndarray:
+        c0 = np.floor((p - r - self.origin) / self.cell).astype(np.int64)
+        c1 = np.floor((p + r - self.origin) / self.cell).astype(np.int64)
+        c0, c1 = np.maximum(c0, 0), np.minimum(c1, self.dims - 1)
+        if np.any(c1 < c0):
+            return np.empty(0, np.int64)
+        g = np.stack(np.meshgrid(*[np.arange(a, b + 1) for a, b in zip(c0, c1)], indexing="ij"), -1).reshape(-1, 3)
+        keys = (g[:, 0] * self.dims[1] + g[:, 1]) * self.dims[2] + g[:, 2]
+        pos = np.searchsorted(self._keys, keys)
+        ok = pos < len(self._keys)
+        pos, keys = pos[ok], keys[ok]
+        pos = pos[self._keys[pos] == keys]
+        if len(pos) == 0:
+            return np.empty(0, np.int64)
+        return np.unique(np.concatenate([self._tris[self._start[i]:self._start[i] + self._count[i]] for i in pos]))
 
     def nearest(self, p: Sequence[float], radius: Optional[float] = None) -> Tuple[float, int]:
         """(distance, triangle index) of the nearest triangle within ``radius`` of p; (inf, -1) if none."""
         r = self.radius if radius is None else radius
         p = np.asarray(p, float)
-        cand = np.flatnonzero(np.all(self.lo <= p + r, 1) & np.all(self.hi >= p - r, 1))
+        cand = self._candidates(p, r)
         if len(cand) == 0:
             return math.inf, -1
         t = self.tri[cand]
