@@ -59,9 +59,11 @@ class DropCounter {
 /// spins. Invalid configuration logs FATAL naming the parameter and returns 2.
 template <typename NodeT>
 int runNode(const char* name) {
+  // The handles outlive the try block: destroying the last one shuts roscpp
+  // down, and rosconsole would then swallow the FATAL line below.
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
   try {
-    ros::NodeHandle nh;
-    ros::NodeHandle pnh("~");
     NodeT node(nh, pnh);
     ROS_INFO("%s: started", name);
     ros::spin();

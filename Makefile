@@ -1,0 +1,28 @@
+# semantic_exploration entry points. Each target installs what is missing
+# (scripts/setup.sh), builds (scripts/build.sh) and then does its job.
+#   make run     one simulated semantic exploration, writes a report to results/
+#   make test    every test (gtest, pytest, rostest); ends with "N passed, N failed, N skipped"
+#   make bench   every benchmark; JSON lines under results/bench/
+#   make build   build only (BUILD_TYPE=Debug for a debug build)
+BUILD_TYPE ?= Release
+export BUILD_TYPE
+
+.PHONY: run test bench build setup clean
+
+run:
+	bash scripts/run_exploration.sh
+
+test:
+	bash scripts/run_tests.sh
+
+bench:
+	bash scripts/run_benchmarks.sh
+
+build: setup
+	bash scripts/build.sh
+
+setup:
+	bash scripts/setup.sh
+
+clean:
+	rm -rf .colcon

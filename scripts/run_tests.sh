@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# The README test command (`make test`): installs what is missing, builds
+# (warnings are errors), then runs every gtest program, every rostest and the
+# Python tests, and ends with one line "N passed, N failed, N skipped".
+# Exits non-zero on any failure, any test program that produced no result,
+# or a failed build.
+set -uo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+START=$(date +%s)
+RESULTS="${SEMEXP_TEST_RESULTS:-$(mktemp -d /tmp/semexp-tests.XXXXXX)}"
+mkdir -p "$RESULTS"/{gtest,rostest,pytest}
+elapsed() { echo "$(( $(date +%s) - START ))"; }
+fail_early() {
+  echo "[test] $1 (after $(elapsed) s)"
+  echo "0 passed, 1 failed"
+  exit 1
+}
+
+echo "[test] results in $RESULTS"
+bash "$ROOT/scripts/setup.sh" || fail_early "setup failed"
+echo "[test] setup done after $(elapsed) s"
+bash "$ROOT/scripts/build.sh" > "$RESULTS/build.log" 2>&1 || { tail -n 60 "$RESULTS/build.log"; fail_early "build failed (log: $RESULTS/build.log)"; }
+echo "[test] build done after $(elapsed) s"
+
+export PATH="/usr/bin:$PATH"
+unset PYTHONPATH
+# shellcheck disable=SC1091
+set +u
+. "$ROOT/.colcon/install/setup.sh"
+set -u
+export ROS_HOME="$RESULTS/ros_home"   # rostest logs and results stay out of ~/.ros
+export SEMEXP_VENV="${SEMEXP_VENV:-$ROOT/.venv}"
+BIN="$ROOT/.colcon/install/semantic_exploration/lib/semantic_exploration"
+
+# 1. gtest programs (core and ROS unit/accuracy tests).
+for t in "$BIN"/test_*; do
+  [ -x "$t" ] || continue
+  case "$(basename "$t")" in *.*) continue ;; esac  # rostest scripts live here too
+  name=$(basename "$t")
+  echo "[test] gtest $name"
+  timeout 900 "$t" --gtest_output="xml:$RESULTS/gtest/$name.xml" > "$RESULTS/gtest/$name.log" 2>&1
+  rc=$?
+  if [ $rc -ne 0 ]; then tail -n 40 "$RESULTS/gtest/$name.log"; echo "[test] $name exited $rc"; fi
+  echo "$name $rc" >> "$RESULTS/gtest/exit_codes"
+done
+
+# 2. Python unit tests (simulator, evaluation, repository checks).
+echo "[test] pytest test/python"
+(cd "$ROOT" && timeout 1200 "$SEMEXP_VENV/bin/python" -m pytest -q -p no:cacheprovider test/python \
+  --junitxml="$RESULTS/pytest/pytest.xml") > "$RESULTS/pytest/pytest.log" 2>&1
+rc=$?
+tail -n 30 "$RESULTS/pytest/pytest.log"
+echo "pytest $rc" >> "$RESULTS/pytest/exit_codes"
+
+# 3. rostest integration tests (each brings up its own master).
+for f in "$ROOT"/test/rostest/*.test; do
+  [ -f "$f" ] || continue
+  name=$(basename "$f")
+  echo "[test] rostest $name"
+  timeout 1200 rostest --results-base-dir "$RESULTS/rostest/$name" semantic_exploration "$name" \
+    > "$RESULTS/rostest/$name.log" 2>&1
+  rc=$?
+  if [ $rc -ne 0 ]; then tail -n 60 "$RESULTS/rostest/$name.log"; echo "[test] rostest $name exited $rc"; fi
+  echo "$name $rc" >> "$RESULTS/rostest/exit_codes"
+done
+
+echo "[test] total time $(elapsed) s (setup, build and tests)"
+/usr/bin/python3 "$ROOT/scripts/summarize_tests.py" "$RESULTS"
