@@ -45,15 +45,17 @@ class Renderer:
         self._offset = np.einsum("ij,ij->i", n, tri[:, 0])
         # Per-face lookups (index M = "no hit").
         m = len(scene.faces)
-        things = set(scene.thing_ids(classes.names))
-        inst = np.zeros(m + 1, np.uint16)
-        cls = np.zeros(m + 1, np.uint16)
+        # Object id -> (instance, class) tables, then per face by one gather.
+        things = scene.thing_ids(classes.names)
+        top = int(max(scene.face_object.max(), max(things, default=0))) + 1
+        id_inst = np.zeros(top, np.uint16)
+        id_cls = np.zeros(top, np.uint16)
         for oid in things:
-            sel = np.flatnonzero(scene.face_object == oid)
-            inst[sel] = oid
-            cls[sel] = classes.id(scene.objects[oid])
-        self._face_instance = inst
-        self._face_class = cls
+            id_inst[oid] = oid
+            id_cls[oid] = classes.id(scene.objects[oid])
+        fo = np.clip(scene.face_object, 0, top - 1)
+        self._face_instance = np.append(id_inst[fo], np.uint16(0))
+        self._face_class = np.append(id_cls[fo], np.uint16(0))
         nr = np.zeros(m + 1, bool)
         nr[:m] = scene.non_returning_faces(non_returning)
         nr[m] = True

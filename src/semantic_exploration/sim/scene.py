@@ -721,8 +721,11 @@ def export_ground_truth(scene: Scene, directory: str, class_names: Iterable[str]
     class_names = list(class_names)
     os.makedirs(os.path.join(directory, "objects"), exist_ok=True)
     objs = []
+    order = np.argsort(scene.face_object, kind="stable")  # faces grouped by object, once
+    sorted_ids = scene.face_object[order]
     for oid in scene.thing_ids(class_names):
-        v, f, c = scene.object_mesh([oid])
+        sel = order[np.searchsorted(sorted_ids, oid, "left"):np.searchsorted(sorted_ids, oid, "right")]
+        v, f, c = _compact(scene.vertices, scene.faces[sel], scene.face_colors[sel])
         cls = scene.objects[oid]
         fn = "objects/%d_%s.ply" % (oid, cls)
         write_mesh_ply(os.path.join(directory, fn), v, f, c)
