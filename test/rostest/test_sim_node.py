@@ -151,7 +151,12 @@ class SimTest(unittest.TestCase):
         cls = type(self)
         cls.auto_report = False
         try:
-            time.sleep(0.5)  # frames in flight settle; the sim now waits for the newest one
+            # At most one more frame can come (the one released by the last report): wait until
+            # the stream has been quiet for 1 s; the sim is then waiting for the newest frame.
+            n = -1
+            while n != len(self.frames()):
+                n = len(self.frames())
+                time.sleep(1.0)
             last = self.frames()[-1].header.stamp
             time.sleep(3.0)
             self.assertEqual(self.frames()[-1].header.stamp, last, "a new frame came without a report")
