@@ -7,7 +7,7 @@ namespace semexp {
 
 namespace {
 
-inline int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+static_assert((-5 >> 1) == -3, "blockOf needs an arithmetic right shift");
 
 inline bool validDepth(float d, const PinholeCamera& camera) {
   return std::isfinite(d) && d > 0.f && d >= camera.d_min_m && d <= camera.d_max_m;
@@ -25,15 +25,13 @@ template <class V>
 TsdfMapT<V>::TsdfMapT(const TsdfParams& params)
     : params_(params),
       voxels_per_block_(params.block_size * params.block_size * params.block_size),
+      block_shift_(0),
+      inv_resolution_(static_cast<float>(1.0 / params.resolution_m)),
       truncation_m_(static_cast<float>(params.truncation_m)) {
-  if (!(params.resolution_m > 0) || !(params.truncation_m > 0) || params.block_size < 1)
-    throw std::invalid_argument("TsdfMap: resolution, truncation and block size must be > 0");
-}
-
-template <class V>
-Eigen::Vector3i TsdfMapT<V>::blockOf(const Eigen::Vector3i& v) const {
-  const int B = params_.block_size;
-  return {floorDiv(v.x(), B), floorDiv(v.y(), B), floorDiv(v.z(), B)};
+  if (!(params.resolution_m > 0) || !(params.truncation_m > 0) || params.block_size < 1 ||
+      (params.block_size & (params.block_size - 1)) != 0)
+    throw std::invalid_argument("TsdfMap: resolution and truncation must be > 0, block size a power of two");
+  while ((1 << block_shift_) < params.block_size) ++block_shift_;
 }
 
 template <class V>
@@ -46,17 +44,33 @@ typename TsdfMapT<V>::Block& TsdfMapT<V>::allocate(const Eigen::Vector3i& b) {
     block_min_ = block_min_.cwiseMin(b);
     block_max_ = block_max_.cwiseMax(b);
   }
+  dense_.clear();  // stale until rebuildIndex(); look-ups fall back to the hash map
   return blocks_.emplace(b, Block(voxels_per_block_)).first->second;
 }
 
 template <class V>
 const V* TsdfMapT<V>::voxel(const Eigen::Vector3i& index) const {
   const Eigen::Vector3i b = blockOf(index);
-  const auto it = blocks_.find(b);
-  if (it == blocks_.end()) return nullptr;
+  const Block* block = findBlock(b);
+  if (!block) return nullptr;
   const int B = params_.block_size;
   const Eigen::Vector3i l = index - b * B;
-  return &it->second[l.x() + B * (l.y() + B * l.z())];
+  return &(*block)[l.x() + B * (l.y() + B * l.z())];
+}
+
+template <class V>
+void TsdfMapT<V>::rebuildIndex() {
+  dense_.clear();
+  if (blocks_.empty()) return;
+  dense_min_ = block_min_;
+  dense_dims_ = block_max_ - block_min_ + Eigen::Vector3i::Ones();
+  const double cells = static_cast<double>(dense_dims_.x()) * dense_dims_.y() * dense_dims_.z();
+  if (cells > kMaxDenseIndex) return;  // very large or scattered object: hash look-ups only
+  dense_.assign(static_cast<std::size_t>(cells), nullptr);
+  for (auto& kv : blocks_) {
+    const Eigen::Vector3i r = kv.first - dense_min_;
+    dense_[r.x() + dense_dims_.x() * (r.y() + dense_dims_.y() * r.z())] = &kv.second;
+  }
 }
 
 template <class V>
@@ -108,6 +122,8 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
     }
   }
 
+  rebuildIndex();
+
   // 2. Projective update of every voxel of the blocks in front of the camera.
   const float block_radius = 0.87f * B * res;
   std::size_t updated = 0;
@@ -141,7 +157,9 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
             if (w_obs <= 0.f) continue;
             const float w_new = w + w_obs;
             const float s = std::min(sdf, trunc);
-            vx.setSdf((vx.sdf(trunc) * w + s * w_obs) / w_new, trunc);
+            const float sdf_new = (vx.sdf(trunc) * w + s * w_obs) / w_new;
+            vx.setSdf(sdf_new, trunc);
+            if (sdf_new < 0.f) block.has_negative = true;
             vx.setWeight(std::min(w_new, max_w));
             if (std::abs(sdf) < trunc) {
               if (use_rgb) {
@@ -174,9 +192,8 @@ bool TsdfMapT<V>::interpolate(const Eigen::Vector3f& p_W, float& sdf_m) const {
   // Usually all 8 voxels lie in one block: one hash look-up instead of eight.
   const Block* same = nullptr;
   if (l0.x() < B - 1 && l0.y() < B - 1 && l0.z() < B - 1) {
-    const auto it = blocks_.find(b0);
-    if (it == blocks_.end()) return false;
-    same = &it->second;
+    same = findBlock(b0);
+    if (!same) return false;
   }
   float sum = 0.f;
   for (int c = 0; c < 8; ++c) {
@@ -227,18 +244,30 @@ bool TsdfMapT<V>::castRay(const Eigen::Vector3f& o, const Eigen::Vector3f& dir, 
     const Eigen::Vector3i bk = blockOf(vi);
     if (bk != key) {
       key = bk;
-      const auto it = blocks_.find(bk);
-      block = it == blocks_.end() ? nullptr : &it->second;
+      block = findBlock(bk);
     }
-    if (!block) {  // skip the unallocated block in one step
+    if (!block || !block->has_negative) {
+      // No crossing can end in this block: step over it in one go.
       float t_exit = t_max;
       for (int i = 0; i < 3; ++i) {
         if (std::abs(dir[i]) < 1e-9f) continue;
         const float face = (dir[i] > 0 ? bk[i] + 1 : bk[i]) * block_edge;
         t_exit = std::min(t_exit, (face - o[i]) / dir[i]);
       }
-      t = std::max(t_exit, t) + 1e-3f * res;
       prev = nullptr;
+      if (block) {  // its last voxel on the ray may start a crossing into the next block
+        const float t_last = std::max(t, t_exit - 0.25f * res);
+        const Eigen::Vector3i l = voxelIndex(o + t_last * dir) - bk * B;
+        if ((l.array() >= 0).all() && (l.array() < B).all()) {
+          const V& last = (*block)[l.x() + B * (l.y() + B * l.z())];
+          if (last.weight() > 0.f) {
+            prev = &last;
+            prev_sdf = last.sdf(truncation_m_);
+            prev_t = t_last;
+          }
+        }
+      }
+      t = std::max(t_exit, t) + 1e-3f * res;
       continue;
     }
     const Eigen::Vector3i l = vi - bk * B;
@@ -248,14 +277,13 @@ bool TsdfMapT<V>::castRay(const Eigen::Vector3f& o, const Eigen::Vector3f& dir, 
       t += res;
       continue;
     }
-    const float sdf = vx.sdf(truncation_m_);
+    float sdf = vx.sdf(truncation_m_);
+    // Near the surface the nearest voxel is too coarse (a grazing ray can pass
+    // between voxel centres that are all positive): interpolate there.
+    float interpolated;
+    if (std::abs(sdf) < res && interpolate(p, interpolated)) sdf = interpolated;
     if (prev && prev_sdf > 0.f && sdf <= 0.f && prev->foreground() + vx.foreground() > 1.f) {
-      float s0 = prev_sdf, s1 = sdf, i0, i1;
-      if (interpolate(o + prev_t * dir, i0) && interpolate(p, i1) && i0 > 0.f && i1 <= 0.f) {
-        s0 = i0;
-        s1 = i1;
-      }
-      hit.distance_m = prev_t + (t - prev_t) * s0 / (s0 - s1);
+      hit.distance_m = prev_t + (t - prev_t) * prev_sdf / (prev_sdf - sdf);
       hit.min_distance_m = std::min(prev->minDistance(), vx.minDistance());
       return true;
     }
@@ -278,8 +306,7 @@ Mesh TsdfMapT<V>::extractMesh() const {
     // The block and its +x/+y/+z neighbours hold the 8 corners of every cube starting in this block.
     const Block* nb[8];
     for (int c = 0; c < 8; ++c) {
-      const auto it = blocks_.find(kv.first + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1));
-      nb[c] = it == blocks_.end() ? nullptr : &it->second;
+      nb[c] = findBlock(kv.first + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1));
     }
     const Eigen::Vector3i base = kv.first * B;
     for (int z = 0; z < B; ++z)

@@ -80,7 +80,7 @@ struct TsdfParams {
   /// (clamped to truncation_m), m; the weight falls linearly from 1 at one
   /// voxel behind to 0 here, so free space hidden behind edges is not dug in.
   double behind_surface_m = 0.04;
-  int block_size = 8;          ///< voxels per block edge
+  int block_size = 8;          ///< voxels per block edge (power of two)
   double max_weight = 100.0;   ///< weight cap (one unit per observation at the surface)
 };
 
@@ -111,9 +111,21 @@ template <class VoxelT>
 class TsdfMapT {
  public:
   using Voxel = VoxelT;
-  using Block = std::vector<VoxelT>;  ///< block_size^3 voxels, x fastest
+  /// block_size^3 voxels, x fastest.
+  struct Block {
+    std::vector<VoxelT> voxels;
+    bool has_negative = false;  ///< some voxel was given SDF < 0 (ray casts step over blocks without)
+    explicit Block(std::size_t n) : voxels(n) {}
+    const VoxelT& operator[](std::size_t i) const { return voxels[i]; }
+    VoxelT& operator[](std::size_t i) { return voxels[i]; }
+  };
 
   explicit TsdfMapT(const TsdfParams& params);
+  // The dense index points into blocks_: moving keeps those nodes, copying would not.
+  TsdfMapT(const TsdfMapT&) = delete;
+  TsdfMapT& operator=(const TsdfMapT&) = delete;
+  TsdfMapT(TsdfMapT&&) = default;
+  TsdfMapT& operator=(TsdfMapT&&) = default;
 
   const TsdfParams& params() const { return params_; }
 
@@ -134,7 +146,7 @@ class TsdfMapT {
   /// Voxel with global index `index` (voxel centre (index + 0.5) * resolution), null if not allocated.
   const VoxelT* voxel(const Eigen::Vector3i& index) const;
   Eigen::Vector3i voxelIndex(const Eigen::Vector3f& p_W) const {
-    return (p_W / static_cast<float>(params_.resolution_m)).array().floor().template cast<int>();
+    return (p_W * inv_resolution_).array().floor().template cast<int>();
   }
   Eigen::Vector3f voxelCentre(const Eigen::Vector3i& index) const {
     return (index.cast<float>().array() + 0.5f) * static_cast<float>(params_.resolution_m);
@@ -173,14 +185,38 @@ class TsdfMapT {
   }
 
  private:
-  Eigen::Vector3i blockOf(const Eigen::Vector3i& voxel_index) const;
+  Eigen::Vector3i blockOf(const Eigen::Vector3i& v) const {
+    // Arithmetic shift = floor division by the power-of-two block size.
+    return {v.x() >> block_shift_, v.y() >> block_shift_, v.z() >> block_shift_};
+  }
   Block& allocate(const Eigen::Vector3i& block_index);
+  /// Block `b` or null: O(1) through the dense index when it is built, else the hash map.
+  const Block* findBlock(const Eigen::Vector3i& b) const {
+    if (!dense_.empty()) {
+      const Eigen::Vector3i r = b - dense_min_;
+      if (r.x() < 0 || r.y() < 0 || r.z() < 0 || r.x() >= dense_dims_.x() || r.y() >= dense_dims_.y() ||
+          r.z() >= dense_dims_.z())
+        return nullptr;
+      return dense_[r.x() + dense_dims_.x() * (r.y() + dense_dims_.y() * r.z())];
+    }
+    const auto it = blocks_.find(b);
+    return it == blocks_.end() ? nullptr : &it->second;
+  }
+  /// Rebuilds the dense block index over the allocated box (after allocation).
+  void rebuildIndex();
+  static constexpr double kMaxDenseIndex = 1 << 21;  ///< cells (8 bytes each)
 
   TsdfParams params_;
   int voxels_per_block_;
+  int block_shift_;  ///< log2(block_size)
+  float inv_resolution_;
   float truncation_m_;
   std::unordered_map<Eigen::Vector3i, Block, VoxelIndexHash> blocks_;
   Eigen::Vector3i block_min_{0, 0, 0}, block_max_{-1, -1, -1};  ///< inclusive range of allocated block indices
+  /// Dense index of block pointers over [block_min_, block_max_] (empty if too large):
+  /// ray casts and meshing look blocks up without hashing.
+  std::vector<Block*> dense_;
+  Eigen::Vector3i dense_min_{0, 0, 0}, dense_dims_{0, 0, 0};
 };
 
 using TsdfMap = TsdfMapT<TsdfVoxel>;

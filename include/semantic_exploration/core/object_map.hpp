@@ -1,0 +1,123 @@
+#pragma once
+/// @file object_map.hpp
+/// The set of object submaps (paper Section IV-B): one fixed-point TSDF per
+/// object at its class's resolution; frame integration of matched
+/// detections and of visible undetected objects; rendering of all objects
+/// into an object-id image; object gain images (Eq. 1 with d_obj); meshes
+/// and saving.
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "semantic_exploration/core/camera.hpp"
+#include "semantic_exploration/core/class_table.hpp"
+#include "semantic_exploration/core/object_map_config.hpp"
+#include "semantic_exploration/core/spherical_grid.hpp"
+#include "semantic_exploration/core/tsdf.hpp"
+
+namespace semexp {
+
+/// One object submap.
+struct MappedObject {
+  std::uint32_t id = 0;              ///< > 0, at most 65535 (object-id images are 16-bit)
+  int class_id = 0;                  ///< index into the class table (> 0)
+  std::string class_name;
+  double resolution_m = 0.0;         ///< voxel edge, m
+  std::uint32_t detection_count = 0; ///< frames in which it was detected
+  TsdfMap tsdf;
+
+  MappedObject(std::uint32_t id_, int class_id_, std::string name, const TsdfParams& params)
+      : id(id_), class_id(class_id_), class_name(std::move(name)), resolution_m(params.resolution_m), tsdf(params) {}
+};
+
+/// A detection of the current frame after matching.
+struct ObjectDetection {
+  std::uint16_t instance_id = 0;  ///< its pixels' value in the instance image
+  std::uint32_t object_id = 0;    ///< matched object, 0 = create a new object
+  int class_id = 0;               ///< class of the detection
+};
+
+/// What integrateFrame did.
+struct FrameIntegration {
+  std::vector<std::uint32_t> created;     ///< new object ids
+  std::vector<std::uint32_t> detected;    ///< objects updated as detected (incl. created)
+  std::vector<std::uint32_t> undetected;  ///< visible objects updated without foreground probability
+  std::uint32_t dropped_unknown_class = 0;   ///< detections with a class id outside the class table
+  std::uint32_t dropped_not_of_interest = 0; ///< detections of classes without object maps
+  std::uint32_t dropped_unknown_object = 0;  ///< detections matched to an object id the map does not have
+  std::uint32_t dropped_full = 0;            ///< new objects refused: all 65535 ids used
+};
+
+/// Paper Eq. (1): gain of a surface seen from d_exp_m that was observed from
+/// at best d_node_m, with desired distance d_desired_m, normalised by d_max_m; in [0, 1].
+double objectDistanceGain(double d_node_m, double d_exp_m, double d_desired_m, double d_max_m);
+
+class ObjectMap {
+ public:
+  /// @throws ConfigError if a config is invalid
+  ObjectMap(const ObjectMapConfig& config, const ClassTable& classes);
+
+  const ObjectMapConfig& config() const { return config_; }
+  const ClassTable& classes() const { return classes_; }
+
+  /// New empty object of class `class_id` at the class's resolution; 0 if
+  /// the class is unknown or no 16-bit id is left.
+  std::uint32_t createObject(int class_id);
+  const MappedObject* object(std::uint32_t id) const;
+  const std::map<std::uint32_t, std::unique_ptr<MappedObject>>& objects() const { return objects_; }
+
+  /// Integrates one frame.
+  /// 1. Renders the known objects (occluded by the depth image and each other).
+  /// 2. Each detection of a class of interest updates its object (created if
+  ///    object_id == 0) through its mask minus the pixels rendered as another
+  ///    object, foreground probability included; detections of one object are
+  ///    merged, so detection_count grows by one per frame.
+  /// 3. Every other rendered object updates SDF and colour through its
+  ///    rendered mask, without the foreground probability.
+  /// @param depth_m CV_32FC1 m; rgb CV_8UC3 or empty; instance_image CV_16UC1 (same size)
+  /// @throws std::invalid_argument if the images do not match the camera
+  FrameIntegration integrateFrame(const PinholeCamera& camera, const Eigen::Isometry3d& T_WC, const cv::Mat& depth_m,
+                                  const cv::Mat& rgb, const cv::Mat& instance_image,
+                                  const std::vector<ObjectDetection>& detections);
+
+  /// Renders all objects from T_WC into `object_ids` (CV_16UC1, 0 = none).
+  /// Each pixel shows the nearest object surface (foreground probability >
+  /// 0.5), hidden if it lies farther than the measured depth plus
+  /// render_depth_tolerance_m (`depth_m` CV_32FC1 m, or empty for no occlusion;
+  /// invalid depth pixels do not occlude).
+  /// @param depth_out optional CV_32FC1 z-depth of the shown surface, m (0 = none)
+  void render(const PinholeCamera& camera, const Eigen::Isometry3d& T_WC, const cv::Mat& depth_m,
+              cv::Mat& object_ids, cv::Mat* depth_out = nullptr) const;
+
+  /// Object gain images for a batch of positions (layout: SphericalGrid).
+  /// Per ray: the nearest object surface before max_depth_m (or d_max_m);
+  /// gain = Eq. (1) with d_obj_m on that surface's minimum observed distance;
+  /// hit depth = its distance, d_max_m if none.
+  /// @param max_depth_m empty, or grid.width * grid.height values per position
+  ///        (row-major), the ray's occluding depth, m (NaN = none)
+  /// @param gains, hit_depth_m one CV_32FC1 grid.height x grid.width image per position
+  void computeGains(const std::vector<Eigen::Vector3d>& positions_W, const SphericalGrid& grid,
+                    const std::vector<float>& max_depth_m, double d_obj_m, double d_max_m, std::vector<cv::Mat>& gains,
+                    std::vector<cv::Mat>& hit_depth_m) const;
+
+  /// Writes object_<id>_<class>.ply per object and objects.json (the
+  /// summaries) into `directory` (created if missing). Returns the written
+  /// paths; on failure returns what was written so far and sets `error`.
+  std::vector<std::string> save(const std::string& directory, double d_obj_m, std::string* error = nullptr) const;
+
+  /// Ids present in an object-id image, ascending.
+  static std::vector<std::uint32_t> visibleIds(const cv::Mat& object_ids);
+
+ private:
+  ObjectMapConfig config_;
+  ClassTable classes_;
+  std::map<std::uint32_t, std::unique_ptr<MappedObject>> objects_;
+  std::uint32_t next_id_ = 1;
+};
+
+}  // namespace semexp

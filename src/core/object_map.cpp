@@ -1,0 +1,303 @@
+#include "semantic_exploration/core/object_map.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+namespace semexp {
+
+double objectDistanceGain(double d_node_m, double d_exp_m, double d_desired_m, double d_max_m) {
+  d_node_m = std::min(d_node_m, d_max_m);  // "never observed closer than range" counts as d_max
+  if (d_node_m <= d_desired_m || d_node_m <= d_exp_m) return 0.0;
+  return std::clamp((d_node_m - std::max(d_exp_m, d_desired_m)) / d_max_m, 0.0, 1.0);
+}
+
+ObjectMap::ObjectMap(const ObjectMapConfig& config, const ClassTable& classes) : config_(config), classes_(classes) {
+  config_.validate();
+  classes_.validate();
+}
+
+std::uint32_t ObjectMap::createObject(int class_id) {
+  const std::string name = classes_.name(class_id);
+  if (name.empty() || next_id_ > 65535) return 0;
+  TsdfParams p;
+  p.resolution_m = classes_.resolution(class_id);
+  p.truncation_m = config_.truncation_voxels * p.resolution_m;
+  p.behind_surface_m = config_.behind_surface_voxels * p.resolution_m;
+  p.block_size = config_.block_size;
+  p.max_weight = config_.max_weight;
+  const std::uint32_t id = next_id_++;
+  objects_.emplace(id, std::make_unique<MappedObject>(id, class_id, name, p));
+  return id;
+}
+
+const MappedObject* ObjectMap::object(std::uint32_t id) const {
+  const auto it = objects_.find(id);
+  return it == objects_.end() ? nullptr : it->second.get();
+}
+
+std::vector<std::uint32_t> ObjectMap::visibleIds(const cv::Mat& object_ids) {
+  std::vector<bool> seen(65536, false);
+  for (int v = 0; v < object_ids.rows; ++v) {
+    const std::uint16_t* row = object_ids.ptr<std::uint16_t>(v);
+    for (int u = 0; u < object_ids.cols; ++u) seen[row[u]] = true;
+  }
+  std::vector<std::uint32_t> ids;
+  for (std::uint32_t i = 1; i < 65536; ++i)
+    if (seen[i]) ids.push_back(i);
+  return ids;
+}
+
+FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Eigen::Isometry3d& T_WC,
+                                           const cv::Mat& depth_m, const cv::Mat& rgb, const cv::Mat& instance_image,
+                                           const std::vector<ObjectDetection>& detections) {
+  if (instance_image.type() != CV_16UC1 || instance_image.size() != depth_m.size())
+    throw std::invalid_argument("ObjectMap::integrateFrame: instance image must be 16UC1 of the depth image's size");
+  FrameIntegration result;
+  cv::Mat rendered;
+  render(camera, T_WC, depth_m, rendered);
+
+  // Union of the masks of the detections of each object.
+  std::map<std::uint32_t, cv::Mat> masks;
+  for (const ObjectDetection& d : detections) {
+    if (classes_.name(d.class_id).empty()) {
+      ++result.dropped_unknown_class;
+      continue;
+    }
+    if (!classes_.isOfInterest(d.class_id)) {
+      ++result.dropped_not_of_interest;
+      continue;
+    }
+    std::uint32_t id = d.object_id;
+    if (id == 0) {
+      id = createObject(d.class_id);
+      if (id == 0) {
+        ++result.dropped_full;
+        continue;
+      }
+      result.created.push_back(id);
+    } else if (!object(id)) {
+      ++result.dropped_unknown_object;
+      continue;
+    }
+    cv::Mat mask = instance_image == d.instance_id;
+    auto it = masks.find(id);
+    if (it == masks.end())
+      masks.emplace(id, mask);
+    else
+      it->second |= mask;
+  }
+  for (auto& kv : masks) {
+    // Pixels where another known object is rendered belong to that object
+    // (a detection spanning two objects only feeds the one it was matched to).
+    // Grown by 2 px: rendered silhouettes are good to about that (a voxel spans several pixels up close).
+    cv::Mat other = (rendered != 0) & (rendered != static_cast<int>(kv.first));
+    cv::dilate(other, other, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
+    kv.second.setTo(0, other);
+    MappedObject& obj = *objects_.at(kv.first);
+    obj.tsdf.integrate(camera, T_WC, depth_m, rgb, kv.second, true);
+    ++obj.detection_count;
+    result.detected.push_back(kv.first);
+  }
+  for (const std::uint32_t id : visibleIds(rendered)) {
+    if (masks.count(id)) continue;
+    const auto it = objects_.find(id);
+    if (it == objects_.end()) continue;
+    it->second->tsdf.integrate(camera, T_WC, depth_m, rgb, rendered == static_cast<int>(id), false);
+    result.undetected.push_back(id);
+  }
+  return result;
+}
+
+void ObjectMap::render(const PinholeCamera& camera, const Eigen::Isometry3d& T_WC, const cv::Mat& depth_m,
+                       cv::Mat& object_ids, cv::Mat* depth_out) const {
+  const bool occlude = !depth_m.empty();
+  if (occlude && (depth_m.type() != CV_32FC1 || depth_m.cols != camera.width || depth_m.rows != camera.height))
+    throw std::invalid_argument("ObjectMap::render: depth must be 32FC1 of the camera's size");
+  object_ids = cv::Mat::zeros(camera.height, camera.width, CV_16UC1);
+  const float inf = std::numeric_limits<float>::infinity();
+  cv::Mat t_best(camera.height, camera.width, CV_32FC1, cv::Scalar(inf));  // along the unit ray, m
+  const Eigen::Isometry3f T_WCf = T_WC.cast<float>();
+  const Eigen::Isometry3f T_CWf = T_WCf.inverse();
+  const Eigen::Vector3f o_W = T_WCf.translation();
+  const float tol = static_cast<float>(config_.render_depth_tolerance_m);
+  const float d_max = static_cast<float>(camera.d_max_m);
+
+  for (const auto& kv : objects_) {
+    Eigen::AlignedBox3f box;
+    if (!kv.second->tsdf.allocatedBox(box)) continue;
+    // Image footprint of the object's box (whole image if the box reaches behind the camera).
+    int u0 = 0, u1 = camera.width - 1, v0 = 0, v1 = camera.height - 1;
+    bool behind = false, any_front = false;
+    float umin = inf, umax = -inf, vmin = inf, vmax = -inf;
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3f p_C = T_CWf * box.corner(static_cast<Eigen::AlignedBox3f::CornerType>(c));
+      if (p_C.z() <= 1e-3f) {
+        behind = true;
+        continue;
+      }
+      any_front = true;
+      Eigen::Vector2f uv(0.f, 0.f);
+      camera.project(p_C, uv);
+      umin = std::min(umin, uv.x());
+      umax = std::max(umax, uv.x());
+      vmin = std::min(vmin, uv.y());
+      vmax = std::max(vmax, uv.y());
+    }
+    if (!any_front) continue;
+    if (!behind) {
+      u0 = std::max(u0, static_cast<int>(std::floor(umin)));
+      u1 = std::min(u1, static_cast<int>(std::ceil(umax)));
+      v0 = std::max(v0, static_cast<int>(std::floor(vmin)));
+      v1 = std::min(v1, static_cast<int>(std::ceil(vmax)));
+    }
+    const auto id = static_cast<std::uint16_t>(kv.first);
+    const float front_margin = static_cast<float>(kv.second->tsdf.params().truncation_m) + 4.f * tol;
+    for (int v = v0; v <= v1; ++v) {
+      float* trow = t_best.ptr<float>(v);
+      std::uint16_t* irow = object_ids.ptr<std::uint16_t>(v);
+      const float* drow = occlude ? depth_m.ptr<float>(v) : nullptr;
+      for (int u = u0; u <= u1; ++u) {
+        const Eigen::Vector3f ray = camera.ray_C(static_cast<float>(u), static_cast<float>(v));
+        const float n = ray.norm();
+        float t_max = std::min(trow[u], d_max * n), t_min = 0.f;
+        if (occlude) {
+          const float d = drow[u];
+          if (std::isfinite(d) && d > 0.f && d >= camera.d_min_m && d <= camera.d_max_m) {
+            t_max = std::min(t_max, d * n + tol);
+            // A surface well in front of the measured one would have been measured instead.
+            t_min = std::max(0.f, d * n - front_margin);
+          }
+        }
+        TsdfRayHit hit;
+        if (kv.second->tsdf.castRay(o_W, T_WCf.linear() * (ray / n), t_min, t_max, hit)) {
+          trow[u] = hit.distance_m;
+          irow[u] = id;
+        }
+      }
+    }
+  }
+  if (depth_out) {
+    *depth_out = cv::Mat::zeros(camera.height, camera.width, CV_32FC1);
+    for (int v = 0; v < camera.height; ++v)
+      for (int u = 0; u < camera.width; ++u) {
+        const float t = t_best.at<float>(v, u);
+        if (std::isfinite(t))
+          depth_out->at<float>(v, u) = t / camera.ray_C(static_cast<float>(u), static_cast<float>(v)).norm();
+      }
+  }
+}
+
+void ObjectMap::computeGains(const std::vector<Eigen::Vector3d>& positions_W, const SphericalGrid& grid,
+                             const std::vector<float>& max_depth_m, double d_obj_m, double d_max_m,
+                             std::vector<cv::Mat>& gains, std::vector<cv::Mat>& hit_depth_m) const {
+  const size_t per_position = static_cast<size_t>(grid.width) * grid.height;
+  if (!max_depth_m.empty() && max_depth_m.size() != per_position * positions_W.size())
+    throw std::invalid_argument("ObjectMap::computeGains: max_depth_m must hold width * height values per position");
+  std::vector<Eigen::Vector3f> dirs(per_position);
+  for (int v = 0; v < grid.height; ++v)
+    for (int u = 0; u < grid.width; ++u) dirs[v * grid.width + u] = grid.direction(u, v).cast<float>();
+  gains.assign(positions_W.size(), cv::Mat());
+  hit_depth_m.assign(positions_W.size(), cv::Mat());
+  for (size_t i = 0; i < positions_W.size(); ++i) {
+    gains[i] = cv::Mat::zeros(grid.height, grid.width, CV_32FC1);
+    hit_depth_m[i] = cv::Mat(grid.height, grid.width, CV_32FC1, cv::Scalar(d_max_m));
+    const Eigen::Vector3f o = positions_W[i].cast<float>();
+    for (size_t r = 0; r < per_position; ++r) {
+      float t_max = static_cast<float>(d_max_m);
+      if (!max_depth_m.empty()) {
+        const float m = max_depth_m[i * per_position + r];
+        if (!std::isnan(m)) t_max = std::min(t_max, m);
+      }
+      if (!(t_max > 0.f)) continue;
+      bool found = false;
+      TsdfRayHit best;
+      for (const auto& kv : objects_) {
+        TsdfRayHit hit;
+        if (kv.second->tsdf.castRay(o, dirs[r], 0.f, t_max, hit)) {
+          t_max = hit.distance_m;
+          best = hit;
+          found = true;
+        }
+      }
+      if (!found) continue;
+      const int v = static_cast<int>(r) / grid.width, u = static_cast<int>(r) % grid.width;
+      hit_depth_m[i].at<float>(v, u) = best.distance_m;
+      gains[i].at<float>(v, u) =
+          static_cast<float>(objectDistanceGain(best.min_distance_m, best.distance_m, d_obj_m, d_max_m));
+    }
+  }
+}
+
+namespace {
+
+std::string jsonEscape(const std::string& s) {
+  std::string out;
+  for (const char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) continue;
+    out += c;
+  }
+  return out;
+}
+
+std::string vec(const Eigen::Vector3d& v) {
+  char buf[96];
+  std::snprintf(buf, sizeof(buf), "[%.4f, %.4f, %.4f]", v.x(), v.y(), v.z());
+  return buf;
+}
+
+}  // namespace
+
+std::vector<std::string> ObjectMap::save(const std::string& directory, double d_obj_m, std::string* error) const {
+  std::vector<std::string> files;
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(directory, ec);
+  if (ec) {
+    if (error) *error = "cannot create " + directory + ": " + ec.message();
+    return files;
+  }
+  const fs::path dir = fs::absolute(directory);
+  std::string json = "{\"objects\": [";
+  bool first = true;
+  for (const auto& kv : objects_) {
+    const MappedObject& o = *kv.second;
+    const std::string name = "object_" + std::to_string(o.id) + "_" + o.class_name + ".ply";
+    const std::string path = (dir / name).string();
+    if (!writePly(o.tsdf.extractMesh(), path)) {
+      if (error) *error = "cannot write " + path;
+      return files;
+    }
+    files.push_back(path);
+    const TsdfSummary s = o.tsdf.summarize(d_obj_m);
+    char buf[256];
+    std::snprintf(buf, sizeof(buf),
+                  "\"resolution_m\": %.4f, \"voxel_count\": %zu, \"observed_fraction\": %.4f, "
+                  "\"detection_count\": %u, ",
+                  o.resolution_m, s.voxel_count, s.observed_fraction, o.detection_count);
+    json += std::string(first ? "" : ",") + "\n  {\"id\": " + std::to_string(o.id) +
+            ", \"class_id\": " + std::to_string(o.class_id) + ", \"class_name\": \"" + jsonEscape(o.class_name) +
+            "\", " + buf + "\"bbox_min\": " + vec(s.bbox_min_W) + ", \"bbox_max\": " + vec(s.bbox_max_W) +
+            ", \"centroid\": " + vec(s.centroid_W) + ", \"mesh\": \"" + jsonEscape(name) + "\"}";
+    first = false;
+  }
+  char tail[64];
+  std::snprintf(tail, sizeof(tail), "\n], \"d_obj_m\": %.3f}\n", d_obj_m);
+  json += tail;
+  const std::string index = (dir / "objects.json").string();
+  std::ofstream f(index);
+  f << json;
+  if (!f) {
+    if (error) *error = "cannot write " + index;
+    return files;
+  }
+  files.push_back(index);
+  return files;
+}
+
+}  // namespace semexp
