@@ -10,7 +10,7 @@ export BUILD_TYPE
 .PHONY: run test bench build setup clean
 
 run:
-	bash scripts/run_exploration.sh
+	bash scripts/run_exploration.sh $(ARGS)
 
 test:
 	bash scripts/run_tests.sh

@@ -1,0 +1,289 @@
+#!/usr/bin/env python3
+"""Runs one simulated exploration mission and writes its report.
+
+Generates a house (or takes a scene file), exports its ground truth, starts
+the simulator and every node (sim.launch) on a private ROS master, shows
+progress while the MAV explores, stops when the planner reports the mission
+finished or a limit is reached, saves the maps and writes report.md and
+summary.json into the output directory.
+
+Example:
+  run_mission.py --mode semantic --seed 0 --size 15 12 3 --out results/run
+  run_mission.py --scene my_scene_semantic.ply --mode classic --wall-limit-s 300
+"""
+import argparse
+import json
+import math
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _import_package():
+    try:
+        import semantic_exploration.sim  # noqa: F401
+    except ImportError:  # running from the source tree
+        sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
+
+
+def prepare_scene(args, out):
+    """Generates the scene (unless given) and exports ground truth; returns (ply, gt doc)."""
+    _import_package()
+    from semantic_exploration.sim.classes import DEFAULT_CLASS_NAMES
+    from semantic_exploration.sim.generator import generate
+    from semantic_exploration.sim.scene import export_ground_truth, load_scene, save_habitat
+    gt_dir = os.path.join(out, "ground_truth")
+    if args.scene:
+        scene = load_scene(args.scene)
+        ply = os.path.abspath(args.scene)
+    else:
+        scene = generate(args.seed, args.size, None)
+        ply = save_habitat(scene, os.path.join(out, "scene"))
+    doc = export_ground_truth(scene, gt_dir, DEFAULT_CLASS_NAMES)
+    doc["gt_dir"] = gt_dir
+    return ply, doc
+
+
+def write_overrides(path, gt, classes, margin_m=0.5):
+    """Bounds of the C++ nodes = the scene's box plus a margin; classes of interest."""
+    lo = [v - margin_m for v in gt["bounds_min"]]
+    hi = [v + margin_m for v in gt["bounds_max"]]
+    with open(path, "w") as f:
+        f.write("# written by run_mission.py for this scene\n")
+        f.write("bounds:\n  min_m: [%s]\n  max_m: [%s]\n" % (", ".join("%.3f" % v for v in lo),
+                                                            ", ".join("%.3f" % v for v in hi)))
+        f.write("classes:\n  of_interest: [%s]\n" % ", ".join(classes))
+
+
+class Monitor:
+    """Collects what the nodes publish during the mission."""
+
+    def __init__(self):
+        import rospy
+        from geometry_msgs.msg import PoseStamped
+        from std_msgs.msg import UInt32
+        from semantic_exploration.msg import ExplorationStatus, MapStats, ObjectArray
+        self.status = None
+        self.stats = None
+        self.objects = None
+        self.collisions = 0
+        self.path_length_m = 0.0
+        self._last_pos = None
+        rospy.Subscriber("/planner/status", ExplorationStatus, self._set("status"), queue_size=10)
+        rospy.Subscriber("/background_map/stats", MapStats, self._set("stats"), queue_size=10)
+        rospy.Subscriber("/object_map/objects", ObjectArray, self._set("objects"), queue_size=2)
+        rospy.Subscriber("/mav/collisions", UInt32, self._on_collisions, queue_size=2)
+        rospy.Subscriber("/mav/pose", PoseStamped, self._on_pose, queue_size=50)
+
+    def _set(self, name):
+        def cb(msg):
+            setattr(self, name, msg)
+        return cb
+
+    def _on_collisions(self, msg):
+        self.collisions = msg.data
+
+    def _on_pose(self, msg):
+        p = msg.pose.position
+        if self._last_pos is not None:
+            self.path_length_m += math.dist(self._last_pos, (p.x, p.y, p.z))
+        self._last_pos = (p.x, p.y, p.z)
+
+    def finished(self):
+        from semantic_exploration.msg import ExplorationStatus
+        return self.status is not None and self.status.state == ExplorationStatus.STATE_FINISHED
+
+    def line(self, sim_s, wall_s, n_gt):
+        explored = self.stats.explored_volume_m3 if self.stats else 0.0
+        frontiers = self.stats.frontier_count if self.stats else 0
+        found = len(self.objects.objects) if self.objects else 0
+        it = self.status.iteration if self.status else 0
+        msg = self.status.message if self.status else "waiting for the planner"
+        return ("[mission] wall %5.0f s  sim %6.1f s  iteration %3d  explored %7.1f m3  frontiers %6d  "
+                "objects %d (ground truth %d)  collisions %d  | %s" %
+                (wall_s, sim_s, it, explored, frontiers, found, n_gt, self.collisions, msg))
+
+
+def call_save(service, directory):
+    import rospy
+    from semantic_exploration.srv import SaveMap
+    try:
+        rospy.wait_for_service(service, timeout=5.0)
+        res = rospy.ServiceProxy(service, SaveMap)(directory)
+        return {"success": res.success, "message": res.message, "files": list(res.files)}
+    except Exception as e:  # a node that died or does not answer must not lose the report
+        return {"success": False, "message": "%s: %s" % (service, e), "files": []}
+
+
+def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
+    objects = mon.objects.objects if mon.objects else []
+    classes = set(args.classes)
+    gt_objs = [o for o in gt["objects"] if o["class"] in classes]
+    stats = mon.stats
+    summary = {
+        "mode": args.mode, "scene": gt.get("scene"), "seed": args.seed,
+        "termination_reason": reason, "sim_time_s": sim_s, "wall_time_s": wall_s,
+        "iterations": mon.status.iteration if mon.status else 0,
+        "explored_volume_m3": stats.explored_volume_m3 if stats else 0.0,
+        "frontier_count": stats.frontier_count if stats else None,
+        "objects_found": len(objects), "ground_truth_objects": len(gt_objs),
+        "path_length_m": mon.path_length_m, "collisions": mon.collisions,
+        "dropped_input": {k: getattr(stats, k) for k in (
+            "dropped_bad_encoding", "dropped_size_mismatch", "dropped_no_tf", "dropped_out_of_bounds",
+            "dropped_no_camera_info", "invalid_depth_pixels")} if stats else {},
+        "saved": saved,
+    }
+    free = os.path.join(gt["gt_dir"], "free_space.json")
+    if os.path.exists(free):
+        with open(free) as f:
+            summary["explorable_free_volume_m3"] = json.load(f)["explorable_free_volume_m3"]
+    with open(os.path.join(out, "summary.json"), "w") as f:
+        json.dump(summary, f, indent=1)
+    lines = [
+        "# Exploration report", "",
+        "| | |", "|---|---|",
+        "| mode | %s |" % args.mode,
+        "| scene | %s |" % summary["scene"],
+        "| termination | %s |" % reason,
+        "| sim time | %.1f s |" % sim_s,
+        "| wall time | %.1f s |" % wall_s,
+        "| planning iterations | %d |" % summary["iterations"],
+        "| explored volume | %.1f m3 |" % summary["explored_volume_m3"],
+    ]
+    if "explorable_free_volume_m3" in summary:
+        lines.append("| explorable free volume (ground truth) | %.1f m3 |" % summary["explorable_free_volume_m3"])
+    lines += [
+        "| objects found / ground truth (%s) | %d / %d |" % (", ".join(args.classes), len(objects), len(gt_objs)),
+        "| path length | %.1f m |" % mon.path_length_m,
+        "| collisions | %d |" % mon.collisions,
+        "", "## Objects found", "",
+        "| id | class | centroid (m) | voxels | observed from <= d_obj |", "|---|---|---|---|---|",
+    ]
+    for o in objects:
+        lines.append("| %d | %s | (%.2f, %.2f, %.2f) | %d | %.0f%% |" % (
+            o.id, o.class_name, o.centroid.x, o.centroid.y, o.centroid.z, o.voxel_count,
+            100.0 * o.observed_fraction))
+    lines += ["", "## Dropped input", ""]
+    for k, v in summary["dropped_input"].items():
+        lines.append("- %s: %d" % (k, v))
+    lines += ["", "## Files", ""]
+    for name, s in saved.items():
+        lines.append("- %s: %s" % (name, s["message"]))
+        lines += ["  - %s" % p for p in s["files"]]
+    lines.append("- ground truth: %s" % gt["gt_dir"])
+    with open(os.path.join(out, "report.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    return summary
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--mode", choices=["semantic", "classic"], default="semantic")
+    ap.add_argument("--scene", default="", help="scene file; default: generate a house")
+    ap.add_argument("--seed", type=int, default=0, help="generator seed")
+    ap.add_argument("--size", type=float, nargs=3, default=[15.0, 12.0, 3.0], metavar=("X", "Y", "H"))
+    ap.add_argument("--classes", nargs="+", default=["chair"], help="classes of interest")
+    ap.add_argument("--out", default=os.path.join("results", "run-" + time.strftime("%Y%m%d-%H%M%S")))
+    ap.add_argument("--wall-limit-s", type=float, default=840.0, help="stop after this wall time, s")
+    ap.add_argument("--sim-limit-s", type=float, default=600.0, help="stop after this sim time, s")
+    ap.add_argument("--real-time-factor", type=float, default=0.0, help="0 = as fast as lockstep allows")
+    ap.add_argument("--no-lockstep", action="store_true")
+    ap.add_argument("--rviz", action="store_true")
+    ap.add_argument("--progress-period-s", type=float, default=10.0)
+    args = ap.parse_args(argv)
+
+    out = os.path.abspath(args.out)
+    os.makedirs(out, exist_ok=True)
+    t0 = time.time()
+    print("[mission] preparing the scene and its ground truth in %s" % out, flush=True)
+    ply, gt = prepare_scene(args, out)
+    overrides = os.path.join(out, "overrides.yaml")
+    write_overrides(overrides, gt, args.classes)
+    print("[mission] scene %s: %d objects, %d of interest" % (
+        gt["scene"], len(gt["objects"]), sum(o["class"] in args.classes for o in gt["objects"])), flush=True)
+
+    port = _free_port()
+    env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOSTNAME="127.0.0.1")
+    env.setdefault("ROS_HOME", os.path.join(out, "ros_home"))
+    os.environ.update(ROS_MASTER_URI=env["ROS_MASTER_URI"], ROS_HOSTNAME="127.0.0.1", ROS_HOME=env["ROS_HOME"])
+    cmd = ["roslaunch", "-p", str(port), "semantic_exploration", "sim.launch",
+           "mode:=" + args.mode, "scene:=" + ply, "overrides:=" + overrides,
+           "classes_of_interest:=[%s]" % ", ".join(args.classes),
+           "lockstep:=" + ("false" if args.no_lockstep else "true"),
+           "real_time_factor:=%g" % args.real_time_factor, "rviz:=" + ("true" if args.rviz else "false"),
+           "output:=log"]
+    log_path = os.path.join(out, "roslaunch.log")
+    print("[mission] %s  (log: %s)" % (" ".join(cmd), log_path), flush=True)
+    log = open(log_path, "w")
+    launch = subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+
+    reason = "wall_time_limit"
+    saved = {}
+    try:
+        import rospy
+        deadline = time.time() + 60.0
+        while True:  # wait for the master that roslaunch starts
+            try:
+                import rosgraph
+                if rosgraph.is_master_online():
+                    break
+            except Exception:
+                pass
+            if launch.poll() is not None or time.time() > deadline:
+                raise RuntimeError("roslaunch did not come up (see %s)" % log_path)
+            time.sleep(0.5)
+        rospy.init_node("mission", anonymous=True, disable_signals=True)
+        mon = Monitor()
+        n_gt = sum(o["class"] in args.classes for o in gt["objects"])
+        next_print = 0.0
+        while True:
+            wall = time.time() - t0
+            sim = rospy.get_time()
+            if time.time() >= next_print:
+                print(mon.line(sim, wall, n_gt), flush=True)
+                next_print = time.time() + args.progress_period_s
+            if mon.finished():
+                reason = mon.status.termination_reason or "finished"
+                break
+            if launch.poll() is not None:
+                reason = "a node died (see %s)" % log_path
+                break
+            if wall > args.wall_limit_s:
+                reason = "wall_time_limit"
+                break
+            if sim > args.sim_limit_s:
+                reason = "sim_time_limit"
+                break
+            time.sleep(0.5)
+        print(mon.line(rospy.get_time(), time.time() - t0, n_gt), flush=True)
+        print("[mission] stopping: %s; saving maps" % reason, flush=True)
+        saved["background_map"] = call_save("/background_map/save", os.path.join(out, "map"))
+        saved["object_map"] = call_save("/object_map/save", os.path.join(out, "objects"))
+        summary = write_report(out, args, gt, mon, saved, rospy.get_time(), time.time() - t0, reason)
+    finally:
+        if launch.poll() is None:
+            os.killpg(launch.pid, signal.SIGINT)
+            try:
+                launch.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                os.killpg(launch.pid, signal.SIGKILL)
+        log.close()
+    print("[mission] report: %s" % os.path.join(out, "report.md"))
+    print("[mission] summary: %s" % os.path.join(out, "summary.json"))
+    print("[mission] %s: %d of %d objects found, explored %.1f m3, %d collisions, %.0f s wall" % (
+        summary["termination_reason"], summary["objects_found"], summary["ground_truth_objects"],
+        summary["explored_volume_m3"], summary["collisions"], summary["wall_time_s"]))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
