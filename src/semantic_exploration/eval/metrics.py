@@ -1,0 +1,136 @@
+"""Reconstruction metrics of the paper's Section V-B, against ground truth.
+
+Ground truth is what the simulator exports (`objects.json`, one PLY per
+object, `background.ply`); a reconstruction is what `object_map/save` writes
+(`objects.json` index + one PLY mesh per object) and the background map's
+occupied voxel centres.
+
+Distances to a ground-truth surface are measured to a dense, seeded sample of
+that surface (spacing `sample_spacing_m`, default 5 mm) through a k-d tree,
+so a distance is over-estimated by at most about half the spacing.
+"""
+import json
+import os
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+COMPLETENESS_THRESHOLD_M = 0.05  # "within 5 cm" (paper Section V-B)
+
+
+def read_ply_vertices(path: str) -> np.ndarray:
+    """Vertex positions (N x 3, float64) of a PLY file (ASCII or binary)."""
+    import trimesh
+    mesh = trimesh.load(path, process=False, force="mesh")
+    return np.asarray(mesh.vertices, dtype=np.float64).reshape(-1, 3)
+
+
+def sample_surface(path: str, spacing_m: float, seed: int = 0) -> np.ndarray:
+    """Seeded uniform samples of a mesh surface, about one per spacing_m^2,
+    plus the mesh's vertices (so thin parts are never missed)."""
+    import trimesh
+    mesh = trimesh.load(path, process=False, force="mesh")
+    if len(mesh.faces) == 0:
+        return np.asarray(mesh.vertices, dtype=np.float64).reshape(-1, 3)
+    count = max(1, int(np.ceil(mesh.area / (spacing_m * spacing_m))))
+    pts, _ = trimesh.sample.sample_surface(mesh, count, seed=seed)
+    return np.vstack([np.asarray(pts, np.float64), np.asarray(mesh.vertices, np.float64)])
+
+
+@dataclass
+class SurfaceScore:
+    """Accuracy (RMSE of reconstructed points to the true surface, m) and
+    completeness (fraction of true surface samples with a reconstructed point
+    within the threshold)."""
+    rmse_m: float
+    completeness: float
+    n_reconstructed: int
+    n_ground_truth: int
+
+
+def score_surface(reconstructed: np.ndarray, truth_samples: np.ndarray,
+                  threshold_m: float = COMPLETENESS_THRESHOLD_M,
+                  truth_tree: Optional[cKDTree] = None) -> SurfaceScore:
+    if len(truth_samples) == 0:
+        raise ValueError("empty ground-truth surface")
+    if len(reconstructed) == 0:
+        return SurfaceScore(float("nan"), 0.0, 0, len(truth_samples))
+    tree = truth_tree if truth_tree is not None else cKDTree(truth_samples)
+    d_rec, _ = tree.query(reconstructed)
+    d_gt, _ = cKDTree(reconstructed).query(truth_samples, distance_upper_bound=threshold_m)
+    return SurfaceScore(float(np.sqrt(np.mean(d_rec ** 2))), float(np.mean(np.isfinite(d_gt))),
+                        len(reconstructed), len(truth_samples))
+
+
+@dataclass
+class ObjectMatch:
+    map_id: int
+    map_class: str
+    gt_id: Optional[int]        # None: lies on no ground-truth object of its class
+    on_surface_fraction: float  # fraction of its vertices within the threshold of gt_id's surface
+    score: Optional[SurfaceScore] = None
+
+
+@dataclass
+class ObjectEvaluation:
+    matches: List[ObjectMatch] = field(default_factory=list)
+    n_ground_truth: int = 0
+    found_gt_ids: List[int] = field(default_factory=list)
+
+    @property
+    def found_fraction(self) -> float:
+        return len(self.found_gt_ids) / self.n_ground_truth if self.n_ground_truth else float("nan")
+
+
+def load_ground_truth(gt_dir: str) -> Dict:
+    with open(os.path.join(gt_dir, "objects.json")) as f:
+        doc = json.load(f)
+    doc["dir"] = gt_dir
+    return doc
+
+
+def load_reconstruction(obj_dir: str) -> Dict:
+    with open(os.path.join(obj_dir, "objects.json")) as f:
+        doc = json.load(f)
+    doc["dir"] = obj_dir
+    return doc
+
+
+def evaluate_objects(gt: Dict, rec: Dict, classes: List[str], spacing_m: float = 0.005,
+                     threshold_m: float = COMPLETENESS_THRESHOLD_M, seed: int = 0) -> ObjectEvaluation:
+    """Matches each reconstructed object to the ground-truth object of its
+    class that most of its vertices lie on (within threshold_m; more than half
+    of them), then scores accuracy and completeness of each match. A
+    ground-truth object counts as found once any map object matches it."""
+    gt_objs = [o for o in gt["objects"] if o["class"] in classes]
+    samples = {o["id"]: sample_surface(os.path.join(gt["dir"], o["mesh"]), spacing_m, seed) for o in gt_objs}
+    trees = {k: cKDTree(v) for k, v in samples.items()}
+    ev = ObjectEvaluation(n_ground_truth=len(gt_objs))
+    found = set()
+    for o in rec.get("objects", []):
+        verts = read_ply_vertices(os.path.join(rec["dir"], o["mesh"]))
+        best, best_frac = None, 0.0
+        for g in gt_objs:
+            if g["class"] != o["class_name"] or len(verts) == 0:
+                continue
+            d, _ = trees[g["id"]].query(verts, distance_upper_bound=threshold_m)
+            frac = float(np.mean(np.isfinite(d)))
+            if frac > best_frac:
+                best, best_frac = g["id"], frac
+        m = ObjectMatch(o["id"], o["class_name"], best if best_frac > 0.5 else None, best_frac)
+        if m.gt_id is not None:
+            m.score = score_surface(verts, samples[m.gt_id], threshold_m, trees[m.gt_id])
+            found.add(m.gt_id)
+        ev.matches.append(m)
+    ev.found_gt_ids = sorted(found)
+    return ev
+
+
+def evaluate_background(gt: Dict, occupied_points: np.ndarray, spacing_m: float = 0.01,
+                        threshold_m: float = COMPLETENESS_THRESHOLD_M, seed: int = 0) -> SurfaceScore:
+    """Accuracy and completeness of the background map's occupied voxel
+    centres against the ground-truth background mesh."""
+    truth = sample_surface(os.path.join(gt["dir"], gt["background_mesh"]), spacing_m, seed)
+    return score_surface(occupied_points, truth, threshold_m)
