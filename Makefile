@@ -3,11 +3,12 @@
 #   make run     one simulated semantic exploration, writes a report to results/
 #   make test    every test (gtest, pytest, rostest); ends with "N passed, N failed, N skipped"
 #   make bench   every benchmark; JSON lines under results/bench/
+#   make experiments  N runs x {classic, semantic} x scenes -> plots and report (long)
 #   make build   build only (BUILD_TYPE=Debug for a debug build)
 BUILD_TYPE ?= Release
 export BUILD_TYPE
 
-.PHONY: run test bench build setup clean
+.PHONY: run test bench experiments build setup clean
 
 run:
 	bash scripts/run_exploration.sh $(ARGS)
@@ -26,3 +27,6 @@ setup:
 
 clean:
 	rm -rf .colcon
+
+experiments:
+	bash scripts/run_exploration.sh --experiments $(ARGS)

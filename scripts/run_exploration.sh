@@ -4,6 +4,7 @@
 # progress; writes report.md, summary.json, maps and meshes under results/.
 # Extra arguments go to scripts/run_mission.py (see --help there), e.g.
 #   make run ARGS="--mode classic --seed 3"
+# With --experiments first, runs scripts/run_experiments.py instead (make experiments).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$ROOT/scripts/setup.sh"
@@ -18,4 +19,8 @@ set +u
 set -u
 export SEMEXP_VENV="${SEMEXP_VENV:-$ROOT/.venv}"
 cd "$ROOT"
+if [ "${1:-}" = "--experiments" ]; then
+  shift
+  exec "$SEMEXP_VENV/bin/python" "$ROOT/scripts/run_experiments.py" --out "$ROOT/results/experiments" "$@"
+fi
 exec "$SEMEXP_VENV/bin/python" "$ROOT/scripts/run_mission.py" --out "$ROOT/results/run-$(date +%Y%m%d-%H%M%S)" "$@"

@@ -12,6 +12,7 @@ Example:
   run_mission.py --scene my_scene_semantic.ply --mode classic --wall-limit-s 300
 """
 import argparse
+import csv
 import json
 import math
 import os
@@ -98,6 +99,31 @@ class Monitor:
             self.path_length_m += math.dist(self._last_pos, (p.x, p.y, p.z))
         self._last_pos = (p.x, p.y, p.z)
 
+    def found_ground_truth(self, gt_objs, margin_m=0.1):
+        """Ground-truth ids whose box (grown by margin_m) holds a map object's
+        centroid of the same class: a cheap per-tick estimate; the final
+        figures come from the meshes (semantic_exploration.eval.metrics)."""
+        found = set()
+        for o in (self.objects.objects if self.objects else []):
+            c = (o.centroid.x, o.centroid.y, o.centroid.z)
+            for g in gt_objs:
+                if g["class"] == o.class_name and all(
+                        g["bbox_min"][i] - margin_m <= c[i] <= g["bbox_max"][i] + margin_m for i in range(3)):
+                    found.add(g["id"])
+        return found
+
+    def row(self, sim_s, wall_s, gt_objs):
+        st = self.stats
+        return {"wall_s": round(wall_s, 2), "sim_s": round(sim_s, 2),
+                "iteration": self.status.iteration if self.status else 0,
+                "explored_volume_m3": round(st.explored_volume_m3, 3) if st else 0.0,
+                "frontier_count": st.frontier_count if st else 0,
+                "objects_in_map": len(self.objects.objects) if self.objects else 0,
+                "ground_truth_found": len(self.found_ground_truth(gt_objs)),
+                "path_length_m": round(self.path_length_m, 3), "collisions": self.collisions,
+                "planning_time_s": round(self.status.planning_time_s, 4) if self.status else 0.0,
+                "integration_time_ms": round(st.integration_time_ms, 3) if st else 0.0}
+
     def finished(self):
         from semantic_exploration.msg import ExplorationStatus
         return self.status is not None and self.status.state == ExplorationStatus.STATE_FINISHED
@@ -124,6 +150,31 @@ def call_save(service, directory):
         return {"success": False, "message": "%s: %s" % (service, e), "files": []}
 
 
+def evaluate(out, gt, classes, saved):
+    """Final figures from the saved meshes and map (empty where a map was not saved)."""
+    from semantic_exploration.eval import metrics
+    res = {}
+    try:
+        rec_dir = os.path.join(out, "objects")
+        if saved.get("object_map", {}).get("success") and os.path.exists(os.path.join(rec_dir, "objects.json")):
+            ev = metrics.evaluate_objects(metrics.load_ground_truth(gt["gt_dir"]),
+                                          metrics.load_reconstruction(rec_dir), classes)
+            res["found"] = len(ev.found_gt_ids)
+            res["ground_truth"] = ev.n_ground_truth
+            res["objects"] = [{"map_id": m.map_id, "class": m.map_class, "gt_id": m.gt_id,
+                               "on_surface_fraction": m.on_surface_fraction,
+                               "rmse_m": m.score.rmse_m if m.score else None,
+                               "completeness": m.score.completeness if m.score else None} for m in ev.matches]
+        occ = [f for f in saved.get("background_map", {}).get("files", []) if f.endswith("occupied.ply")]
+        if occ:
+            b = metrics.evaluate_background(metrics.load_ground_truth(gt["gt_dir"]), metrics.read_ply_vertices(occ[0]))
+            res["background"] = {"rmse_m": b.rmse_m, "completeness": b.completeness,
+                                 "n_reconstructed": b.n_reconstructed}
+    except Exception as e:  # a failed evaluation must not lose the rest of the report
+        res["error"] = "%s: %s" % (type(e).__name__, e)
+    return res
+
+
 def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
     objects = mon.objects.objects if mon.objects else []
     classes = set(args.classes)
@@ -146,6 +197,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
     if os.path.exists(free):
         with open(free) as f:
             summary["explorable_free_volume_m3"] = json.load(f)["explorable_free_volume_m3"]
+    summary["evaluation"] = evaluate(out, gt, args.classes, saved)
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     lines = [
@@ -172,6 +224,24 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
         lines.append("| %d | %s | (%.2f, %.2f, %.2f) | %d | %.0f%% |" % (
             o.id, o.class_name, o.centroid.x, o.centroid.y, o.centroid.z, o.voxel_count,
             100.0 * o.observed_fraction))
+    ev = summary["evaluation"]
+    if ev.get("objects"):
+        lines += ["", "## Object reconstruction (against ground truth, 5 cm)", "",
+                  "found %d of %d ground-truth objects" % (ev["found"], ev["ground_truth"]), "",
+                  "| map id | class | ground-truth id | on its surface | accuracy RMSE | completeness |",
+                  "|---|---|---|---|---|---|"]
+        for m in ev["objects"]:
+            lines.append("| %d | %s | %s | %.0f%% | %s | %s |" % (
+                m["map_id"], m["class"], m["gt_id"] if m["gt_id"] is not None else "-",
+                100 * m["on_surface_fraction"],
+                "%.1f cm" % (100 * m["rmse_m"]) if m.get("rmse_m") is not None else "-",
+                "%.0f%%" % (100 * m["completeness"]) if m.get("completeness") is not None else "-"))
+    if ev.get("background"):
+        b = ev["background"]
+        lines += ["", "background: accuracy RMSE %.1f cm, completeness %.0f%% (%d occupied voxels)" % (
+            100 * b["rmse_m"], 100 * b["completeness"], b["n_reconstructed"])]
+    if ev.get("error"):
+        lines += ["", "evaluation: %s" % ev["error"]]
     lines += ["", "## Dropped input", ""]
     for k, v in summary["dropped_input"].items():
         lines.append("- %s: %d" % (k, v))
@@ -199,6 +269,7 @@ def main(argv=None):
     ap.add_argument("--no-lockstep", action="store_true")
     ap.add_argument("--rviz", action="store_true")
     ap.add_argument("--progress-period-s", type=float, default=10.0)
+    ap.add_argument("--extra-overrides", default="", help="YAML for the C++ nodes loaded after the scene's")
     args = ap.parse_args(argv)
 
     out = os.path.abspath(args.out)
@@ -208,6 +279,9 @@ def main(argv=None):
     ply, gt = prepare_scene(args, out)
     overrides = os.path.join(out, "overrides.yaml")
     write_overrides(overrides, gt, args.classes)
+    if args.extra_overrides:
+        with open(args.extra_overrides) as f, open(overrides, "a") as o:
+            o.write(f.read())
     print("[mission] scene %s: %d objects, %d of interest" % (
         gt["scene"], len(gt["objects"]), sum(o["class"] in args.classes for o in gt["objects"])), flush=True)
 
@@ -243,11 +317,22 @@ def main(argv=None):
             time.sleep(0.5)
         rospy.init_node("mission", anonymous=True, disable_signals=True)
         mon = Monitor()
-        n_gt = sum(o["class"] in args.classes for o in gt["objects"])
-        next_print = 0.0
+        gt_objs = [o for o in gt["objects"] if o["class"] in args.classes]
+        n_gt = len(gt_objs)
+        series = open(os.path.join(out, "timeseries.csv"), "w")
+        writer = None
+        next_print = next_row = 0.0
         while True:
             wall = time.time() - t0
             sim = rospy.get_time()
+            if time.time() >= next_row:
+                row = mon.row(sim, wall, gt_objs)
+                if writer is None:
+                    writer = csv.DictWriter(series, fieldnames=list(row))
+                    writer.writeheader()
+                writer.writerow(row)
+                series.flush()
+                next_row = time.time() + 1.0
             if time.time() >= next_print:
                 print(mon.line(sim, wall, n_gt), flush=True)
                 next_print = time.time() + args.progress_period_s
@@ -265,6 +350,9 @@ def main(argv=None):
                 break
             time.sleep(0.5)
         print(mon.line(rospy.get_time(), time.time() - t0, n_gt), flush=True)
+        if writer is not None:
+            writer.writerow(mon.row(rospy.get_time(), time.time() - t0, gt_objs))
+        series.close()
         print("[mission] stopping: %s; saving maps" % reason, flush=True)
         saved["background_map"] = call_save("/background_map/save", os.path.join(out, "map"))
         saved["object_map"] = call_save("/object_map/save", os.path.join(out, "objects"))

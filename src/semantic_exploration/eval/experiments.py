@@ -1,0 +1,127 @@
+"""Aggregation of many runs into the paper's Figures 5-8 style curves.
+
+Each run directory holds `timeseries.csv` (written by run_mission.py once a
+second: sim time, explored volume, objects found, ...) and `summary.json`.
+Curves are resampled on a common sim-time grid; a run that ended earlier
+keeps its last value (it has stopped exploring). Across runs of one mode we
+report the median and the 10th/90th percentiles.
+"""
+import csv
+import json
+import os
+from typing import Dict, List, Sequence
+
+import numpy as np
+
+CURVES = {  # column of timeseries.csv -> (label, unit)
+    "explored_volume_m3": ("explored volume", "m^3"),
+    "found_percent": ("ground-truth objects found", "%"),
+    "path_length_m": ("path length", "m"),
+}
+
+
+def read_run(run_dir: str) -> Dict:
+    with open(os.path.join(run_dir, "timeseries.csv")) as f:
+        rows = list(csv.DictReader(f))
+    with open(os.path.join(run_dir, "summary.json")) as f:
+        summary = json.load(f)
+    t = np.array([float(r["sim_s"]) for r in rows])
+    n_gt = max(1, int(summary.get("ground_truth_objects", 0)))
+    series = {
+        "explored_volume_m3": np.array([float(r["explored_volume_m3"]) for r in rows]),
+        "found_percent": 100.0 * np.array([float(r["ground_truth_found"]) for r in rows]) / n_gt,
+        "path_length_m": np.array([float(r["path_length_m"]) for r in rows]),
+    }
+    order = np.argsort(t, kind="stable")
+    return {"dir": run_dir, "t": t[order], "series": {k: v[order] for k, v in series.items()}, "summary": summary}
+
+
+def resample(t: np.ndarray, y: np.ndarray, grid: np.ndarray) -> np.ndarray:
+    """Step-wise value of y at each grid time (last sample at or before it; 0 before the first)."""
+    if len(t) == 0:
+        return np.zeros_like(grid)
+    idx = np.searchsorted(t, grid, side="right") - 1
+    out = np.where(idx >= 0, y[np.clip(idx, 0, len(y) - 1)], 0.0)
+    return out.astype(float)
+
+
+def aggregate(runs: Sequence[Dict], grid: np.ndarray) -> Dict[str, Dict[str, np.ndarray]]:
+    """Per curve: median, p10, p90 over runs on the grid."""
+    out = {}
+    for key in CURVES:
+        stack = np.stack([resample(r["t"], r["series"][key], grid) for r in runs])
+        out[key] = {"median": np.median(stack, 0), "p10": np.percentile(stack, 10, 0),
+                    "p90": np.percentile(stack, 90, 0)}
+    return out
+
+
+def time_to_reach(t: np.ndarray, y: np.ndarray, level: float) -> float:
+    """First sim time at which y >= level (inf if never)."""
+    hit = np.nonzero(y >= level - 1e-9)[0]
+    return float(t[hit[0]]) if len(hit) else float("inf")
+
+
+def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: float = 5.0) -> Dict:
+    """CSV of the aggregated curves, one PNG per curve, and report.md."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    os.makedirs(out_dir, exist_ok=True)
+    t_end = max(float(r["t"][-1]) for runs in by_mode.values() for r in runs if len(r["t"]))
+    grid = np.arange(0.0, t_end + grid_step_s, grid_step_s)
+    agg = {mode: aggregate(runs, grid) for mode, runs in by_mode.items()}
+
+    with open(os.path.join(out_dir, "curves.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["mode", "curve", "sim_s", "median", "p10", "p90"])
+        for mode, curves in agg.items():
+            for key, c in curves.items():
+                for i, t in enumerate(grid):
+                    w.writerow([mode, key, "%.1f" % t, "%.4f" % c["median"][i], "%.4f" % c["p10"][i],
+                                "%.4f" % c["p90"][i]])
+    plots = []
+    for key, (label, unit) in CURVES.items():
+        fig, ax = plt.subplots(figsize=(6, 4))
+        for mode, curves in agg.items():
+            c = curves[key]
+            line, = ax.plot(grid, c["median"], label="%s (median)" % mode)
+            ax.fill_between(grid, c["p10"], c["p90"], color=line.get_color(), alpha=0.2,
+                            label="%s (10th-90th percentile)" % mode)
+        ax.set_xlabel("sim time (s)")
+        ax.set_ylabel("%s (%s)" % (label, unit))
+        ax.grid(True, alpha=0.3)
+        ax.legend()
+        fig.tight_layout()
+        path = os.path.join(out_dir, "%s.png" % key)
+        fig.savefig(path, dpi=100)
+        plt.close(fig)
+        plots.append(path)
+
+    rows = []
+    for mode, runs in by_mode.items():
+        final_found = [r["series"]["found_percent"][-1] for r in runs]
+        final_vol = [r["series"]["explored_volume_m3"][-1] for r in runs]
+        t100 = [time_to_reach(r["t"], r["series"]["found_percent"], 100.0) for r in runs]
+        reasons = sorted(set(r["summary"].get("termination_reason", "?") for r in runs))
+        rows.append({"mode": mode, "runs": len(runs), "found_percent_median": float(np.median(final_found)),
+                     "explored_m3_median": float(np.median(final_vol)),
+                     "time_to_all_found_s_median": float(np.median(t100)),
+                     "collisions": int(sum(r["summary"].get("collisions", 0) for r in runs)),
+                     "termination": ", ".join(reasons)})
+    lines = ["# Experiment report", "",
+             "Median over runs; curves show the median and the 10th-90th percentile band.", "",
+             "| mode | runs | objects found (final, median) | explored volume (final, median) | "
+             "time to find all (median) | collisions | termination |", "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append("| %s | %d | %.0f%% | %.1f m3 | %s | %d | %s |" % (
+            r["mode"], r["runs"], r["found_percent_median"], r["explored_m3_median"],
+            "%.0f s" % r["time_to_all_found_s_median"] if np.isfinite(r["time_to_all_found_s_median"]) else "never",
+            r["collisions"], r["termination"]))
+    lines += ["", "Figures: " + ", ".join("[%s](%s)" % (os.path.basename(p), os.path.basename(p)) for p in plots),
+              "", "Data: [curves.csv](curves.csv)", ""]
+    for mode, runs in by_mode.items():
+        lines.append("- %s runs: %s" % (mode, ", ".join(os.path.relpath(r["dir"], out_dir) for r in runs)))
+    with open(os.path.join(out_dir, "report.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    return {"rows": rows, "plots": plots}

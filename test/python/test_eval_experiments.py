@@ -1,0 +1,60 @@
+"""Aggregation of runs into median / percentile curves, with known answers."""
+import csv
+import json
+import os
+
+import numpy as np
+import pytest
+
+pytest.importorskip("matplotlib")
+from semantic_exploration.eval import experiments  # noqa: E402
+
+
+def make_run(d, times, explored, found, n_gt=4, reason="explored"):
+    os.makedirs(d)
+    with open(os.path.join(d, "timeseries.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["wall_s", "sim_s", "explored_volume_m3", "ground_truth_found", "path_length_m"])
+        for t, e, n in zip(times, explored, found):
+            w.writerow([t, t, e, n, t * 0.5])
+    with open(os.path.join(d, "summary.json"), "w") as f:
+        json.dump({"ground_truth_objects": n_gt, "termination_reason": reason, "collisions": 0}, f)
+    return experiments.read_run(d)
+
+
+def test_resample_is_stepwise_and_holds_the_last_value():
+    t = np.array([1.0, 3.0])
+    y = np.array([10.0, 30.0])
+    assert experiments.resample(t, y, np.array([0.0, 1.0, 2.0, 3.0, 9.0])).tolist() == [0, 10, 10, 30, 30]
+
+
+def test_median_and_percentiles_over_three_runs(tmp_path):
+    runs = [make_run(str(tmp_path / str(i)), [0, 10, 20], [0, v, 2 * v], [0, f, 4])
+            for i, (v, f) in enumerate([(10, 1), (20, 2), (30, 3)])]
+    agg = experiments.aggregate(runs, np.array([0.0, 10.0, 20.0]))
+    assert agg["explored_volume_m3"]["median"].tolist() == [0, 20, 40]
+    # numpy's linear percentile of (10, 20, 30): p10 = 12, p90 = 28
+    assert agg["explored_volume_m3"]["p10"][1] == pytest.approx(12.0)
+    assert agg["explored_volume_m3"]["p90"][1] == pytest.approx(28.0)
+    assert agg["found_percent"]["median"].tolist() == [0, 50, 100]
+
+
+def test_time_to_reach():
+    t = np.array([0.0, 5.0, 9.0])
+    assert experiments.time_to_reach(t, np.array([0, 50, 100.0]), 100) == 9.0
+    assert experiments.time_to_reach(t, np.array([0, 50, 75.0]), 100) == float("inf")
+
+
+def test_outputs_are_written(tmp_path):
+    a = [make_run(str(tmp_path / "a0"), [0, 10, 20], [0, 10, 20], [0, 2, 4])]
+    b = [make_run(str(tmp_path / "b0"), [0, 10, 30], [0, 5, 30], [0, 1, 2])]
+    res = experiments.write_outputs(str(tmp_path / "out"), {"semantic": a, "classic": b}, grid_step_s=10)
+    for name in ("report.md", "curves.csv", "explored_volume_m3.png", "found_percent.png"):
+        assert os.path.getsize(str(tmp_path / "out" / name)) > 0
+    rows = {r["mode"]: r for r in res["rows"]}
+    assert rows["semantic"]["found_percent_median"] == 100.0
+    assert rows["semantic"]["time_to_all_found_s_median"] == 20.0
+    assert rows["classic"]["found_percent_median"] == 50.0
+    report = open(str(tmp_path / "out" / "report.md")).read()
+    assert "| semantic | 1 | 100% | 20.0 m3 | 20 s |" in report
+    assert "| classic | 1 | 50% | 30.0 m3 | never |" in report
