@@ -10,12 +10,10 @@
 namespace semexp {
 
 namespace {
-constexpr std::uint8_t kDirty = 1, kFrontierCand = 2, kCoarseFrontier = 4;
 constexpr std::uint16_t kNoDist = 0xFFFF;
 
-inline std::uint16_t toMm(double d_m) {
-  const double mm = std::round(d_m * 1000.0);
-  return static_cast<std::uint16_t>(std::min(mm, 65534.0));
+inline std::uint16_t toMm(float d_m) {
+  return static_cast<std::uint16_t>(std::min(d_m * 1000.f + 0.5f, 65534.f));  // d_m >= 0
 }
 inline std::int16_t toFixed(double l) { return static_cast<std::int16_t>(std::lround(l * OccupancyMap::kScale)); }
 }  // namespace
@@ -97,6 +95,16 @@ int OccupancyMap::allocateBlock(int cell) {
     free_slots_.pop_back();
   } else {
     b = static_cast<int>(block_cell_.size());
+    if (block_cell_.size() == block_cell_.capacity()) {
+      // Grow by a quarter rather than doubling: the pools are most of the memory.
+      const std::size_t cap = block_cell_.capacity() + block_cell_.capacity() / 4 + 64;
+      block_cell_.reserve(cap);
+      block_l_.reserve(cap * bs3_);
+      block_dist_.reserve(cap * bs3_);
+      if (cfg_.integrate_colour) block_rgbw_.reserve(cap * 4 * bs3_);
+      block_front_.reserve(cap * fwords_);
+      block_hit_.reserve(cap * fwords_);
+    }
     block_cell_.push_back(-1);
     block_l_.resize(block_l_.size() + bs3_);
     block_dist_.resize(block_dist_.size() + bs3_);
@@ -119,6 +127,11 @@ int OccupancyMap::allocateBlock(int cell) {
 void OccupancyMap::releaseBlock(int cell) {
   const int b = cell_block_[cell];
   if (b < 0) return;
+  if (cell_flags_[cell] & kBlockFrontier) {
+    frontier_voxels_ -= static_cast<std::size_t>(blockFrontierBits(cell));
+    --frontier_block_count_;
+    cell_flags_[cell] &= static_cast<std::uint8_t>(~kBlockFrontier);
+  }
   block_cell_[b] = -1;
   free_slots_.push_back(b);
   cell_block_[cell] = -1;
@@ -365,7 +378,7 @@ void OccupancyMap::freeCell(FrameCtx& ctx, int cell) {
     }
     if (cfg_.integrate_min_distance) {
       const Eigen::Vector3d c = origin_ + (Eigen::Vector3d(bx, by, bz) * bs_ + Eigen::Vector3d::Constant(0.5 * bs_)) * res_;
-      cell_dist_[cell] = std::min(cell_dist_[cell], toMm((c - ctx.cam_W).norm()));
+      cell_dist_[cell] = std::min(cell_dist_[cell], toMm(static_cast<float>((c - ctx.cam_W).norm())));
     }
     return;
   }
@@ -385,7 +398,7 @@ void OccupancyMap::freeCell(FrameCtx& ctx, int cell) {
         }
         if (cfg_.integrate_min_distance) {
           const double d = (c0 + Eigen::Vector3d(x, y, z) * res_).norm();
-          D[i] = std::min(D[i], toMm(d));
+          D[i] = std::min(D[i], toMm(static_cast<float>(d)));
         }
       }
   if (changed && cell_stamp_[cell] != stamp_) {
@@ -510,7 +523,14 @@ void OccupancyMap::refreshSummaries(std::vector<int>& cells, bool track) {
   std::vector<int> cur;
   cur.reserve(cells.size());
   for (int c : cells) {
-    levels_[0].s[c] = cellSummary(c);
+    Summary sm = cellSummary(c);
+    if (cell_block_[c] >= 0 && !sm.unknown_any && sm.min_l == sm.max_l && sm.max_l < 0) {
+      // A block of equal free voxels is a uniform leaf again: give the memory back.
+      releaseBlock(c);
+      cell_value_[c] = sm.min_l;
+      cell_dist_[c] = kNoDist;
+    }
+    levels_[0].s[c] = sm;
     cur.push_back(c);
     if (!track) continue;
     if (!(cell_flags_[c] & kDirty)) {

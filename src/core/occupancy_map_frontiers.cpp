@@ -1,10 +1,10 @@
 // Background occupancy map: incrementally maintained frontiers (free leaves
 // with an unknown 6-neighbour, paper IV-A.1).
 //
-// Why re-checking only the previous frontiers plus the changed cells is exact:
-// voxels never become unknown again, so a voxel whose own cell did not change
-// can only lose frontier status (its unknown neighbour got observed), never
-// gain it; those are exactly the previous frontiers.
+// Why re-checking the changed cells plus the previous frontiers next to them
+// is exact: voxels never become unknown again, so a voxel whose own cell did
+// not change can only lose frontier status (its unknown neighbour, in an
+// adjacent changed cell, got observed), never gain it.
 #include <algorithm>
 
 #include "semantic_exploration/core/occupancy_map.hpp"
@@ -12,7 +12,6 @@
 namespace semexp {
 
 namespace {
-constexpr std::uint8_t kFrontierCand = 2, kCoarseFrontier = 4;
 
 inline int popcount64(std::uint64_t x) { return __builtin_popcountll(x); }
 }  // namespace
@@ -113,52 +112,109 @@ std::int16_t OccupancyMap::voxelValueOrKnown(int x, int y, int z) const {
   return voxelValue(x, y, z);
 }
 
-void OccupancyMap::updateFrontiers() {
-  std::vector<int> blocks;
-  blocks.reserve(frontier_blocks_.size() + frontier_cand_.size());
-  // Previous frontier blocks whose cell did not change: only their set bits can change (to 0).
-  for (int cell : frontier_blocks_) {
-    if ((cell_flags_[cell] & kFrontierCand) || cell_block_[cell] < 0) continue;
-    recheckBlockFrontiers(cell, false);
-    blocks.push_back(cell);
-  }
-  std::vector<int> coarse;
-  for (int cell : frontier_cells_) {
-    cell_flags_[cell] &= static_cast<std::uint8_t>(~kCoarseFrontier);
-    if (!(cell_flags_[cell] & kFrontierCand)) coarse.push_back(cell);
-  }
-  for (int cell : frontier_cand_) {
-    cell_flags_[cell] &= static_cast<std::uint8_t>(~kFrontierCand);
-    if (cell_block_[cell] >= 0) {
-      recheckBlockFrontiers(cell, true);
-      blocks.push_back(cell);
-    } else {
-      coarse.push_back(cell);
+int OccupancyMap::blockFrontierBits(int cell) const {
+  const std::uint64_t* F = block_front_.data() + static_cast<std::size_t>(cell_block_[cell]) * fwords_;
+  int n = 0;
+  for (int w = 0; w < fwords_; ++w) n += popcount64(F[w]);
+  return n;
+}
+
+void OccupancyMap::checkFrontierCell(int cell, bool full) {
+  std::uint8_t& fl = cell_flags_[cell];
+  if (cell_block_[cell] >= 0) {
+    if (fl & kCoarseFrontier) {  // refined into a block since
+      fl &= static_cast<std::uint8_t>(~kCoarseFrontier);
+      --frontier_cell_count_;
     }
+    const bool had = fl & kBlockFrontier;
+    const int before = had ? blockFrontierBits(cell) : 0;
+    if (!had && !full) return;
+    recheckBlockFrontiers(cell, full);
+    const int after = blockFrontierBits(cell);
+    frontier_voxels_ = frontier_voxels_ - before + after;
+    if (after > 0 && !had) {
+      fl |= kBlockFrontier;
+      ++frontier_block_count_;
+      if (!(fl & kListedBlock)) {
+        fl |= kListedBlock;
+        frontier_blocks_.push_back(cell);
+      }
+    } else if (after == 0 && had) {
+      fl &= static_cast<std::uint8_t>(~kBlockFrontier);
+      --frontier_block_count_;
+    }
+    return;
   }
-  frontier_cand_.clear();
-  frontier_blocks_.clear();
-  frontier_voxels_ = 0;
-  for (int cell : blocks) {
-    const std::uint64_t* F = block_front_.data() + static_cast<std::size_t>(cell_block_[cell]) * fwords_;
-    int n = 0;
-    for (int w = 0; w < fwords_; ++w) n += popcount64(F[w]);
-    if (n == 0) continue;
-    frontier_voxels_ += n;
-    frontier_blocks_.push_back(cell);
-  }
-  frontier_cells_.clear();
-  for (int cell : coarse) {
-    if ((cell_flags_[cell] & kCoarseFrontier) || !cellIsFrontier(cell)) continue;
-    cell_flags_[cell] |= kCoarseFrontier;
-    frontier_cells_.push_back(cell);
+  const bool was = fl & kCoarseFrontier;
+  const bool is = cellIsFrontier(cell);
+  if (is && !was) {
+    fl |= kCoarseFrontier;
+    ++frontier_cell_count_;
+    if (!(fl & kListedCell)) {
+      fl |= kListedCell;
+      frontier_cells_.push_back(cell);
+    }
+  } else if (!is && was) {
+    fl &= static_cast<std::uint8_t>(~kCoarseFrontier);
+    --frontier_cell_count_;
   }
 }
 
-std::size_t OccupancyMap::frontierCount() const { return frontier_voxels_ + frontier_cells_.size(); }
+void OccupancyMap::updateFrontiers() {
+  // A voxel's frontier status depends on itself and its 6 neighbours only, so
+  // besides the changed cells just the frontier-holding cells face-adjacent to
+  // them can change (and only by losing frontiers): cost follows the update,
+  // not the size of the frontier set.
+  for (int c : frontier_cand_) cell_flags_[c] |= kVisited;
+  for (int c : frontier_cand_) checkFrontierCell(c, true);
+  std::vector<int> extra;
+  for (int c : frontier_cand_) {
+    const int bz = c / (nb_.x() * nb_.y()), by = (c / nb_.x()) % nb_.y(), bx = c % nb_.x();
+    for (int axis = 0; axis < 3; ++axis)
+      for (int sgn = -1; sgn <= 1; sgn += 2) {
+        Eigen::Vector3i n(bx, by, bz);
+        n[axis] += sgn;
+        if (n[axis] < 0 || n[axis] >= nb_[axis]) continue;
+        const int nc = cellIndex(n.x(), n.y(), n.z());
+        std::uint8_t& fl = cell_flags_[nc];
+        if ((fl & kVisited) || !(fl & (kBlockFrontier | kCoarseFrontier))) continue;
+        fl |= kVisited;
+        extra.push_back(nc);
+        checkFrontierCell(nc, false);
+      }
+  }
+  const std::uint8_t clear = static_cast<std::uint8_t>(~(kVisited | kFrontierCand));
+  for (int c : frontier_cand_) cell_flags_[c] &= clear;
+  for (int c : extra) cell_flags_[c] &= clear;
+  frontier_cand_.clear();
+  // Drop stale list entries once they dominate.
+  if (frontier_blocks_.size() > 2 * frontier_block_count_ + 256) {
+    std::size_t k = 0;
+    for (int c : frontier_blocks_) {
+      if (cell_flags_[c] & kBlockFrontier)
+        frontier_blocks_[k++] = c;
+      else
+        cell_flags_[c] &= static_cast<std::uint8_t>(~kListedBlock);
+    }
+    frontier_blocks_.resize(k);
+  }
+  if (frontier_cells_.size() > 2 * frontier_cell_count_ + 256) {
+    std::size_t k = 0;
+    for (int c : frontier_cells_) {
+      if (cell_flags_[c] & kCoarseFrontier)
+        frontier_cells_[k++] = c;
+      else
+        cell_flags_[c] &= static_cast<std::uint8_t>(~kListedCell);
+    }
+    frontier_cells_.resize(k);
+  }
+}
+
+std::size_t OccupancyMap::frontierCount() const { return frontier_voxels_ + frontier_cell_count_; }
 
 void OccupancyMap::forEachFrontier(const std::function<void(const Eigen::Vector3d&, double)>& f) const {
   for (int cell : frontier_blocks_) {
+    if (!(cell_flags_[cell] & kBlockFrontier)) continue;
     const int bz = cell / (nb_.x() * nb_.y()), by = (cell / nb_.x()) % nb_.y(), bx = cell % nb_.x();
     const std::uint64_t* F = block_front_.data() + static_cast<std::size_t>(cell_block_[cell]) * fwords_;
     for (int w = 0; w < fwords_; ++w) {
@@ -173,6 +229,7 @@ void OccupancyMap::forEachFrontier(const std::function<void(const Eigen::Vector3
     }
   }
   for (int cell : frontier_cells_) {
+    if (!(cell_flags_[cell] & kCoarseFrontier)) continue;
     const int bz = cell / (nb_.x() * nb_.y()), by = (cell / nb_.x()) % nb_.y(), bx = cell % nb_.x();
     f(origin_ + (Eigen::Vector3d(bx, by, bz) * bs_ + Eigen::Vector3d::Constant(0.5 * bs_)) * res_, bs_ * res_);
   }

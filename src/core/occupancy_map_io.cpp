@@ -12,7 +12,6 @@
 namespace semexp {
 
 namespace {
-constexpr std::uint8_t kDirty = 1, kCoarseFrontier = 4;
 constexpr std::uint16_t kNoDist = 0xFFFF;
 constexpr char kMagic[8] = {'S', 'E', 'M', 'E', 'X', 'P', 'O', 'M'};
 constexpr std::uint32_t kVersion = 1;
@@ -122,6 +121,7 @@ void OccupancyMap::clearAll() {
   frontier_blocks_.clear();
   frontier_cells_.clear();
   frontier_voxels_ = 0;
+  frontier_block_count_ = frontier_cell_count_ = 0;
   initGeometry();
 }
 
@@ -191,10 +191,15 @@ void OccupancyMap::save(const std::string& path) const {
     if (cfg_.integrate_colour) putVec(f, block_rgbw_.data() + 4 * o, 4 * bs3_);
     putVec(f, block_front_.data() + static_cast<std::size_t>(b) * fwords_, fwords_);
   }
-  put(f, static_cast<std::uint64_t>(frontier_blocks_.size()));
-  putVec(f, frontier_blocks_.data(), frontier_blocks_.size());
-  put(f, static_cast<std::uint64_t>(frontier_cells_.size()));
-  putVec(f, frontier_cells_.data(), frontier_cells_.size());
+  std::vector<int> fb, fc;  // live entries, in list order
+  for (int c : frontier_blocks_)
+    if (cell_flags_[c] & kBlockFrontier) fb.push_back(c);
+  for (int c : frontier_cells_)
+    if (cell_flags_[c] & kCoarseFrontier) fc.push_back(c);
+  put(f, static_cast<std::uint64_t>(fb.size()));
+  putVec(f, fb.data(), fb.size());
+  put(f, static_cast<std::uint64_t>(fc.size()));
+  putVec(f, fc.data(), fc.size());
   if (!f) throw std::runtime_error("error writing " + path);
 }
 
@@ -243,12 +248,17 @@ OccupancyMap OccupancyMap::load(const std::string& path) {
   getVec(f, m.frontier_blocks_.data(), m.frontier_blocks_.size());
   m.frontier_cells_.resize(get<std::uint64_t>(f));
   getVec(f, m.frontier_cells_.data(), m.frontier_cells_.size());
-  for (int c : m.frontier_cells_) m.cell_flags_.at(c) |= kCoarseFrontier;
+  for (int c : m.frontier_cells_) {
+    if (m.cell_block_.at(c) >= 0) throw std::runtime_error(path + ": corrupt frontier table");
+    m.cell_flags_[c] |= kCoarseFrontier | kListedCell;
+  }
+  m.frontier_cell_count_ = m.frontier_cells_.size();
   for (int c : m.frontier_blocks_) {
     if (m.cell_block_.at(c) < 0) throw std::runtime_error(path + ": corrupt frontier table");
-    const std::uint64_t* F = m.block_front_.data() + static_cast<std::size_t>(m.cell_block_[c]) * m.fwords_;
-    for (int w = 0; w < m.fwords_; ++w) m.frontier_voxels_ += __builtin_popcountll(F[w]);
+    m.cell_flags_[c] |= kBlockFrontier | kListedBlock;
+    m.frontier_voxels_ += static_cast<std::size_t>(m.blockFrontierBits(c));
   }
+  m.frontier_block_count_ = m.frontier_blocks_.size();
   return m;
 }
 

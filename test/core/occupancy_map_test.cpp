@@ -290,13 +290,18 @@ TEST(OccupancyMap, FrontierAppearsAndDisappears) {
   map.forEachFrontier([&](const Eigen::Vector3d& q, double size) {
     ASSERT_EQ(map.state(q), VoxelState::kFree);
     bool unk = false;
+    const int k = static_cast<int>(std::lround(size / r));  // voxels per edge of the leaf
     for (int a = 0; a < 3; ++a)
-      for (int s = -1; s <= 1; s += 2) {
-        Eigen::Vector3d n = q;
-        n[a] += s * 0.5 * (size + r);
-        unk = unk || map.state(n) == VoxelState::kUnknown;
-      }
-    EXPECT_TRUE(unk);
+      for (int s = -1; s <= 1; s += 2)
+        for (int i = 0; i < k; ++i)
+          for (int j = 0; j < k; ++j) {  // every voxel just across this face
+            Eigen::Vector3d n = q;
+            n[a] += s * 0.5 * (size + r);
+            n[(a + 1) % 3] += (i - 0.5 * (k - 1)) * r;
+            n[(a + 2) % 3] += (j - 0.5 * (k - 1)) * r;
+            unk = unk || map.state(n) == VoxelState::kUnknown;
+          }
+    EXPECT_TRUE(unk) << q.transpose() << " size " << size;
   });
 }
 
@@ -355,4 +360,60 @@ TEST(OccupancyMap, SaveLoadRoundTripIsBitIdentical) {
   std::remove(p1.c_str());
   std::remove(p2.c_str());
   std::remove(bt.c_str());
+}
+
+TEST(OccupancyMap, IncrementalFrontiersEqualABruteForceScan) {
+  BackgroundMapConfig cfg;
+  PinholeCamera cam;
+  const BoxRoom scene = semexp_test::standardRoom();
+  Bounds b;
+  b.min_m = scene.room.lo - Eigen::Vector3d::Constant(0.2);
+  b.max_m = scene.room.hi + Eigen::Vector3d::Constant(0.2);
+  OccupancyMap map(cfg, b);
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Isometry3d T = lookPose({-1.5 + 0.4 * i, 0.3 * std::sin(i), 1.0 + 0.1 * i}, 0.8 * i, 0.1 * (i % 3));
+    map.integrate(scene.render(cam, T).data(), nullptr, cam, T);
+    map.updateFrontiers();
+  }
+  const double r = cfg.resolution_m;
+  const Eigen::Vector3d lo = map.extentMin();
+  const Eigen::Vector3i n = ((map.extentMax() - lo) / r).array().round().cast<int>();
+  auto st = [&](int x, int y, int z) {
+    if (x < 0 || y < 0 || z < 0 || x >= n.x() || y >= n.y() || z >= n.z()) return VoxelState::kFree;  // outside: not unknown
+    return map.state(lo + (Eigen::Vector3d(x, y, z) + Eigen::Vector3d::Constant(0.5)) * r);
+  };
+  // Voxel-level truth.
+  std::vector<std::uint8_t> truth(static_cast<std::size_t>(n.prod()), 0);
+  std::size_t n_truth = 0;
+  for (int z = 0; z < n.z(); ++z)
+    for (int y = 0; y < n.y(); ++y)
+      for (int x = 0; x < n.x(); ++x) {
+        if (st(x, y, z) != VoxelState::kFree) continue;
+        const bool f = st(x + 1, y, z) == VoxelState::kUnknown || st(x - 1, y, z) == VoxelState::kUnknown ||
+                       st(x, y + 1, z) == VoxelState::kUnknown || st(x, y - 1, z) == VoxelState::kUnknown ||
+                       st(x, y, z + 1) == VoxelState::kUnknown || st(x, y, z - 1) == VoxelState::kUnknown;
+        truth[x + n.x() * (y + n.y() * z)] = f;
+        n_truth += f;
+      }
+  // Every reported leaf holds a true frontier voxel; every true frontier voxel lies in a reported leaf.
+  std::vector<std::uint8_t> covered(truth.size(), 0);
+  std::size_t empty_leaves = 0;
+  map.forEachFrontier([&](const Eigen::Vector3d& c, double size) {
+    const int k = static_cast<int>(std::lround(size / r));
+    const Eigen::Vector3i v0 = ((c - lo) / r - Eigen::Vector3d::Constant(0.5 * k)).array().round().cast<int>();
+    bool any = false;
+    for (int z = v0.z(); z < v0.z() + k; ++z)
+      for (int y = v0.y(); y < v0.y() + k; ++y)
+        for (int x = v0.x(); x < v0.x() + k; ++x) {
+          const std::size_t i = x + n.x() * (y + n.y() * z);
+          covered[i] = 1;
+          any = any || truth[i];
+        }
+    empty_leaves += !any;
+  });
+  std::size_t missed = 0;
+  for (std::size_t i = 0; i < truth.size(); ++i) missed += truth[i] && !covered[i];
+  EXPECT_GT(n_truth, 1000u);
+  EXPECT_EQ(missed, 0u);
+  EXPECT_EQ(empty_leaves, 0u);
 }

@@ -187,6 +187,14 @@ class OccupancyMap {
   };
   static constexpr std::int16_t kUnknown = INT16_MIN;  ///< log-odds sentinel of unknown voxels
   static constexpr double kScale = 1000.0;              ///< stored log-odds per unit log-odds
+  // cell_flags_ bits
+  static constexpr std::uint8_t kDirty = 1;           ///< changed since the last takeUpdate()
+  static constexpr std::uint8_t kFrontierCand = 2;    ///< changed since the last updateFrontiers()
+  static constexpr std::uint8_t kCoarseFrontier = 4;  ///< uniform cell that is a frontier
+  static constexpr std::uint8_t kBlockFrontier = 8;   ///< block with frontier bits
+  static constexpr std::uint8_t kListedBlock = 16;    ///< in frontier_blocks_
+  static constexpr std::uint8_t kListedCell = 32;     ///< in frontier_cells_
+  static constexpr std::uint8_t kVisited = 64;        ///< scratch of updateFrontiers()
 
  private:
   struct FrameCtx;
@@ -218,6 +226,8 @@ class OccupancyMap {
   void march(const Eigen::Vector3d& o_W, const Eigen::Vector3d& dir_W, double t0, double t1, F&& f) const;
   // frontiers (occupancy_map_frontiers.cpp)
   void recheckBlockFrontiers(int cell, bool full);
+  void checkFrontierCell(int cell, bool full);
+  int blockFrontierBits(int cell) const;
   bool cellIsFrontier(int cell) const;
 
   BackgroundMapConfig cfg_;
@@ -232,7 +242,7 @@ class OccupancyMap {
   std::vector<std::int32_t> cell_block_;   ///< block slot or -1 (uniform leaf)
   std::vector<std::int16_t> cell_value_;   ///< log-odds of a uniform leaf
   std::vector<std::uint16_t> cell_dist_;   ///< min observed distance of a uniform leaf, mm (0xFFFF never)
-  std::vector<std::uint8_t> cell_flags_;   ///< bit0 dirty (update), bit1 frontier candidate, bit2 coarse frontier
+  std::vector<std::uint8_t> cell_flags_;   ///< k* bits above
   std::vector<std::uint32_t> cell_stamp_;  ///< frame stamp (dedupe of changed cells)
   // per block slot (structure of arrays)
   std::vector<std::int32_t> block_cell_;   ///< owning cell or -1 (free slot)
@@ -248,9 +258,10 @@ class OccupancyMap {
 
   std::vector<int> dirty_cells_;     ///< changed since the last takeUpdate()
   std::vector<int> frontier_cand_;   ///< changed since the last updateFrontiers()
-  std::vector<int> frontier_blocks_; ///< cells whose block has frontier bits
-  std::vector<int> frontier_cells_;  ///< uniform cells that are frontiers themselves
-  std::size_t frontier_voxels_ = 0;
+  std::vector<int> frontier_blocks_; ///< cells whose block has frontier bits (entries without kBlockFrontier are stale)
+  std::vector<int> frontier_cells_;  ///< uniform cells that are frontiers (entries without kCoarseFrontier are stale)
+  std::size_t frontier_voxels_ = 0;  ///< set frontier bits over all blocks
+  std::size_t frontier_block_count_ = 0, frontier_cell_count_ = 0;
   std::uint32_t stamp_ = 0;
   std::uint64_t sequence_ = 0;
   std::vector<int> changed_scratch_;  ///< reused per-frame list of changed cells
