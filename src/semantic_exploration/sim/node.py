@@ -3,7 +3,7 @@ detector would, for a scene rendered by :class:`Simulator`.
 
 Topics (relative names, resolved in the node's namespace):
   sub  planner/path (nav_msgs/Path, yaw in orientation), frame_integrated (FrameIntegrated, lockstep),
-       ~load_scene (std_msgs/String: path of a scene file to switch to)
+       ~load_scene (std_msgs/String: "mesh" or "mesh;labels" of a scene to switch to)
   pub  camera/depth/image_raw (32FC1 m), camera/rgb/image_raw (rgb8), camera/camera_info,
        camera/instance_gt (16UC1 object id), camera/class_gt (16UC1 class id), detections,
        mav/pose, mav/goal_reached (PoseStamped), mav/collisions (UInt32, latched), /clock, tf
@@ -222,10 +222,11 @@ class MavSimNode:
         """Applies queued scene switches; returns True if the scene changed."""
         changed = False
         while not self._requests.empty():
-            path = self._requests.get()
+            request = self._requests.get()
+            path, _, labels = request.partition(";")
             try:
                 cfg = from_dict(rospy.get_param("~", {}), unknown=[]).validate()
-                sim = load_simulator(cfg, path)
+                sim = load_simulator(cfg, path.strip(), labels.strip())
             except (SceneError, ConfigError) as e:
                 rospy.logerr("mav_sim: rejected scene '%s': %s; keeping the current scene", path, e)
                 continue

@@ -165,10 +165,12 @@ class Simulator:
         return out
 
 
-def load_simulator(cfg: SimConfig, scene_file: Optional[str] = None) -> Simulator:
-    """Simulator for cfg, optionally with another scene file; raises SceneError/ConfigError."""
+def load_simulator(cfg: SimConfig, scene_file: Optional[str] = None, labels: str = "") -> Simulator:
+    """Simulator for cfg, optionally with another scene file (and its label table, "" = next to
+    the mesh); raises SceneError/ConfigError."""
     if scene_file is not None:
         cfg.scene.file = scene_file
+        cfg.scene.labels = labels
     try:
         return Simulator.from_config(cfg)
     except (OSError, ValueError) as e:
