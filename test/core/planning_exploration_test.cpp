@@ -168,6 +168,30 @@ TEST_F(ExplorationTest, TerminationTimeLimit) {
   EXPECT_EQ(r.termination_reason, "time_limit");
 }
 
+// Explored volume 10.0, 10.05, 10.08, 10.09 m^3 with stall_iterations 2 and
+// stall_volume_m3 0.05: after the third iteration the growth over the last
+// two is 10.08 - 10.0 = 0.08 >= 0.05 (continue); after
+// the fourth 10.09 - 10.05 = 0.04 < 0.05 -> "no_progress".
+TEST_F(ExplorationTest, TerminationNoProgress) {
+  config.stall_iterations = 2;
+  config.stall_volume_m3 = 0.05;
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  ExplorationInputs in = inputs();
+  const double volumes[4] = {10.0, 10.05, 10.08, 10.09};
+  for (int it = 0; it < 4; ++it) {
+    in.explored_volume_m3 = volumes[it];
+    const IterationResult r = planner.plan(in, providers);
+    EXPECT_EQ(r.finished, it == 3) << it << ": " << r.message;
+    if (it == 3) {
+      EXPECT_EQ(r.termination_reason, "no_progress");
+    }
+  }
+  // Unknown volume (negative): never stops for lack of progress.
+  ExplorationPlanner unknown(config, exploration, room_bounds(), camera, 0.05);
+  in.explored_volume_m3 = -1.0;
+  for (int it = 0; it < 5; ++it) EXPECT_FALSE(unknown.plan(in, providers).finished);
+}
+
 // Start inside an occupied block: nothing reachable, K = 3 iterations, then stop.
 TEST_F(ExplorationTest, TerminationNoReachableCandidate) {
   config.max_failed_iterations = 3;

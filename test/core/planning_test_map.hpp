@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "semantic_exploration/core/bounds.hpp"
@@ -94,6 +95,43 @@ class TestGrid {
         img.at(u, v) = static_cast<float>(std::min(1.0, sum / norm));
       }
     return img;
+  }
+
+  /// Distance along unit `dir` from `origin` to where the ray enters the
+  /// first occupied voxel (exact voxel traversal); infinity if none within
+  /// max_range_m or before leaving the grid.
+  double first_hit(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, double max_range_m) const {
+    Eigen::Vector3i i;
+    if (!index(origin, i)) return std::numeric_limits<double>::infinity();
+    if (at(i) == kOccupied) return 0.0;
+    Eigen::Vector3i step;
+    Eigen::Vector3d t_max, t_delta;
+    for (int k = 0; k < 3; ++k) {
+      const double lo = bounds_.min_m[k] + i[k] * res_;
+      if (dir[k] > 0) {
+        step[k] = 1;
+        t_max[k] = (lo + res_ - origin[k]) / dir[k];
+        t_delta[k] = res_ / dir[k];
+      } else if (dir[k] < 0) {
+        step[k] = -1;
+        t_max[k] = (lo - origin[k]) / dir[k];
+        t_delta[k] = -res_ / dir[k];
+      } else {
+        step[k] = 0;
+        t_max[k] = t_delta[k] = std::numeric_limits<double>::infinity();
+      }
+    }
+    while (true) {
+      int k = 0;
+      if (t_max[1] < t_max[k]) k = 1;
+      if (t_max[2] < t_max[k]) k = 2;
+      const double t = t_max[k];
+      if (t > max_range_m) return std::numeric_limits<double>::infinity();
+      i[k] += step[k];
+      if (i[k] < 0 || i[k] >= dims_[k]) return std::numeric_limits<double>::infinity();
+      if (at(i) == kOccupied) return t;
+      t_max[k] += t_delta[k];
+    }
   }
 
   /// Centres of free voxels with an unknown 6-neighbour (inside the grid).

@@ -45,6 +45,8 @@ struct PlannerConfig {
   int convergence_solutions = 5;         ///< a solve also stops once the moving average cost of this many improving solutions settles; 0 = off
   double convergence_epsilon = 0.05;      ///< ... i.e. changes by less than this fraction
   int planning_threads = 0;               ///< threads planning candidates in parallel; 0 = all hardware threads
+  int stall_iterations = 20;              ///< stop ("no_progress") when the explored volume grew less than stall_volume_m3 over this many iterations; 0 = off
+  double stall_volume_m3 = 0.1;           ///< see stall_iterations, m^3
 
   void validate(const std::string& ns = "planner/") const {
     require(n_candidates > 0, ns + "n_candidates", "must be > 0");
@@ -73,6 +75,8 @@ struct PlannerConfig {
     require(convergence_solutions >= 0, ns + "convergence_solutions", "must be >= 0 (0 = off)");
     require(std::isfinite(convergence_epsilon) && convergence_epsilon > 0 && convergence_epsilon < 1,
             ns + "convergence_epsilon", "must be in (0, 1)");
+    require(stall_iterations >= 0, ns + "stall_iterations", "must be >= 0 (0 = off)");
+    require(std::isfinite(stall_volume_m3) && stall_volume_m3 >= 0, ns + "stall_volume_m3", "must be >= 0 m^3");
     require(planning_threads >= 0, ns + "planning_threads", "must be >= 0 (0 = all hardware threads)");
   }
 };

@@ -67,6 +67,20 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
     r.message = "no frontier left and all objects observed from <= d_obj";
     return finish();
   }
+  if (in.explored_volume_m3 >= 0 && planner_.stall_iterations > 0) {
+    explored_volumes_m3_.push_back(in.explored_volume_m3);
+    const std::size_t k = static_cast<std::size_t>(planner_.stall_iterations);
+    if (explored_volumes_m3_.size() > k) {
+      const double grown = explored_volumes_m3_.back() - explored_volumes_m3_[explored_volumes_m3_.size() - 1 - k];
+      if (grown < planner_.stall_volume_m3) {
+        r.finished = true;
+        r.termination_reason = "no_progress";
+        r.message = fmt("explored volume grew %.3f m^3 (< %.3f) over the last %.0f iterations", grown,
+                        planner_.stall_volume_m3, static_cast<double>(k));
+        return finish();
+      }
+    }
+  }
   if (!prov.is_free || !prov.gains) throw std::invalid_argument("ExplorationPlanner: is_free and gains are required");
 
   // 1. Sampling.

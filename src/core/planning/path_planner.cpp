@@ -139,7 +139,10 @@ PlannedPath PathPlanner::plan(const Eigen::Vector3d& start, const Eigen::Vector3
   if (valid(start)) {
     out = plan_from_valid_start(start, goal);
   } else {
-    // Escape: nearest valid point whose straight segment holds no occupied voxel.
+    // Escape: nearest valid point whose straight segment keeps R/2 from
+    // occupied voxels. Only half the radius: the MAV is already there, and a
+    // surface seen from a new angle may have grown into its sphere; the
+    // escape moves it away from that surface.
     Eigen::Vector3d esc;
     bool found = false;
     if (not_occupied_ && nearest_valid(start, escape_radius_m_, esc)) {
@@ -148,7 +151,7 @@ PlannedPath PathPlanner::plan(const Eigen::Vector3d& start, const Eigen::Vector3
       found = true;
       for (int i = 0; i <= n && found; ++i) {
         const Eigen::Vector3d q = start + (esc - start) * (static_cast<double>(i) / n);
-        found = bounds_.contains(q) && not_occupied_(q, check_radius_m_);
+        found = bounds_.contains(q) && not_occupied_(q, 0.5 * config_.mav_radius_m);
       }
     }
     if (!found) {

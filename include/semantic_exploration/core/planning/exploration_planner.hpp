@@ -3,7 +3,11 @@
 /// One next-best-view planning iteration (paper Section IV-D, DESIGN Section
 /// 5): sample candidates, plan paths to them in parallel, evaluate their gains
 /// in one batched call, choose the highest utility, give the winner's path
-/// vertices their yaw, and decide when exploration is over.
+/// vertices their yaw, and decide when exploration is over: "explored" (no
+/// frontier left, every object observed from <= d_obj), "time_limit",
+/// "no_progress" (explored volume stalled, see PlannerConfig::stall_*) or
+/// "no_reachable_candidate" (max_failed_iterations in a row without a
+/// reachable candidate of positive utility).
 
 #include <Eigen/Core>
 #include <string>
@@ -32,6 +36,11 @@ struct ExplorationInputs {
   /// track it leave it true (candidates are only sampled at frontiers and
   /// objects anyway, so nothing else could be planned for).
   bool background_observed = true;
+  /// Explored (free + occupied) volume of the background map, m^3; negative
+  /// if unknown. Feeds the "no_progress" stop: the map's entropy never drops
+  /// to zero (free voxels clamp at a non-zero entropy), and frontiers that no
+  /// view can resolve would otherwise keep the exploration going forever.
+  double explored_volume_m3 = -1.0;
 };
 
 /// The map behind the planner.
@@ -62,7 +71,7 @@ struct IterationResult {
   GainSet winner_gains;                  ///< the winner's three gain images
   GainImage winner_combined;             ///< and G
   bool finished = false;                 ///< exploration is over; see termination_reason
-  std::string termination_reason;        ///< "explored", "time_limit", "no_reachable_candidate" or ""
+  std::string termination_reason;        ///< "explored", "time_limit", "no_progress", "no_reachable_candidate" or ""
   bool provider_error = false;           ///< a gain/history provider failed (e.g. a service timed out)
   std::string message;                   ///< what happened, human readable
   int candidates_reachable = 0;
@@ -95,6 +104,7 @@ class ExplorationPlanner {
   CandidateSampler sampler_;
   int window_columns_;
   int failed_iterations_ = 0;
+  std::vector<double> explored_volumes_m3_;  ///< per iteration with a known volume
 };
 
 }  // namespace semexp

@@ -55,8 +55,10 @@ struct PlannedPath {
 ///
 /// Invalid start: if `not_occupied` is given (sphere holds no occupied voxel,
 /// unknown allowed), the nearest valid point within escape_radius_m whose
-/// straight segment from the start passes not_occupied at R is used as an
-/// escape and planning continues from there; otherwise kStartInvalid.
+/// straight segment from the start keeps R/2 from occupied voxels is used as
+/// an escape and planning continues from there; otherwise kStartInvalid. (R/2:
+/// the MAV is already at the start; a surface seen from a new angle may have
+/// grown into its sphere, and the escape moves away from it.)
 ///
 /// plan_all() plans several goals in parallel (config.planning_threads, 0 =
 /// all hardware threads), each thread with its own OMPL instances. The
