@@ -4,7 +4,8 @@ detector would, for a scene rendered by :class:`Simulator`.
 Topics (relative names, resolved in the node's namespace):
   sub  planner/path (nav_msgs/Path, yaw in orientation), frame_integrated (FrameIntegrated, lockstep),
        ~load_scene (std_msgs/String: "mesh" or "mesh;labels" of a scene to switch to)
-  pub  camera/depth/image_raw (32FC1 m), camera/rgb/image_raw (rgb8), camera/camera_info,
+  pub  camera/depth/image_raw (32FC1 m), camera/rgb/image_raw (rgb8), camera/camera_info (also as
+       camera/depth/camera_info and camera/rgb/camera_info),
        camera/instance_gt (16UC1 object id), camera/class_gt (16UC1 class id), detections,
        mav/pose, mav/goal_reached (PoseStamped), mav/collisions (UInt32, latched), /clock, tf
 
@@ -85,6 +86,9 @@ class MavSimNode:
         self.pub_depth = rospy.Publisher("camera/depth/image_raw", Image, **latch)
         self.pub_rgb = rospy.Publisher("camera/rgb/image_raw", Image, **latch)
         self.pub_info = rospy.Publisher("camera/camera_info", CameraInfo, **latch)
+        # Per-image copies where image_transport tools (rviz DepthCloud, image_view) look for them.
+        self.pub_info_depth = rospy.Publisher("camera/depth/camera_info", CameraInfo, **latch)
+        self.pub_info_rgb = rospy.Publisher("camera/rgb/camera_info", CameraInfo, **latch)
         self.pub_inst = rospy.Publisher("camera/instance_gt", Image, **latch)
         self.pub_cls = rospy.Publisher("camera/class_gt", Image, **latch)
         self.pub_det = rospy.Publisher("detections", Detections, **latch)
@@ -183,6 +187,8 @@ class MavSimNode:
         hdr = Header(stamp=_stamp(t_ns), frame_id=c.frames.camera)
         info = CameraInfo(header=hdr, **self.sim.renderer.camera_info())
         self.pub_info.publish(info)
+        self.pub_info_depth.publish(info)
+        self.pub_info_rgb.publish(info)
         self.pub_depth.publish(_image(out["depth"], "32FC1", hdr))
         self.pub_rgb.publish(_image(out["rgb"], "rgb8", hdr))
         self.pub_inst.publish(_image(out["instance"], "16UC1", hdr))
