@@ -54,12 +54,19 @@ std::vector<std::uint32_t> ObjectMap::visibleIds(const cv::Mat& object_ids) {
 
 FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Eigen::Isometry3d& T_WC,
                                            const cv::Mat& depth_m, const cv::Mat& rgb, const cv::Mat& instance_image,
-                                           const std::vector<ObjectDetection>& detections) {
+                                           const std::vector<ObjectDetection>& detections,
+                                           const cv::Mat* rendered_before) {
   if (instance_image.type() != CV_16UC1 || instance_image.size() != depth_m.size())
     throw std::invalid_argument("ObjectMap::integrateFrame: instance image must be 16UC1 of the depth image's size");
+  if (rendered_before && (rendered_before->type() != CV_16UC1 || rendered_before->size() != depth_m.size()))
+    throw std::invalid_argument("ObjectMap::integrateFrame: rendered ids must be 16UC1 of the depth image's size");
   FrameIntegration result;
+  ++version_;
   cv::Mat rendered;
-  render(camera, T_WC, depth_m, rendered);
+  if (rendered_before)
+    rendered = *rendered_before;
+  else
+    render(camera, T_WC, depth_m, rendered);
 
   // Union of the masks of the detections of each object.
   std::map<std::uint32_t, cv::Mat> masks;

@@ -1,24 +1,187 @@
 #include "semantic_exploration/ros/instance_matching_node.hpp"
 
+#include <sensor_msgs/image_encodings.h>
+
+#include <cstring>
+#include <unordered_set>
+
 #include "semantic_exploration/MatchedDetections.h"
 #include "semantic_exploration/RenderInstances.h"
+#include "semantic_exploration/core/instance_matching.hpp"
 
 namespace semexp_ros {
+
+namespace enc = sensor_msgs::image_encodings;
+
+namespace {
+
+// 16UC1 message -> CV_16UC1 copy; "" on success.
+std::string toMat16(const sensor_msgs::Image& im, cv::Mat& out) {
+  if (im.encoding != enc::TYPE_16UC1 && im.encoding != enc::MONO16)
+    return "encoding '" + im.encoding + "' (expected 16UC1)";
+  if (im.width == 0 || im.height == 0 || im.step < im.width * 2 ||
+      im.data.size() < static_cast<size_t>(im.step) * im.height || im.is_bigendian)
+    return "buffer does not match its size";
+  cv::Mat(im.height, im.width, CV_16UC1, const_cast<uint8_t*>(im.data.data()), im.step).copyTo(out);
+  return "";
+}
+
+}  // namespace
 
 InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listener_(tf_buffer_) {
   const auto p = ParamReader::fromNodeHandle(pnh);
   config_ = loadMatching(p);
   classes_ = loadClasses(p);
+  camera_ = loadCamera(p);
   frames_ = loadFrames(p);
+  p.get("tf_timeout_s", tf_timeout_s_);
+  if (!(tf_timeout_s_ >= 0)) throw semexp::ConfigError("tf_timeout_s", "must be >= 0 s");
   matched_pub_ = nh.advertise<semantic_exploration::MatchedDetections>("matched_detections", 10);
   render_client_ = nh.serviceClient<semantic_exploration::RenderInstances>("object_map/render_instances");
-  detections_sub_ = nh.subscribe("detections", 5, &InstanceMatchingNode::detectionsCallback, this);
-  ROS_INFO("instance_matching: iou_threshold %.2f, min_mask_pixels %d", config_.iou_threshold,
-           config_.min_mask_pixels);
+  info_sub_ = nh.subscribe("camera/camera_info", 1, &InstanceMatchingNode::infoCallback, this);
+  detections_sub_.subscribe(nh, "detections", 5);
+  depth_sub_.subscribe(nh, "camera/depth/image_raw", 5);
+  sync_ = std::make_unique<message_filters::Synchronizer<SyncPolicy>>(SyncPolicy(10), detections_sub_, depth_sub_);
+  sync_->registerCallback(&InstanceMatchingNode::frameCallback, this);
+  ROS_INFO("instance_matching: iou_threshold %.2f, min_mask_pixels %d, fragment_fraction %.2f",
+           config_.iou_threshold, config_.min_mask_pixels, config_.fragment_fraction);
 }
 
-void InstanceMatchingNode::detectionsCallback(const semantic_exploration::DetectionsConstPtr& msg) {
-  drops_.drop("matching_unavailable", "matching core not wired into this node");
+void InstanceMatchingNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
+  semexp::PinholeCamera c;
+  const auto err = cameraFromInfo(*msg, camera_.d_min_m, camera_.d_max_m, c);
+  if (!err.empty()) {
+    drops_.drop("bad_camera_info", err);
+    return;
+  }
+  camera_ = c;
+  camera_info_ = *msg;
+  have_info_ = true;
+}
+
+void InstanceMatchingNode::publishEmpty(const std_msgs::Header& header) {
+  // The frame still reaches object_map (visible objects are updated as
+  // undetected and lockstep sees the frame handled).
+  semantic_exploration::MatchedDetections empty;
+  empty.header = header;
+  empty.instance_image.header = header;
+  empty.instance_image.width = static_cast<uint32_t>(camera_.width);
+  empty.instance_image.height = static_cast<uint32_t>(camera_.height);
+  empty.instance_image.encoding = enc::TYPE_16UC1;
+  empty.instance_image.step = static_cast<uint32_t>(camera_.width * 2);
+  empty.instance_image.data.assign(static_cast<size_t>(camera_.width) * camera_.height * 2, 0);
+  matched_pub_.publish(empty);
+}
+
+void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsConstPtr& msg,
+                                         const sensor_msgs::ImageConstPtr& depth_msg) {
+  const auto fail = [&](const std::string& reason, const std::string& detail) {
+    drops_.drop(reason, detail);
+    publishEmpty(msg->header);
+  };
+  cv::Mat depth_m, instances;
+  std::string err = depthToMeters(*depth_msg, depth_m);
+  if (!err.empty()) return fail("bad_depth", err);
+  if (depth_m.cols != camera_.width || depth_m.rows != camera_.height)
+    return fail("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +
+                                     " but camera " + std::to_string(camera_.width) + "x" +
+                                     std::to_string(camera_.height));
+  err = toMat16(msg->instance_image, instances);
+  if (!err.empty()) return fail("bad_instances", "instance image: " + err);
+  if (instances.size() != depth_m.size())
+    return fail("size_mismatch", "instance image " + std::to_string(instances.cols) + "x" +
+                                     std::to_string(instances.rows) + " differs from depth");
+
+  // Only detections of classes with object maps take part; unknown classes are bad input.
+  std::vector<std::uint16_t> ids;
+  std::vector<const semantic_exploration::Detection*> kept;
+  std::unordered_set<std::uint16_t> listed, excluded;
+  for (const auto& d : msg->detections) {
+    listed.insert(d.instance_id);
+    if (classes_.name(d.class_id).empty()) {
+      drops_.drop("unknown_class", "class id " + std::to_string(d.class_id) + " ('" + d.class_name +
+                                       "') is not in the class table");
+      excluded.insert(d.instance_id);
+    } else if (!classes_.isOfInterest(d.class_id)) {
+      excluded.insert(d.instance_id);
+    } else {
+      ids.push_back(d.instance_id);
+      kept.push_back(&d);
+    }
+  }
+  std::uint32_t unlisted = 0;
+  for (int v = 0; v < instances.rows; ++v) {
+    std::uint16_t* row = instances.ptr<std::uint16_t>(v);
+    for (int u = 0; u < instances.cols; ++u) {
+      if (!row[u]) continue;
+      if (!listed.count(row[u])) ++unlisted;
+      if (excluded.count(row[u])) row[u] = 0;
+    }
+  }
+  if (unlisted) drops_.drop("unlisted_instance", std::to_string(unlisted) + " mask pixels of unlisted instance ids");
+
+  Eigen::Isometry3d T_WC;
+  const std::string frame = msg->header.frame_id.empty() ? frames_.camera : msg->header.frame_id;
+  err = lookupPose(tf_buffer_, frames_.world, frame, msg->header.stamp, tf_timeout_s_, T_WC);
+  if (!err.empty()) return fail("no_tf", err);
+
+  semantic_exploration::RenderInstances srv;
+  const Eigen::Quaterniond q(T_WC.linear());
+  srv.request.pose.position.x = T_WC.translation().x();
+  srv.request.pose.position.y = T_WC.translation().y();
+  srv.request.pose.position.z = T_WC.translation().z();
+  srv.request.pose.orientation.w = q.w();
+  srv.request.pose.orientation.x = q.x();
+  srv.request.pose.orientation.y = q.y();
+  srv.request.pose.orientation.z = q.z();
+  if (have_info_) {
+    srv.request.camera_info = camera_info_;
+  } else {  // intrinsics from the parameters
+    auto& ci = srv.request.camera_info;
+    ci.width = static_cast<uint32_t>(camera_.width);
+    ci.height = static_cast<uint32_t>(camera_.height);
+    ci.K = {camera_.fx, 0.0, camera_.cx, 0.0, camera_.fy, camera_.cy, 0.0, 0.0, 1.0};
+  }
+  srv.request.camera_info.header = msg->header;
+  srv.request.depth = *depth_msg;
+  if (!render_client_.call(srv)) return fail("render_unavailable", "object_map/render_instances failed");
+  cv::Mat object_ids;
+  err = toMat16(srv.response.object_ids, object_ids);
+  if (err.empty() && object_ids.size() != instances.size()) err = "size differs from the instance image";
+  if (!err.empty()) return fail("bad_render", "rendered object ids: " + err);
+
+  cv::Mat cleaned;
+  const semexp::MatchingOutput out = semexp::matchDetections(instances, ids, object_ids, config_, &cleaned);
+  if (out.duplicate_ids) drops_.drop("duplicate_instance", std::to_string(out.duplicate_ids) + " repeated or zero instance ids");
+
+  semantic_exploration::MatchedDetections matched;
+  matched.header = msg->header;
+  matched.instance_image = msg->instance_image;
+  matched.instance_image.encoding = enc::TYPE_16UC1;
+  matched.instance_image.step = static_cast<uint32_t>(cleaned.cols * 2);
+  matched.instance_image.data.resize(static_cast<size_t>(cleaned.rows) * cleaned.cols * 2);
+  for (int v = 0; v < cleaned.rows; ++v)
+    std::memcpy(&matched.instance_image.data[static_cast<size_t>(v) * cleaned.cols * 2], cleaned.ptr(v),
+                static_cast<size_t>(cleaned.cols) * 2);
+  // out.detections follows `ids` except for repeated ids, which matchDetections skipped.
+  std::unordered_set<std::uint16_t> emitted;
+  size_t j = 0;
+  for (const auto* d : kept) {
+    if (!emitted.insert(d->instance_id).second || d->instance_id == 0) continue;
+    const semexp::MatchResult& r = out.detections[j++];
+    if (r.dropped) {
+      ROS_DEBUG("instance_matching: dropped instance %u (%u px < %d)", r.instance_id, r.mask_pixels,
+                config_.min_mask_pixels);
+      continue;
+    }
+    semantic_exploration::MatchedDetection m;
+    m.detection = *d;
+    m.object_id = r.object_id;
+    m.iou = r.iou;
+    m.mask_pixels = r.mask_pixels;
+    matched.detections.push_back(m);
+  }
+  matched_pub_.publish(matched);
 }
 
 }  // namespace semexp_ros

@@ -1,11 +1,40 @@
 #include "semantic_exploration/ros/object_map_node.hpp"
 
+#include <sensor_msgs/image_encodings.h>
 #include <visualization_msgs/MarkerArray.h>
+
+#include <cstring>
 
 #include "semantic_exploration/FrameIntegrated.h"
 #include "semantic_exploration/ObjectArray.h"
 
 namespace semexp_ros {
+
+namespace {
+
+sensor_msgs::Image toImageMsg(const std_msgs::Header& header, const cv::Mat& m) {
+  sensor_msgs::Image img;
+  img.header = header;
+  img.height = static_cast<uint32_t>(m.rows);
+  img.width = static_cast<uint32_t>(m.cols);
+  img.encoding = m.type() == CV_16UC1 ? sensor_msgs::image_encodings::TYPE_16UC1
+                                      : sensor_msgs::image_encodings::TYPE_32FC1;
+  img.is_bigendian = 0;
+  img.step = static_cast<uint32_t>(m.cols * m.elemSize());
+  img.data.resize(static_cast<size_t>(img.step) * m.rows);
+  for (int v = 0; v < m.rows; ++v) std::memcpy(&img.data[static_cast<size_t>(v) * img.step], m.ptr(v), img.step);
+  return img;
+}
+
+geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
+  geometry_msgs::Point q;
+  q.x = p.x();
+  q.y = p.y();
+  q.z = p.z();
+  return q;
+}
+
+}  // namespace
 
 ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listener_(tf_buffer_) {
   const auto p = ParamReader::fromNodeHandle(pnh);
@@ -14,39 +43,232 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_lis
   exploration_ = loadExploration(p);
   camera_ = loadCamera(p);
   frames_ = loadFrames(p);
+  p.get("tf_timeout_s", tf_timeout_s_);
+  if (!(tf_timeout_s_ >= 0)) throw semexp::ConfigError("tf_timeout_s", "must be >= 0 s");
+  map_ = std::make_unique<semexp::ObjectMap>(config_, classes_);
+
   objects_pub_ = pnh.advertise<semantic_exploration::ObjectArray>("objects", 1, true);
   meshes_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("meshes", 1, true);
   integrated_pub_ = nh.advertise<semantic_exploration::FrameIntegrated>("frame_integrated", 10);
   render_srv_ = pnh.advertiseService("render_instances", &ObjectMapNode::renderInstances, this);
   gains_srv_ = pnh.advertiseService("compute_gains", &ObjectMapNode::computeGains, this);
   save_srv_ = pnh.advertiseService("save", &ObjectMapNode::save, this);
-  matched_sub_ = nh.subscribe("matched_detections", 5, &ObjectMapNode::matchedCallback, this);
+  info_sub_ = nh.subscribe("camera/camera_info", 1, &ObjectMapNode::infoCallback, this);
+  matched_sub_.subscribe(nh, "matched_detections", 5);
+  depth_sub_.subscribe(nh, "camera/depth/image_raw", 5);
+  rgb_sub_.subscribe(nh, "camera/rgb/image_raw", 5);
+  sync_ = std::make_unique<message_filters::Synchronizer<SyncPolicy>>(SyncPolicy(10), matched_sub_, depth_sub_,
+                                                                       rgb_sub_);
+  sync_->registerCallback(&ObjectMapNode::frameCallback, this);
   std::string interest;
   for (const auto& c : classes_.of_interest) interest += (interest.empty() ? "" : ", ") + c;
-  ROS_INFO("object_map: classes of interest [%s]", interest.c_str());
+  ROS_INFO("object_map: classes of interest [%s], truncation %.1f voxels", interest.c_str(),
+           config_.truncation_voxels);
 }
 
-void ObjectMapNode::matchedCallback(const semantic_exploration::MatchedDetectionsConstPtr& msg) {
+void ObjectMapNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
+  semexp::PinholeCamera c;
+  const auto err = cameraFromInfo(*msg, camera_.d_min_m, camera_.d_max_m, c);
+  if (!err.empty()) {
+    drops_.drop("bad_camera_info", err);
+    return;
+  }
+  camera_ = c;
+}
+
+void ObjectMapNode::reportFrame(const std_msgs::Header& header, bool integrated, double time_ms) {
   semantic_exploration::FrameIntegrated done;
-  done.header = msg->header;
+  done.header = header;
   done.node = "object_map";
-  done.integrated = false;
+  done.integrated = integrated;
+  done.time_ms = static_cast<float>(time_ms);
   integrated_pub_.publish(done);
 }
 
-bool ObjectMapNode::renderInstances(semantic_exploration::RenderInstances::Request&,
-                                    semantic_exploration::RenderInstances::Response&) {
-  return false;
+void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsConstPtr& matched,
+                                  const sensor_msgs::ImageConstPtr& depth_msg,
+                                  const sensor_msgs::ImageConstPtr& rgb_msg) {
+  const auto t0 = ros::WallTime::now();
+  const auto fail = [&](const std::string& reason, const std::string& detail) {
+    drops_.drop(reason, detail);
+    reportFrame(matched->header, false, (ros::WallTime::now() - t0).toSec() * 1e3);
+  };
+  cv::Mat depth_m, rgb, instances;
+  std::string err = depthToMeters(*depth_msg, depth_m);
+  if (!err.empty()) return fail("bad_depth", err);
+  err = colourToRgb(*rgb_msg, rgb);
+  if (!err.empty()) return fail("bad_rgb", err);
+  if (depth_m.cols != camera_.width || depth_m.rows != camera_.height)
+    return fail("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +
+                                     " but camera " + std::to_string(camera_.width) + "x" +
+                                     std::to_string(camera_.height));
+  if (rgb.size() != depth_m.size()) return fail("size_mismatch", "colour and depth differ in size");
+  const auto& im = matched->instance_image;
+  if (im.encoding != sensor_msgs::image_encodings::TYPE_16UC1 && im.encoding != sensor_msgs::image_encodings::MONO16)
+    return fail("bad_instances", "instance image encoding '" + im.encoding + "' (expected 16UC1)");
+  if (static_cast<int>(im.width) != depth_m.cols || static_cast<int>(im.height) != depth_m.rows)
+    return fail("size_mismatch", "instance image differs from depth in size");
+  if (im.step < im.width * 2 || im.data.size() < static_cast<size_t>(im.step) * im.height || im.is_bigendian)
+    return fail("bad_instances", "instance image buffer does not match its size");
+  cv::Mat(im.height, im.width, CV_16UC1, const_cast<uint8_t*>(im.data.data()), im.step).copyTo(instances);
+
+  Eigen::Isometry3d T_WC;
+  const std::string frame = matched->header.frame_id.empty() ? frames_.camera : matched->header.frame_id;
+  err = lookupPose(tf_buffer_, frames_.world, frame, matched->header.stamp, tf_timeout_s_, T_WC);
+  if (!err.empty()) return fail("no_tf", err);
+
+  std::vector<semexp::ObjectDetection> detections;
+  for (const auto& d : matched->detections)
+    detections.push_back({d.detection.instance_id, d.object_id, static_cast<int>(d.detection.class_id)});
+  semexp::FrameIntegration r;
+  try {
+    const bool reuse = !cached_render_.ids.empty() && cached_render_.stamp == matched->header.stamp &&
+                       cached_render_.version == map_->version() && cached_render_.ids.size() == depth_m.size();
+    r = map_->integrateFrame(camera_, T_WC, depth_m, rgb, instances, detections, reuse ? &cached_render_.ids : nullptr);
+    cached_render_.ids.release();
+  } catch (const std::exception& e) {
+    return fail("integration_error", e.what());
+  }
+  if (r.dropped_unknown_class) drops_.drop("unknown_class", std::to_string(r.dropped_unknown_class) + " detection(s)");
+  if (r.dropped_unknown_object)
+    drops_.drop("unknown_object", std::to_string(r.dropped_unknown_object) + " detection(s) matched to no known object");
+  if (r.dropped_full) drops_.drop("too_many_objects", "all 65535 object ids are used");
+  for (const auto id : r.created)
+    ROS_INFO("object_map: new object %u (%s)", id, map_->object(id)->class_name.c_str());
+  last_stamp_ = matched->header.stamp;
+  const double ms = (ros::WallTime::now() - t0).toSec() * 1e3;
+  reportFrame(matched->header, true, ms);
+  if ((ros::WallTime::now() - last_publish_).toSec() >= config_.publish_period_s) publishObjects(last_stamp_);
 }
 
-bool ObjectMapNode::computeGains(semantic_exploration::ComputeGains::Request&,
-                                 semantic_exploration::ComputeGains::Response&) {
-  return false;
+void ObjectMapNode::publishObjects(const ros::Time& stamp) {
+  last_publish_ = ros::WallTime::now();
+  semantic_exploration::ObjectArray arr;
+  arr.header.stamp = stamp;
+  arr.header.frame_id = frames_.world;
+  visualization_msgs::MarkerArray markers;
+  for (const auto& kv : map_->objects()) {
+    const semexp::MappedObject& o = *kv.second;
+    const semexp::TsdfSummary s = o.tsdf.summarize(exploration_.d_obj_m);
+    semantic_exploration::ObjectInfo info;
+    info.id = o.id;
+    info.class_id = static_cast<uint16_t>(o.class_id);
+    info.class_name = o.class_name;
+    info.resolution_m = static_cast<float>(o.resolution_m);
+    info.bbox_min = toPoint(s.bbox_min_W);
+    info.bbox_max = toPoint(s.bbox_max_W);
+    info.centroid = toPoint(s.centroid_W);
+    info.voxel_count = static_cast<uint32_t>(s.voxel_count);
+    info.observed_fraction = static_cast<float>(s.observed_fraction);
+    info.detection_count = o.detection_count;
+    arr.objects.push_back(info);
+    if (meshes_pub_.getNumSubscribers() == 0) continue;
+    const semexp::Mesh mesh = o.tsdf.extractMesh();
+    visualization_msgs::Marker m;
+    m.header = arr.header;
+    m.ns = "object_meshes";
+    m.id = static_cast<int>(o.id);
+    m.type = visualization_msgs::Marker::TRIANGLE_LIST;
+    m.action = mesh.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
+    m.pose.orientation.w = 1.0;
+    m.scale.x = m.scale.y = m.scale.z = 1.0;
+    m.color.r = m.color.g = m.color.b = m.color.a = 1.0;
+    for (const auto& t : mesh.triangles)
+      for (int k = 0; k < 3; ++k) {
+        m.points.push_back(toPoint(mesh.vertices_W[t[k]].cast<double>()));
+        std_msgs::ColorRGBA c;
+        c.r = mesh.colours[t[k]][0] / 255.f;
+        c.g = mesh.colours[t[k]][1] / 255.f;
+        c.b = mesh.colours[t[k]][2] / 255.f;
+        c.a = 1.f;
+        m.colors.push_back(c);
+      }
+    markers.markers.push_back(m);
+  }
+  objects_pub_.publish(arr);
+  if (!markers.markers.empty()) meshes_pub_.publish(markers);
 }
 
-bool ObjectMapNode::save(semantic_exploration::SaveMap::Request&, semantic_exploration::SaveMap::Response& res) {
-  res.success = false;
-  res.message = "object_map: the object map core is not wired into this node";
+bool ObjectMapNode::renderInstances(semantic_exploration::RenderInstances::Request& req,
+                                    semantic_exploration::RenderInstances::Response& res) {
+  semexp::PinholeCamera cam;
+  std::string err = cameraFromInfo(req.camera_info, camera_.d_min_m, camera_.d_max_m, cam);
+  if (!err.empty()) {
+    drops_.drop("bad_render_request", err);
+    return false;
+  }
+  const auto& q = req.pose.orientation;
+  const auto& t = req.pose.position;
+  Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
+  const Eigen::Quaterniond quat(q.w, q.x, q.y, q.z);
+  if (!(quat.norm() > 0.5) || !std::isfinite(t.x + t.y + t.z)) {
+    drops_.drop("bad_render_request", "pose is not a valid rigid transform");
+    return false;
+  }
+  T_WC.linear() = quat.normalized().toRotationMatrix();
+  T_WC.translation() = Eigen::Vector3d(t.x, t.y, t.z);
+  cv::Mat depth_m;
+  if (!req.depth.data.empty()) {
+    err = depthToMeters(req.depth, depth_m);
+    if (err.empty() && (depth_m.cols != cam.width || depth_m.rows != cam.height))
+      err = "depth size differs from camera_info";
+    if (!err.empty()) {
+      drops_.drop("bad_render_request", err);
+      return false;
+    }
+  }
+  cv::Mat ids;
+  map_->render(cam, T_WC, depth_m, ids);
+  if (!req.depth.data.empty() && cam.width == camera_.width && cam.height == camera_.height) {
+    cached_render_.stamp = req.depth.header.stamp;
+    cached_render_.version = map_->version();
+    cached_render_.ids = ids;
+  }
+  std_msgs::Header header;
+  header.stamp = req.depth.header.stamp;
+  header.frame_id = req.camera_info.header.frame_id.empty() ? frames_.camera : req.camera_info.header.frame_id;
+  res.object_ids = toImageMsg(header, ids);
+  for (const auto id : semexp::ObjectMap::visibleIds(ids)) res.visible_object_ids.push_back(id);
+  return true;
+}
+
+bool ObjectMapNode::computeGains(semantic_exploration::ComputeGains::Request& req,
+                                 semantic_exploration::ComputeGains::Response& res) {
+  semexp::SphericalGrid grid;
+  grid.width = req.width;
+  grid.height = req.height;
+  grid.vfov_rad = camera_.vfov_rad();
+  if (grid.width <= 0 || grid.height <= 0) {
+    drops_.drop("bad_gain_request", "width and height must be > 0");
+    return false;
+  }
+  std::vector<Eigen::Vector3d> positions;
+  for (const auto& p : req.positions) positions.emplace_back(p.x, p.y, p.z);
+  std::vector<cv::Mat> gains, hits;
+  try {
+    map_->computeGains(positions, grid, req.max_depth_m, exploration_.d_obj_m, camera_.d_max_m, gains, hits);
+  } catch (const std::exception& e) {
+    drops_.drop("bad_gain_request", e.what());
+    return false;
+  }
+  std_msgs::Header header;
+  header.stamp = last_stamp_;
+  header.frame_id = frames_.world;
+  for (size_t i = 0; i < gains.size(); ++i) {
+    res.distance_gain.push_back(toImageMsg(header, gains[i]));
+    res.hit_depth.push_back(toImageMsg(header, hits[i]));
+  }
+  return true;  // entropy_gain stays empty: object maps hold no entropy
+}
+
+bool ObjectMapNode::save(semantic_exploration::SaveMap::Request& req, semantic_exploration::SaveMap::Response& res) {
+  std::string error;
+  res.files = map_->save(req.directory, exploration_.d_obj_m, &error);
+  res.success = error.empty();
+  res.message = error.empty() ? "object_map: wrote " + std::to_string(res.files.size()) + " files (" +
+                                    std::to_string(map_->objects().size()) + " objects) to " + req.directory
+                              : "object_map: " + error;
+  if (!res.success) ROS_ERROR("%s", res.message.c_str());
   return true;
 }
 

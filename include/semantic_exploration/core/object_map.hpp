@@ -80,10 +80,15 @@ class ObjectMap {
   /// 3. Every other rendered object updates SDF and colour through its
   ///    rendered mask, without the foreground probability.
   /// @param depth_m CV_32FC1 m; rgb CV_8UC3 or empty; instance_image CV_16UC1 (same size)
+  /// @param rendered optional: render() of the current map from the same pose
+  ///        and depth (e.g. the one matching used), so step 1 is skipped
   /// @throws std::invalid_argument if the images do not match the camera
   FrameIntegration integrateFrame(const PinholeCamera& camera, const Eigen::Isometry3d& T_WC, const cv::Mat& depth_m,
                                   const cv::Mat& rgb, const cv::Mat& instance_image,
-                                  const std::vector<ObjectDetection>& detections);
+                                  const std::vector<ObjectDetection>& detections, const cv::Mat* rendered = nullptr);
+
+  /// Grows with every integrated frame (a render is reusable while it is unchanged).
+  std::uint64_t version() const { return version_; }
 
   /// Renders all objects from T_WC into `object_ids` (CV_16UC1, 0 = none).
   /// Each pixel shows the nearest object surface (foreground probability >
@@ -118,6 +123,7 @@ class ObjectMap {
   ClassTable classes_;
   std::map<std::uint32_t, std::unique_ptr<MappedObject>> objects_;
   std::uint32_t next_id_ = 1;
+  std::uint64_t version_ = 0;
 };
 
 }  // namespace semexp

@@ -2,13 +2,27 @@
 /// @file instance_matching_node.hpp
 /// ROS shell of instance matching (paper Section IV-B.1).
 ///
-/// Subscribes `detections` (Detections) and `camera/depth/image_raw`; pose
-/// from tf2; renders known objects through the `object_map/render_instances`
-/// service; publishes `matched_detections` (MatchedDetections).
+/// Subscribes `detections` (Detections) and `camera/depth/image_raw`
+/// (approximately time-synchronised) and `camera/camera_info`; pose from tf2;
+/// renders the known objects through the `object_map/render_instances`
+/// service; matches with semexp::matchDetections (policy in
+/// core/instance_matching.hpp); publishes `matched_detections`
+/// (MatchedDetections) with masks under min_mask_pixels removed. Detections
+/// of classes without object maps are left out; bad input (sizes, encodings,
+/// unknown class ids, masks of unlisted instance ids, missing tf, render
+/// service down) is dropped with a counter and a throttled log line, and the
+/// frame goes on without detections (so object_map still handles it).
 
+#include <message_filters/subscriber.h>
+#include <message_filters/sync_policies/approximate_time.h>
+#include <message_filters/synchronizer.h>
 #include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
+
+#include <memory>
 
 #include "semantic_exploration/Detections.h"
 #include "semantic_exploration/ros/node_common.hpp"
@@ -21,14 +35,26 @@ class InstanceMatchingNode {
   InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
 
  private:
-  void detectionsCallback(const semantic_exploration::DetectionsConstPtr& msg);
+  using SyncPolicy =
+      message_filters::sync_policies::ApproximateTime<semantic_exploration::Detections, sensor_msgs::Image>;
+
+  void infoCallback(const sensor_msgs::CameraInfoConstPtr& msg);
+  void frameCallback(const semantic_exploration::DetectionsConstPtr& msg, const sensor_msgs::ImageConstPtr& depth);
+  void publishEmpty(const std_msgs::Header& header);
 
   semexp::MatchingConfig config_;
   semexp::ClassTable classes_;
+  semexp::PinholeCamera camera_;
+  sensor_msgs::CameraInfo camera_info_;
+  bool have_info_ = false;
   FrameNames frames_;
+  double tf_timeout_s_ = 0.1;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  ros::Subscriber detections_sub_;
+  message_filters::Subscriber<semantic_exploration::Detections> detections_sub_;
+  message_filters::Subscriber<sensor_msgs::Image> depth_sub_;
+  std::unique_ptr<message_filters::Synchronizer<SyncPolicy>> sync_;
+  ros::Subscriber info_sub_;
   ros::Publisher matched_pub_;
   ros::ServiceClient render_client_;
   DropCounter drops_;

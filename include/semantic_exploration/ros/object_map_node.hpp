@@ -3,18 +3,29 @@
 /// ROS shell of the per-object TSDF submaps (paper Section IV-B).
 ///
 /// Subscribes `matched_detections`, `camera/depth/image_raw`,
-/// `camera/rgb/image_raw`; pose from tf2. Publishes `~objects`
-/// (ObjectArray), `~meshes` (MarkerArray), `frame_integrated`; serves
-/// `~render_instances`, `~compute_gains`, `~save`.
+/// `camera/rgb/image_raw` (approximately time-synchronised) and
+/// `camera/camera_info`; pose from tf2. Publishes `~objects` (ObjectArray) and
+/// `~meshes` (MarkerArray), both at most every object_map/publish_period_s,
+/// and `frame_integrated` after every frame; serves `~render_instances`,
+/// `~compute_gains` and `~save`. Bad input (sizes, encodings, unknown classes
+/// or objects, missing tf) is dropped with a counter and a throttled log line.
 
+#include <message_filters/subscriber.h>
+#include <message_filters/sync_policies/approximate_time.h>
+#include <message_filters/synchronizer.h>
 #include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
+
+#include <memory>
 
 #include "semantic_exploration/ComputeGains.h"
 #include "semantic_exploration/MatchedDetections.h"
 #include "semantic_exploration/RenderInstances.h"
 #include "semantic_exploration/SaveMap.h"
+#include "semantic_exploration/core/object_map.hpp"
 #include "semantic_exploration/ros/node_common.hpp"
 #include "semantic_exploration/ros/params.hpp"
 
@@ -25,7 +36,14 @@ class ObjectMapNode {
   ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
 
  private:
-  void matchedCallback(const semantic_exploration::MatchedDetectionsConstPtr& msg);
+  using SyncPolicy = message_filters::sync_policies::ApproximateTime<semantic_exploration::MatchedDetections,
+                                                                     sensor_msgs::Image, sensor_msgs::Image>;
+
+  void infoCallback(const sensor_msgs::CameraInfoConstPtr& msg);
+  void frameCallback(const semantic_exploration::MatchedDetectionsConstPtr& matched,
+                     const sensor_msgs::ImageConstPtr& depth, const sensor_msgs::ImageConstPtr& rgb);
+  void reportFrame(const std_msgs::Header& header, bool integrated, double time_ms);
+  void publishObjects(const ros::Time& stamp);
   bool renderInstances(semantic_exploration::RenderInstances::Request& req,
                        semantic_exploration::RenderInstances::Response& res);
   bool computeGains(semantic_exploration::ComputeGains::Request& req, semantic_exploration::ComputeGains::Response& res);
@@ -36,9 +54,22 @@ class ObjectMapNode {
   semexp::ExplorationConfig exploration_;
   semexp::PinholeCamera camera_;
   FrameNames frames_;
+  double tf_timeout_s_ = 0.1;
+  std::unique_ptr<semexp::ObjectMap> map_;
+  ros::Time last_stamp_;
+  /// Last render_instances answer, reused by the frame it was made for if the map did not change since.
+  struct CachedRender {
+    ros::Time stamp;
+    std::uint64_t version = 0;
+    cv::Mat ids;
+  } cached_render_;
+  ros::WallTime last_publish_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  ros::Subscriber matched_sub_;
+  message_filters::Subscriber<semantic_exploration::MatchedDetections> matched_sub_;
+  message_filters::Subscriber<sensor_msgs::Image> depth_sub_, rgb_sub_;
+  std::unique_ptr<message_filters::Synchronizer<SyncPolicy>> sync_;
+  ros::Subscriber info_sub_;
   ros::Publisher objects_pub_, meshes_pub_, integrated_pub_;
   ros::ServiceServer render_srv_, gains_srv_, save_srv_;
   DropCounter drops_;
