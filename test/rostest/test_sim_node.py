@@ -35,12 +35,12 @@ class SimTest(unittest.TestCase):
         rospy.init_node("sim_test")
         cls.lock = threading.Lock()
         cls.auto_report = True
-        cls.msgs = {k: [] for k in ("depth", "rgb", "info", "inst", "cls", "det", "pose", "goal", "coll")}
+        cls.msgs = {k: [] for k in ("depth", "rgb", "info", "inst", "cls", "det", "pose", "goal", "coll", "rej")}
         cls.clock = []
         cls.buffer = tf2_ros.Buffer(rospy.Duration(60.0))
         cls.listener = tf2_ros.TransformListener(cls.buffer)
         cls.report_pub = rospy.Publisher("/frame_integrated", FrameIntegrated, queue_size=10)
-        cls.path_pub = rospy.Publisher("/planner/path", Path, queue_size=1)
+        cls.path_pub = rospy.Publisher("/planner/path", Path, queue_size=10)
         cls.scene_pub = rospy.Publisher("/mav_sim/load_scene", String, queue_size=1)
 
         def keep(key):
@@ -57,7 +57,8 @@ class SimTest(unittest.TestCase):
         for key, topic, typ in (("rgb", "/camera/rgb/image_raw", Image), ("info", "/camera/camera_info", CameraInfo),
                                 ("inst", "/camera/instance_gt", Image), ("cls", "/camera/class_gt", Image),
                                 ("det", "/detections", Detections), ("pose", "/mav/pose", PoseStamped),
-                                ("goal", "/mav/goal_reached", PoseStamped), ("coll", "/mav/collisions", UInt32)):
+                                ("goal", "/mav/goal_reached", PoseStamped), ("coll", "/mav/collisions", UInt32),
+                                ("rej", "/mav/path_rejected", String)):
             rospy.Subscriber(topic, typ, keep(key), queue_size=200)
         rospy.Subscriber("/clock", Clock, lambda m: cls.clock.append(m.clock.to_nsec()), queue_size=1000)
         assert wait_for(lambda: len(cls.msgs["depth"]) >= 5, 90.0), "no frames from mav_sim"
@@ -172,13 +173,21 @@ class SimTest(unittest.TestCase):
     def test_5_bad_paths_are_rejected_and_sim_keeps_running(self):
         p0 = self.current_pose()
         self.send_path([(p0[0], p0[1], p0[2], 0.0), (float("nan"), 1.0, 1.0, 0.0)])
+        time.sleep(0.3)
         self.send_path([(p0[0], p0[1], p0[2], 0.0), (50.0, 1.0, 1.0, 0.0)])
+        time.sleep(0.3)
         self.send_path([(p0[0] + 1.0, p0[1], p0[2], 0.0)], frame="map")
         self.scene_pub.publish(String("/nonexistent/scene_semantic.ply"))
         n = len(self.frames())
         self.assertTrue(wait_for(lambda: len(self.frames()) >= n + 10), "sim stopped after bad input")
         p1 = self.current_pose()
         self.assertLess(np.linalg.norm(np.subtract(p1, p0)), 1e-6, "a rejected path moved the MAV")
+        self.assertTrue(wait_for(lambda: len(self.frames("rej")) >= 3, 10.0))
+        reasons = [m.data for m in self.frames("rej")]
+        self.assertEqual(len(reasons), 3, reasons)
+        self.assertIn("NaN", reasons[0])
+        self.assertIn("outside the bounds", reasons[1])
+        self.assertIn("frame 'map'", reasons[2])
 
     def test_6_path_following_and_goal_reached(self):
         x, y, z = self.current_pose()

@@ -7,7 +7,8 @@ Topics (relative names, resolved in the node's namespace):
   pub  camera/depth/image_raw (32FC1 m), camera/rgb/image_raw (rgb8), camera/camera_info (also as
        camera/depth/camera_info and camera/rgb/camera_info),
        camera/instance_gt (16UC1 object id), camera/class_gt (16UC1 class id), detections,
-       mav/pose, mav/goal_reached (PoseStamped), mav/collisions (UInt32, latched), /clock, tf
+       mav/pose, mav/goal_reached (PoseStamped), mav/collisions (UInt32, latched),
+       mav/path_rejected (String: why a path was refused), /clock, tf
 
 Time: the node advances sim time in physics steps and publishes /clock; it
 never reads ROS time itself (stamps come from its own counter), so it works
@@ -95,6 +96,7 @@ class MavSimNode:
         self.pub_pose = rospy.Publisher("mav/pose", PoseStamped, queue_size=10)
         self.pub_goal = rospy.Publisher("mav/goal_reached", PoseStamped, queue_size=10)
         self.pub_coll = rospy.Publisher("mav/collisions", UInt32, queue_size=1, latch=True)
+        self.pub_rejected = rospy.Publisher("mav/path_rejected", String, queue_size=5)
         self.pub_clock = rospy.Publisher("/clock", Clock, queue_size=10)
         self.tf = tf2_ros.TransformBroadcaster()
         self.tf_static = tf2_ros.StaticTransformBroadcaster()
@@ -113,7 +115,7 @@ class MavSimNode:
     def _on_path(self, msg: Path) -> None:
         frame = msg.header.frame_id.lstrip("/")
         if frame and frame != self.cfg.frames.world:
-            rospy.logerr("mav_sim: rejected path in frame '%s' (expected '%s')", frame, self.cfg.frames.world)
+            self._reject("path in frame '%s' (expected '%s')" % (frame, self.cfg.frames.world))
             return
         try:
             wps = waypoints_from_poses([((p.pose.position.x, p.pose.position.y, p.pose.position.z),
@@ -122,10 +124,14 @@ class MavSimNode:
             if self.sim is not None:
                 wps = self.sim.check_path(wps)
         except PathError as e:
-            rospy.logerr("mav_sim: rejected path of %d poses: %s; keeping the previous one", len(msg.poses), e)
+            self._reject("path of %d poses: %s" % (len(msg.poses), e))
             return
         with self._lock:
             self._pending_path = wps
+
+    def _reject(self, why: str) -> None:
+        rospy.logerr("mav_sim: rejected %s; keeping the previous path", why)
+        self.pub_rejected.publish(String(why))
 
     def _on_integrated(self, msg: FrameIntegrated) -> None:
         name = _short_name(msg.node)
@@ -268,7 +274,7 @@ class MavSimNode:
                 try:
                     sim.set_path(path)
                 except PathError as e:  # checked against a scene that was replaced since
-                    rospy.logerr("mav_sim: rejected path: %s", e)
+                    self._reject("path: %s" % e)
                 else:
                     if path:
                         rospy.loginfo("mav_sim: following a path of %d waypoints to (%.2f, %.2f, %.2f, yaw %.2f)",
