@@ -127,6 +127,7 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listene
   frontiers_sub_ = nh.subscribe("background_map/frontiers", 1, &PlannerNode::frontiersCallback, this);
   objects_sub_ = nh.subscribe("object_map/objects", 1, &PlannerNode::objectsCallback, this);
   goal_sub_ = nh.subscribe("mav/goal_reached", 1, &PlannerNode::goalReachedCallback, this);
+  stats_sub_ = nh.subscribe("background_map/stats", 1, &PlannerNode::statsCallback, this);
   timer_ = nh.createTimer(ros::Duration(0.2), &PlannerNode::timerCallback, this);
   ROS_INFO("planner: n %d, P_fr %.2f, a_ent/a_bg/a_obj %.2f/%.2f/%.2f, d_bg %.1f m, d_obj %.1f m",
            config_.n_candidates, config_.p_frontier, config_.a_ent, config_.a_bg, config_.a_obj,
@@ -231,6 +232,11 @@ void PlannerNode::objectsCallback(const semantic_exploration::ObjectArrayConstPt
     if (s.bbox_min_W.allFinite() && s.bbox_max_W.allFinite() && s.centroid_W.allFinite()) objs.push_back(s);
   }
   objects_ = std::move(objs);
+}
+
+void PlannerNode::statsCallback(const semantic_exploration::MapStatsConstPtr& msg) {
+  if (std::isfinite(msg->explored_volume_m3) && msg->explored_volume_m3 >= 0)
+    explored_volume_m3_ = msg->explored_volume_m3;
 }
 
 // ---------------------------------------------------------------- triggers
@@ -391,6 +397,7 @@ bool PlannerNode::iterate(std::string& message) {
   in.elapsed_s = (now - start_time_).toSec();
   in.frontiers_W = frontiers_W_;
   in.objects = objects_;
+  in.explored_volume_m3 = explored_volume_m3_;
 
   semexp::ExplorationProviders prov;
   const semexp::MapReplica& replica = replica_;

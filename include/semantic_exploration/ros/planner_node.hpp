@@ -4,7 +4,8 @@
 ///
 /// Subscribes `background_map/map_update` (MapBlocks, kept in a replica;
 /// a sequence gap triggers a `background_map/get_map` resync),
-/// `background_map/frontiers` (PointCloud2 xyz), `object_map/objects`,
+/// `background_map/frontiers` (PointCloud2 xyz), `background_map/stats`
+/// (explored volume, for the no-progress stop), `object_map/objects`,
 /// `mav/goal_reached`; pose from tf2 (world <- body, latest). Calls
 /// `background_map/compute_gains`, `object_map/compute_gains` (with the
 /// background hit depths for occlusion) and `depth_history/get_masks`, one
@@ -34,6 +35,7 @@
 #include <vector>
 
 #include "semantic_exploration/MapBlocks.h"
+#include "semantic_exploration/MapStats.h"
 #include "semantic_exploration/ObjectArray.h"
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
 #include "semantic_exploration/core/planning/map_replica.hpp"
@@ -50,6 +52,7 @@ class PlannerNode {
   void mapUpdateCallback(const semantic_exploration::MapBlocksConstPtr& msg);
   void frontiersCallback(const sensor_msgs::PointCloud2ConstPtr& msg);
   void objectsCallback(const semantic_exploration::ObjectArrayConstPtr& msg);
+  void statsCallback(const semantic_exploration::MapStatsConstPtr& msg);
   void goalReachedCallback(const geometry_msgs::PoseStampedConstPtr& msg);
   void timerCallback(const ros::TimerEvent& ev);
   bool planOnce(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
@@ -80,6 +83,7 @@ class PlannerNode {
   std::vector<Eigen::Vector3d> frontiers_W_;
   std::vector<semexp::ObjectSummary> objects_;
   bool have_frontiers_ = false;
+  double explored_volume_m3_ = -1.0;  ///< from background_map/stats; negative until received
 
   uint8_t state_ = 0;
   bool finished_ = false;
@@ -91,7 +95,7 @@ class PlannerNode {
 
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  ros::Subscriber update_sub_, frontiers_sub_, objects_sub_, goal_sub_;
+  ros::Subscriber update_sub_, frontiers_sub_, objects_sub_, goal_sub_, stats_sub_;
   ros::Publisher path_pub_, candidates_pub_, markers_pub_, status_pub_;
   ros::Publisher gain_pubs_[4];
   ros::ServiceServer plan_srv_;
