@@ -227,6 +227,18 @@ def test_ground_truth_export(tmp_path):
     assert pts.min(0)[0] > 0 and pts.max(0)[0] < 3.5 and pts.min(0)[2] > 0 and pts.max(0)[2] < 2.5
 
 
+def test_free_space_from_a_given_start_and_outside_start_rejected(tmp_path):
+    s = load_scene(EXAMPLE)
+    s.start = None
+    doc = export_ground_truth(s, str(tmp_path / "a"), DEFAULT_CLASS_NAMES)
+    assert doc["start"] is None and not (tmp_path / "a" / "free_space.json").exists()
+    export_ground_truth(s, str(tmp_path / "b"), DEFAULT_CLASS_NAMES, start=(0.5, 1.5, 1.2))
+    free = json.loads((tmp_path / "b" / "free_space.json").read_text())
+    assert 17.0 < free["explorable_free_volume_m3"] < 26.25
+    with pytest.raises(SceneError, match="not in free space"):
+        export_ground_truth(s, str(tmp_path / "c"), DEFAULT_CLASS_NAMES, start=(-0.05, 1.5, 1.2))
+
+
 def test_scene_rejects_inconsistent_arrays():
     with pytest.raises(SceneError, match="out of range"):
         Scene(np.zeros((3, 3)), [[0, 1, 5]], [0])

@@ -157,7 +157,7 @@ class MavSimNode:
                           *sim.start[:3], c.mav.radius_m)
         if c.scene.gt_dir:
             try:
-                export_ground_truth(sim.scene, c.scene.gt_dir, c.classes.names)
+                export_ground_truth(sim.scene, c.scene.gt_dir, c.classes.names, start=sim.start)
                 rospy.loginfo("mav_sim: ground truth written to %s", c.scene.gt_dir)
             except (OSError, SceneError) as e:
                 rospy.logerr("mav_sim: ground-truth export to '%s' failed: %s", c.scene.gt_dir, e)

@@ -713,12 +713,15 @@ def free_space_grid(scene: Scene, resolution_m: float = 0.1, start=None, margin_
 
 
 def export_ground_truth(scene: Scene, directory: str, class_names: Iterable[str],
-                        free_resolution_m: float = 0.1) -> Dict:
+                        free_resolution_m: float = 0.1, start=None) -> Dict:
     """Writes per-object PLYs, background.ply, objects.json and free_space.{json,npz}.
 
+    The explorable free space is the free volume connected to ``start`` (x, y,
+    z[, yaw]; default the scene's start pose); without a start it is skipped.
     Returns the objects.json content.
     """
     class_names = list(class_names)
+    start = scene.start if start is None else tuple(float(v) for v in start)
     os.makedirs(os.path.join(directory, "objects"), exist_ok=True)
     objs = []
     order = np.argsort(scene.face_object, kind="stable")  # faces grouped by object, once
@@ -736,12 +739,12 @@ def export_ground_truth(scene: Scene, directory: str, class_names: Iterable[str]
     write_mesh_ply(os.path.join(directory, "background.ply"), v, f, c)
     lo, hi = scene.bounds
     doc = {"scene": scene.name, "bounds_min": lo.round(4).tolist(), "bounds_max": hi.round(4).tolist(),
-           "start": list(scene.start) if scene.start else None, "class_names": class_names,
+           "start": list(start) if start else None, "class_names": class_names,
            "background_mesh": "background.ply", "objects": objs}
     with open(os.path.join(directory, "objects.json"), "w") as fh:
         json.dump(doc, fh, indent=1)
-    if scene.start is not None:
-        free, origin, res = free_space_grid(scene, free_resolution_m)
+    if start is not None:
+        free, origin, res = free_space_grid(scene, free_resolution_m, start)
         np.savez_compressed(os.path.join(directory, "free_space.npz"), free=free, origin=origin,
                             resolution=res)
         with open(os.path.join(directory, "free_space.json"), "w") as fh:
