@@ -164,29 +164,75 @@ void ObjectMap::render(const PinholeCamera& camera, const Eigen::Isometry3d& T_W
     }
     const auto id = static_cast<std::uint16_t>(kv.first);
     const float front_margin = static_cast<float>(kv.second->tsdf.params().truncation_m) + 4.f * tol;
-    for (int v = v0; v <= v1; ++v) {
-      float* trow = t_best.ptr<float>(v);
-      std::uint16_t* irow = object_ids.ptr<std::uint16_t>(v);
-      const float* drow = occlude ? depth_m.ptr<float>(v) : nullptr;
-      for (int u = u0; u <= u1; ++u) {
-        const Eigen::Vector3f ray = camera.ray_C(static_cast<float>(u), static_cast<float>(v));
-        const float n = ray.norm();
-        float t_max = std::min(trow[u], d_max * n), t_min = 0.f;
-        if (occlude) {
-          const float d = drow[u];
-          if (std::isfinite(d) && d > 0.f && d >= camera.d_min_m && d <= camera.d_max_m) {
-            t_max = std::min(t_max, d * n + tol);
-            // A surface well in front of the measured one would have been measured instead.
-            t_min = std::max(0.f, d * n - front_margin);
-          }
-        }
-        TsdfRayHit hit;
-        if (kv.second->tsdf.castRay(o_W, T_WCf.linear() * (ray / n), t_min, t_max, hit)) {
-          trow[u] = hit.distance_m;
-          irow[u] = id;
+    // Ray range of pixel (u, v) and its unit direction in world.
+    const auto range = [&](int u, int v, float& t_min, float& t_max, Eigen::Vector3f& dir_W) {
+      const Eigen::Vector3f ray = camera.ray_C(static_cast<float>(u), static_cast<float>(v));
+      const float n = ray.norm();
+      dir_W = T_WCf.linear() * (ray / n);
+      t_max = std::min(t_best.at<float>(v, u), d_max * n);
+      t_min = 0.f;
+      if (occlude) {
+        const float d = depth_m.at<float>(v, u);
+        if (std::isfinite(d) && d > 0.f && d >= camera.d_min_m && d <= camera.d_max_m) {
+          t_max = std::min(t_max, d * n + tol);
+          // A surface well in front of the measured one would have been measured instead.
+          t_min = std::max(0.f, d * n - front_margin);
         }
       }
-    }
+    };
+    const auto cast = [&](int u, int v) {
+      float t_min, t_max;
+      Eigen::Vector3f dir_W;
+      range(u, v, t_min, t_max, dir_W);
+      TsdfRayHit hit;
+      return kv.second->tsdf.castRay(o_W, dir_W, t_min, t_max, hit) ? hit.distance_m : inf;
+    };
+    const auto write = [&](int u, int v, float t) {
+      if (!std::isfinite(t)) return;
+      t_best.at<float>(v, u) = t;
+      object_ids.at<std::uint16_t>(v, u) = id;
+    };
+    // Adaptive subsampling: rays on every second row and column; a pixel
+    // between four samples that all missed is a miss, between four hits it
+    // takes their interpolated distance if that passes its own depth test;
+    // anything else gets its own ray. Masks under min_mask_pixels are dropped
+    // anyway, so 1-px slivers between samples do not matter.
+    std::vector<int> us, vs;
+    for (int u = u0; u <= u1; u += 2) us.push_back(u);
+    if (us.back() != u1) us.push_back(u1);
+    for (int v = v0; v <= v1; v += 2) vs.push_back(v);
+    if (vs.back() != v1) vs.push_back(v1);
+    std::vector<float> sample(us.size() * vs.size());
+    for (size_t j = 0; j < vs.size(); ++j)
+      for (size_t i = 0; i < us.size(); ++i) sample[j * us.size() + i] = cast(us[i], vs[j]);
+    for (size_t j = 0; j < vs.size(); ++j)
+      for (size_t i = 0; i < us.size(); ++i) write(us[i], vs[j], sample[j * us.size() + i]);
+    for (size_t j = 0; j + 1 < vs.size(); ++j)
+      for (size_t i = 0; i + 1 < us.size(); ++i) {
+        const float c00 = sample[j * us.size() + i], c10 = sample[j * us.size() + i + 1];
+        const float c01 = sample[(j + 1) * us.size() + i], c11 = sample[(j + 1) * us.size() + i + 1];
+        const int n_hit = std::isfinite(c00) + std::isfinite(c10) + std::isfinite(c01) + std::isfinite(c11);
+        if (n_hit == 0) continue;
+        const int ua = us[i], ub = us[i + 1], va = vs[j], vb = vs[j + 1];
+        for (int v = va; v <= vb; ++v)
+          for (int u = ua; u <= ub; ++u) {
+            if ((u == ua || u == ub) && (v == va || v == vb)) continue;  // a sample
+            if ((v == vb && j + 2 < vs.size()) || (u == ub && i + 2 < us.size())) continue;  // next cell's
+            if (n_hit == 4) {
+              const float fu = ub > ua ? static_cast<float>(u - ua) / (ub - ua) : 0.f;
+              const float fv = vb > va ? static_cast<float>(v - va) / (vb - va) : 0.f;
+              const float t = (1 - fv) * ((1 - fu) * c00 + fu * c10) + fv * ((1 - fu) * c01 + fu * c11);
+              float t_min, t_max;
+              Eigen::Vector3f dir_W;
+              range(u, v, t_min, t_max, dir_W);
+              if (t >= t_min && t <= t_max) {
+                write(u, v, t);
+                continue;
+              }
+            }
+            write(u, v, cast(u, v));
+          }
+      }
   }
   if (depth_out) {
     *depth_out = cv::Mat::zeros(camera.height, camera.width, CV_32FC1);
