@@ -1,6 +1,13 @@
 #include "semantic_exploration/ros/background_map_node.hpp"
 
 #include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/image_encodings.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
 
 #include "semantic_exploration/FrameIntegrated.h"
 #include "semantic_exploration/MapBlocks.h"
@@ -8,19 +15,65 @@
 
 namespace semexp_ros {
 
+namespace {
+
+constexpr double kColourSyncTolerance_s = 0.005;  // colour and depth of one frame share (almost) one stamp
+
+semantic_exploration::MapBlocks toMsg(const semexp::MapBlocksData& d, const ros::Time& stamp, const std::string& frame) {
+  semantic_exploration::MapBlocks m;
+  m.header.stamp = stamp;
+  m.header.frame_id = frame;
+  m.sequence = d.sequence;
+  m.full = d.full;
+  m.resolution_m = static_cast<float>(d.resolution_m);
+  m.block_size = static_cast<std::uint8_t>(d.block_size);
+  m.origin.x = d.origin_m.x();
+  m.origin.y = d.origin_m.y();
+  m.origin.z = d.origin_m.z();
+  m.encoding = semantic_exploration::MapBlocks::ENCODING_LOG_ODDS_I8;
+  m.coords = d.coords;
+  m.payload.resize(d.payload.size());
+  if (!d.payload.empty()) std::memcpy(m.payload.data(), d.payload.data(), d.payload.size());
+  return m;
+}
+
+sensor_msgs::Image floatImage(const std::vector<float>& v, int w, int h, const std_msgs::Header& header) {
+  sensor_msgs::Image img;
+  img.header = header;
+  img.width = static_cast<std::uint32_t>(w);
+  img.height = static_cast<std::uint32_t>(h);
+  img.encoding = sensor_msgs::image_encodings::TYPE_32FC1;
+  img.is_bigendian = 0;
+  img.step = static_cast<std::uint32_t>(w * sizeof(float));
+  img.data.resize(v.size() * sizeof(float));
+  if (!v.empty()) std::memcpy(img.data.data(), v.data(), img.data.size());
+  return img;
+}
+
+}  // namespace
+
 BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listener_(tf_buffer_) {
   const auto p = ParamReader::fromNodeHandle(pnh);
   camera_ = loadCamera(p);
   bounds_ = loadBounds(p);
   config_ = loadBackgroundMap(p);
+  // Fields not (yet) read by loadBackgroundMap.
+  p.get("background_map/surface_front_m", config_.surface_front_m);
+  p.get("background_map/integrate_min_distance", config_.integrate_min_distance);
+  config_.validate("background_map/");
   exploration_ = loadExploration(p);
   frames_ = loadFrames(p);
   p.get("tf_timeout_s", tf_timeout_s_);
   if (!(tf_timeout_s_ >= 0)) throw semexp::ConfigError("tf_timeout_s", "must be >= 0 s");
+  p.get("background_map/frontier_period_s", frontier_period_s_);
+  if (!(frontier_period_s_ >= 0)) throw semexp::ConfigError("background_map/frontier_period_s", "must be >= 0 s");
+  p.get("background_map/colour_wait_s", colour_wait_s_);
+  if (!(colour_wait_s_ >= 0)) throw semexp::ConfigError("background_map/colour_wait_s", "must be >= 0 s");
+  map_ = std::make_unique<semexp::OccupancyMap>(config_, bounds_);
 
   occupied_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("occupied", 1, true);
   frontiers_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("frontiers", 1, true);
-  update_pub_ = pnh.advertise<semantic_exploration::MapBlocks>("map_update", 10);
+  update_pub_ = pnh.advertise<semantic_exploration::MapBlocks>("map_update", 50);
   stats_pub_ = pnh.advertise<semantic_exploration::MapStats>("stats", 10);
   integrated_pub_ = nh.advertise<semantic_exploration::FrameIntegrated>("frame_integrated", 10);
   gains_srv_ = pnh.advertiseService("compute_gains", &BackgroundMapNode::computeGains, this);
@@ -28,9 +81,12 @@ BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) 
   save_srv_ = pnh.advertiseService("save", &BackgroundMapNode::save, this);
   info_sub_ = nh.subscribe("camera/camera_info", 1, &BackgroundMapNode::infoCallback, this);
   depth_sub_ = nh.subscribe("camera/depth/image_raw", 2, &BackgroundMapNode::depthCallback, this);
-  ROS_INFO("background_map: resolution %.3f m, bounds [%.1f %.1f %.1f] - [%.1f %.1f %.1f] m",
+  if (config_.integrate_colour) rgb_sub_ = nh.subscribe("camera/rgb/image_raw", 5, &BackgroundMapNode::rgbCallback, this);
+  flush_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.005, 0.5 * colour_wait_s_)), &BackgroundMapNode::flushTimer, this);
+  last_header_.frame_id = frames_.world;
+  ROS_INFO("background_map: resolution %.3f m, bounds [%.1f %.1f %.1f] - [%.1f %.1f %.1f] m, colour %s",
            config_.resolution_m, bounds_.min_m.x(), bounds_.min_m.y(), bounds_.min_m.z(), bounds_.max_m.x(),
-           bounds_.max_m.y(), bounds_.max_m.z());
+           bounds_.max_m.y(), bounds_.max_m.z(), config_.integrate_colour ? "on" : "off");
 }
 
 void BackgroundMapNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
@@ -44,27 +100,256 @@ void BackgroundMapNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg)
   have_info_ = true;
 }
 
+// ------------------------------------------------------------ frame pairing
+
+sensor_msgs::ImageConstPtr BackgroundMapNode::matchingRgb(const ros::Time& stamp) const {
+  for (auto it = rgb_buffer_.rbegin(); it != rgb_buffer_.rend(); ++it)
+    if (std::abs(((*it)->header.stamp - stamp).toSec()) <= kColourSyncTolerance_s) return *it;
+  return nullptr;
+}
+
 void BackgroundMapNode::depthCallback(const sensor_msgs::ImageConstPtr& msg) {
+  if (pending_depth_) {  // an older frame whose colour never came
+    processFrame(pending_depth_, nullptr);
+    pending_depth_.reset();
+  }
+  if (!config_.integrate_colour) return processFrame(msg, nullptr);
+  if (auto rgb = matchingRgb(msg->header.stamp)) return processFrame(msg, rgb);
+  // Wait briefly for the colour image only while a colour stream is alive.
+  if (!last_rgb_wall_.isZero() && (ros::WallTime::now() - last_rgb_wall_).toSec() < 1.0) {
+    pending_depth_ = msg;
+    pending_since_ = ros::WallTime::now();
+    return;
+  }
+  processFrame(msg, nullptr);
+}
+
+void BackgroundMapNode::rgbCallback(const sensor_msgs::ImageConstPtr& msg) {
+  rgb_buffer_.push_back(msg);
+  while (rgb_buffer_.size() > 10) rgb_buffer_.pop_front();
+  last_rgb_wall_ = ros::WallTime::now();
+  if (pending_depth_ &&
+      std::abs((msg->header.stamp - pending_depth_->header.stamp).toSec()) <= kColourSyncTolerance_s) {
+    const auto d = pending_depth_;
+    pending_depth_.reset();
+    processFrame(d, msg);
+  }
+}
+
+void BackgroundMapNode::flushTimer(const ros::WallTimerEvent&) {
+  if (pending_depth_ && (ros::WallTime::now() - pending_since_).toSec() >= colour_wait_s_) {
+    const auto d = pending_depth_;
+    pending_depth_.reset();
+    processFrame(d, nullptr);
+  }
+}
+
+// -------------------------------------------------------------- integration
+
+void BackgroundMapNode::reportFrame(const std_msgs::Header& header, bool integrated, double time_ms) {
   semantic_exploration::FrameIntegrated done;
-  done.header = msg->header;
+  done.header = header;
   done.node = "background_map";
-  done.integrated = false;
+  done.integrated = integrated;
+  done.time_ms = static_cast<float>(time_ms);
   integrated_pub_.publish(done);
 }
 
-bool BackgroundMapNode::computeGains(semantic_exploration::ComputeGains::Request&,
-                                     semantic_exploration::ComputeGains::Response&) {
-  ROS_WARN_THROTTLE(5.0, "background_map: compute_gains called before the map core is wired");
-  return false;
+void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, const sensor_msgs::ImageConstPtr& rgb_msg) {
+  const auto t0 = ros::WallTime::now();
+  auto fail = [&](const std::string& reason, const std::string& detail) {
+    drops_.drop(reason, detail);
+    publishStats(msg->header);
+    reportFrame(msg->header, false, (ros::WallTime::now() - t0).toSec() * 1e3);
+  };
+  cv::Mat depth_m;
+  auto err = depthToMeters(*msg, depth_m);
+  if (!err.empty()) return fail("bad_encoding", err);
+  if (!have_info_) return fail("no_camera_info", "depth received before any camera_info");
+  if (depth_m.cols != camera_.width || depth_m.rows != camera_.height)
+    return fail("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +
+                                     " but camera_info " + std::to_string(camera_.width) + "x" +
+                                     std::to_string(camera_.height));
+  cv::Mat rgb;
+  if (rgb_msg) {
+    err = colourToRgb(*rgb_msg, rgb);
+    if (err.empty() && rgb.size() != depth_m.size()) err = "colour and depth differ in size";
+    if (!err.empty()) {
+      drops_.drop("bad_rgb", err + " (integrating depth without colour)");
+      rgb.release();
+    }
+  }
+  Eigen::Isometry3d T_WC;
+  const std::string frame = msg->header.frame_id.empty() ? frames_.camera : msg->header.frame_id;
+  err = lookupPose(tf_buffer_, frames_.world, frame, msg->header.stamp, tf_timeout_s_, T_WC);
+  if (!err.empty()) return fail("no_tf", err);
+  if (!bounds_.contains(T_WC.translation()))
+    return fail("out_of_bounds", "camera at (" + std::to_string(T_WC.translation().x()) + ", " +
+                                     std::to_string(T_WC.translation().y()) + ", " +
+                                     std::to_string(T_WC.translation().z()) + ") lies outside the map bounds");
+  const auto t_int = ros::WallTime::now();
+  semexp::IntegrationStats st;
+  try {
+    st = map_->integrate(depth_m, rgb, camera_, T_WC);
+  } catch (const std::exception& e) {
+    return fail("bad_input", e.what());
+  }
+  last_integration_ms_ = static_cast<float>((ros::WallTime::now() - t_int).toSec() * 1e3);
+  const auto t_fr = ros::WallTime::now();
+  map_->updateFrontiers();
+  last_frontier_ms_ = static_cast<float>((ros::WallTime::now() - t_fr).toSec() * 1e3);
+  invalid_depth_pixels_ += st.invalid_pixels;
+  if (st.invalid_pixels > 0)
+    ROS_DEBUG_THROTTLE(5.0, "background_map: %zu invalid depth pixels in the last frame (they carve nothing)",
+                       st.invalid_pixels);
+  ++frames_integrated_;
+  last_header_ = msg->header;
+  last_header_.frame_id = frames_.world;
+  if (map_->pendingUpdateCount() > 0) update_pub_.publish(toMsg(map_->takeUpdate(), msg->header.stamp, frames_.world));
+  publishStats(msg->header);
+  clouds_dirty_ = true;
+  publishClouds(msg->header.stamp, false);
+  reportFrame(msg->header, true, (ros::WallTime::now() - t0).toSec() * 1e3);
 }
 
-bool BackgroundMapNode::getMap(semantic_exploration::GetMap::Request&, semantic_exploration::GetMap::Response&) {
-  return false;
+void BackgroundMapNode::publishStats(const std_msgs::Header& header) {
+  semantic_exploration::MapStats s;
+  s.header.stamp = header.stamp;
+  s.header.frame_id = frames_.world;
+  s.free_volume_m3 = map_->freeVolume();
+  s.occupied_volume_m3 = map_->occupiedVolume();
+  s.explored_volume_m3 = s.free_volume_m3 + s.occupied_volume_m3;
+  s.frontier_count = static_cast<std::uint32_t>(map_->frontierCount());
+  s.block_count = static_cast<std::uint32_t>(map_->blockCount());
+  s.memory_bytes = map_->memoryBytes();
+  s.integration_time_ms = last_integration_ms_;
+  s.frontier_time_ms = last_frontier_ms_;
+  s.frames_integrated = frames_integrated_;
+  s.dropped_bad_encoding = drops_.count("bad_encoding");
+  s.dropped_size_mismatch = drops_.count("size_mismatch");
+  s.dropped_no_tf = drops_.count("no_tf");
+  s.dropped_out_of_bounds = drops_.count("out_of_bounds");
+  s.dropped_no_camera_info = drops_.count("no_camera_info");
+  s.invalid_depth_pixels = invalid_depth_pixels_;
+  stats_pub_.publish(s);
 }
 
-bool BackgroundMapNode::save(semantic_exploration::SaveMap::Request&, semantic_exploration::SaveMap::Response& res) {
-  res.success = false;
-  res.message = "background_map: the map core is not wired into this node";
+void BackgroundMapNode::publishClouds(const ros::Time& stamp, bool force) {
+  const ros::WallTime now = ros::WallTime::now();
+  if (!clouds_dirty_ && !force) return;
+  bool published_any = false;
+  if (force || last_frontier_pub_.isZero() || (now - last_frontier_pub_).toSec() >= frontier_period_s_) {
+    sensor_msgs::PointCloud2 cloud;
+    cloud.header.stamp = stamp;
+    cloud.header.frame_id = frames_.world;
+    sensor_msgs::PointCloud2Modifier mod(cloud);
+    mod.setPointCloud2FieldsByString(1, "xyz");
+    mod.resize(map_->frontierCount());
+    sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
+    std::size_t n = 0;
+    map_->forEachFrontier([&](const Eigen::Vector3d& c, double) {
+      if (n >= map_->frontierCount()) return;
+      *x = static_cast<float>(c.x());
+      *y = static_cast<float>(c.y());
+      *z = static_cast<float>(c.z());
+      ++x, ++y, ++z, ++n;
+    });
+    mod.resize(n);
+    frontiers_pub_.publish(cloud);
+    last_frontier_pub_ = now;
+    published_any = true;
+  }
+  if (force || last_occupied_pub_.isZero() || (now - last_occupied_pub_).toSec() >= config_.publish_period_s) {
+    if (occupied_pub_.getNumSubscribers() > 0 || force) {
+      std::vector<Eigen::Vector3f> pts;
+      std::vector<std::array<std::uint8_t, 3>> cols;
+      map_->forEachOccupied([&](const Eigen::Vector3d& c, double, const std::uint8_t* rgb) {
+        pts.push_back(c.cast<float>());
+        cols.push_back({rgb[0], rgb[1], rgb[2]});
+      });
+      sensor_msgs::PointCloud2 cloud;
+      cloud.header.stamp = stamp;
+      cloud.header.frame_id = frames_.world;
+      sensor_msgs::PointCloud2Modifier mod(cloud);
+      mod.setPointCloud2FieldsByString(2, "xyz", "rgb");
+      mod.resize(pts.size());
+      sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
+      sensor_msgs::PointCloud2Iterator<std::uint8_t> r(cloud, "r"), g(cloud, "g"), b(cloud, "b");
+      for (std::size_t i = 0; i < pts.size(); ++i, ++x, ++y, ++z, ++r, ++g, ++b) {
+        *x = pts[i].x();
+        *y = pts[i].y();
+        *z = pts[i].z();
+        *r = cols[i][0];
+        *g = cols[i][1];
+        *b = cols[i][2];
+      }
+      occupied_pub_.publish(cloud);
+    }
+    last_occupied_pub_ = now;
+    published_any = true;
+  }
+  if (published_any) clouds_dirty_ = false;
+}
+
+// ----------------------------------------------------------------- services
+
+bool BackgroundMapNode::computeGains(semantic_exploration::ComputeGains::Request& req,
+                                     semantic_exploration::ComputeGains::Response& res) {
+  const int w = req.width, h = req.height;
+  if (w <= 0 || h <= 0) {
+    drops_.drop("bad_gain_request", "compute_gains needs width and height > 0");
+    return false;
+  }
+  const std::size_t n = req.positions.size(), per = static_cast<std::size_t>(w) * h;
+  if (!req.max_depth_m.empty() && req.max_depth_m.size() != n * per) {
+    drops_.drop("bad_gain_request", "max_depth_m has " + std::to_string(req.max_depth_m.size()) + " values, expected " +
+                                        std::to_string(n * per) + " (or none)");
+    return false;
+  }
+  std::vector<Eigen::Vector3d> pos;
+  pos.reserve(n);
+  for (const auto& p : req.positions) pos.emplace_back(p.x, p.y, p.z);
+  semexp::SphericalGrid grid;
+  grid.width = w;
+  grid.height = h;
+  grid.vfov_rad = camera_.vfov_rad();
+  semexp::GainSettings gs;
+  gs.d_min_m = camera_.d_min_m;
+  gs.d_max_m = camera_.d_max_m;
+  gs.d_desired_m = exploration_.d_bg_m;
+  const auto gains = map_->computeGains(pos, grid, gs, req.max_depth_m);
+  std_msgs::Header header;
+  header.stamp = ros::Time::now();
+  header.frame_id = frames_.world;
+  for (const auto& g : gains) {
+    res.entropy_gain.push_back(floatImage(g.entropy, w, h, header));
+    res.distance_gain.push_back(floatImage(g.distance, w, h, header));
+    res.hit_depth.push_back(floatImage(g.hit_depth_m, w, h, header));
+  }
+  return true;
+}
+
+bool BackgroundMapNode::getMap(semantic_exploration::GetMap::Request&, semantic_exploration::GetMap::Response& res) {
+  res.map = toMsg(map_->snapshot(), last_header_.stamp, frames_.world);
+  return true;
+}
+
+bool BackgroundMapNode::save(semantic_exploration::SaveMap::Request& req, semantic_exploration::SaveMap::Response& res) {
+  try {
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::absolute(req.directory.empty() ? fs::path(".") : fs::path(req.directory));
+    fs::create_directories(dir);
+    const std::string bt = (dir / "background_map.bt").string();
+    const std::string own = (dir / "background_map.semexpmap").string();
+    map_->exportOctomap(bt);
+    map_->save(own);
+    res.files = {bt, own};
+    res.success = true;
+    res.message = "wrote " + bt + " (OctoMap) and " + own + " (own format)";
+  } catch (const std::exception& e) {
+    res.success = false;
+    res.message = std::string("background_map: save failed: ") + e.what();
+  }
   return true;
 }
 

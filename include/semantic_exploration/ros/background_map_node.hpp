@@ -3,10 +3,17 @@
 /// ROS shell of the background occupancy map (paper Section IV-A).
 ///
 /// Subscribes `camera/depth/image_raw` (32FC1 m or 16UC1 mm),
-/// `camera/rgb/image_raw`, `camera/camera_info`; pose from tf2 at the image
-/// stamp. Publishes `~occupied`, `~frontiers` (PointCloud2), `~map_update`
-/// (MapBlocks), `~stats` (MapStats), `frame_integrated`; serves
-/// `~compute_gains`, `~get_map`, `~save`.
+/// `camera/rgb/image_raw` (optional; paired with depth by stamp),
+/// `camera/camera_info`; pose from tf2 at the image stamp. Publishes
+/// `~occupied` (PointCloud2 xyzrgb, throttled), `~frontiers` (PointCloud2 xyz,
+/// throttled), `~map_update` (MapBlocks, changed blocks only), `~stats`
+/// (MapStats), `frame_integrated`; serves `~compute_gains`, `~get_map`,
+/// `~save` (OctoMap .bt plus the own format).
+///
+/// Bad input (unsupported encodings, sizes that disagree with camera_info,
+/// depth before any camera_info, no tf at the stamp, a camera outside the
+/// bounds) drops the frame with a throttled log line and a MapStats counter;
+/// invalid depth pixels are counted and carve nothing.
 
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -14,11 +21,13 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <deque>
 #include <memory>
 
 #include "semantic_exploration/ComputeGains.h"
 #include "semantic_exploration/GetMap.h"
 #include "semantic_exploration/SaveMap.h"
+#include "semantic_exploration/core/occupancy_map.hpp"
 #include "semantic_exploration/ros/node_common.hpp"
 #include "semantic_exploration/ros/params.hpp"
 
@@ -30,7 +39,15 @@ class BackgroundMapNode {
 
  private:
   void depthCallback(const sensor_msgs::ImageConstPtr& msg);
+  void rgbCallback(const sensor_msgs::ImageConstPtr& msg);
   void infoCallback(const sensor_msgs::CameraInfoConstPtr& msg);
+  void flushTimer(const ros::WallTimerEvent&);
+  /// Integrates depth (with `rgb` if non-null); always reports frame_integrated.
+  void processFrame(const sensor_msgs::ImageConstPtr& depth, const sensor_msgs::ImageConstPtr& rgb);
+  sensor_msgs::ImageConstPtr matchingRgb(const ros::Time& stamp) const;
+  void reportFrame(const std_msgs::Header& header, bool integrated, double time_ms);
+  void publishStats(const std_msgs::Header& header);
+  void publishClouds(const ros::Time& stamp, bool force);
   bool computeGains(semantic_exploration::ComputeGains::Request& req, semantic_exploration::ComputeGains::Response& res);
   bool getMap(semantic_exploration::GetMap::Request& req, semantic_exploration::GetMap::Response& res);
   bool save(semantic_exploration::SaveMap::Request& req, semantic_exploration::SaveMap::Response& res);
@@ -41,14 +58,29 @@ class BackgroundMapNode {
   semexp::ExplorationConfig exploration_;
   FrameNames frames_;
   double tf_timeout_s_ = 0.1;
+  double frontier_period_s_ = 0.5;  ///< minimum period between ~frontiers clouds, s
+  double colour_wait_s_ = 0.05;     ///< how long a depth frame waits for its colour image, s (wall)
 
+  std::unique_ptr<semexp::OccupancyMap> map_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  ros::Subscriber depth_sub_, info_sub_;
+  ros::Subscriber depth_sub_, rgb_sub_, info_sub_;
   ros::Publisher occupied_pub_, frontiers_pub_, update_pub_, stats_pub_, integrated_pub_;
   ros::ServiceServer gains_srv_, get_map_srv_, save_srv_;
+  ros::WallTimer flush_timer_;
   DropCounter drops_;
   bool have_info_ = false;
+
+  std::deque<sensor_msgs::ImageConstPtr> rgb_buffer_;  ///< recent colour images, oldest first
+  sensor_msgs::ImageConstPtr pending_depth_;           ///< depth waiting for its colour image
+  ros::WallTime pending_since_;
+  ros::WallTime last_rgb_wall_;
+  ros::WallTime last_occupied_pub_, last_frontier_pub_;
+  std_msgs::Header last_header_;
+  std::uint64_t frames_integrated_ = 0;
+  std::uint64_t invalid_depth_pixels_ = 0;
+  float last_integration_ms_ = 0.f, last_frontier_ms_ = 0.f;
+  bool clouds_dirty_ = false;
 };
 
 }  // namespace semexp_ros
