@@ -128,6 +128,7 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listene
   objects_sub_ = nh.subscribe("object_map/objects", 1, &PlannerNode::objectsCallback, this);
   goal_sub_ = nh.subscribe("mav/goal_reached", 1, &PlannerNode::goalReachedCallback, this);
   stats_sub_ = nh.subscribe("background_map/stats", 1, &PlannerNode::statsCallback, this);
+  rejected_sub_ = nh.subscribe("mav/path_rejected", 5, &PlannerNode::pathRejectedCallback, this);
   timer_ = nh.createTimer(ros::Duration(0.2), &PlannerNode::timerCallback, this);
   ROS_INFO("planner: n %d, P_fr %.2f, a_ent/a_bg/a_obj %.2f/%.2f/%.2f, d_bg %.1f m, d_obj %.1f m",
            config_.n_candidates, config_.p_frontier, config_.a_ent, config_.a_bg, config_.a_obj,
@@ -245,6 +246,16 @@ void PlannerNode::goalReachedCallback(const geometry_msgs::PoseStampedConstPtr&)
   if (finished_ || state_ != ExplorationStatus::STATE_EXECUTING) return;
   std::string message;
   iterate(message);
+}
+
+void PlannerNode::pathRejectedCallback(const std_msgs::StringConstPtr& msg) {
+  if (finished_ || state_ != ExplorationStatus::STATE_EXECUTING) return;
+  // Replan on the next timer tick after retry_period_s, not at once: the
+  // same map would likely give the same path.
+  ROS_WARN("planner: the executor rejected the path (%s); replanning in %.1f s", msg->data.c_str(), retry_period_s_);
+  state_ = ExplorationStatus::STATE_WAITING;
+  last_attempt_ = ros::WallTime::now();
+  publishStatus(state_, "path rejected by the executor: " + msg->data);
 }
 
 void PlannerNode::timerCallback(const ros::TimerEvent&) {

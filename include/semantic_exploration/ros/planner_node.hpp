@@ -6,7 +6,8 @@
 /// a sequence gap triggers a `background_map/get_map` resync),
 /// `background_map/frontiers` (PointCloud2 xyz), `background_map/stats`
 /// (explored volume, for the no-progress stop), `object_map/objects`,
-/// `mav/goal_reached`; pose from tf2 (world <- body, latest). Calls
+/// `mav/goal_reached`, `mav/path_rejected` (std_msgs/String: the
+/// executor refused the path; replan after retry_period_s); pose from tf2 (world <- body, latest). Calls
 /// `background_map/compute_gains`, `object_map/compute_gains` (with the
 /// background hit depths for occlusion) and `depth_history/get_masks`, one
 /// batched call each per iteration. Publishes `~path` (nav_msgs/Path, yaw in
@@ -26,6 +27,7 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <std_msgs/String.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
@@ -54,6 +56,7 @@ class PlannerNode {
   void objectsCallback(const semantic_exploration::ObjectArrayConstPtr& msg);
   void statsCallback(const semantic_exploration::MapStatsConstPtr& msg);
   void goalReachedCallback(const geometry_msgs::PoseStampedConstPtr& msg);
+  void pathRejectedCallback(const std_msgs::StringConstPtr& msg);
   void timerCallback(const ros::TimerEvent& ev);
   bool planOnce(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   void publishStatus(uint8_t state, const std::string& message);
@@ -95,7 +98,7 @@ class PlannerNode {
 
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  ros::Subscriber update_sub_, frontiers_sub_, objects_sub_, goal_sub_, stats_sub_;
+  ros::Subscriber update_sub_, frontiers_sub_, objects_sub_, goal_sub_, stats_sub_, rejected_sub_;
   ros::Publisher path_pub_, candidates_pub_, markers_pub_, status_pub_;
   ros::Publisher gain_pubs_[4];
   ros::ServiceServer plan_srv_;
