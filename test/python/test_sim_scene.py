@@ -13,7 +13,7 @@ sys.path.insert(0, os.path.join(ROOT, "src"))
 from semantic_exploration.sim.classes import DEFAULT_CLASS_NAMES  # noqa: E402
 from semantic_exploration.sim.generator import generate  # noqa: E402
 from semantic_exploration.sim.scene import (Scene, SceneError, export_ground_truth, load_habitat,  # noqa: E402
-                                            load_mesh_with_labels, load_scene, read_house, save_habitat,
+                                            load_scene, read_house, save_habitat,
                                             write_semantic_ply)
 
 EXAMPLE = os.path.join(ROOT, "test", "data", "example_semantic.ply")

@@ -9,9 +9,9 @@ import pytest
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 sys.path.insert(0, os.path.join(ROOT, "src"))
 
-from semantic_exploration.sim.config import ConfigError, SimConfig, from_dict  # noqa: E402
+from semantic_exploration.sim.config import ConfigError, from_dict  # noqa: E402
 from semantic_exploration.sim.scene import SceneError  # noqa: E402
-from semantic_exploration.sim.simulator import (PathError, Simulator, load_simulator,  # noqa: E402
+from semantic_exploration.sim.simulator import (PathError, load_simulator,  # noqa: E402
                                                 quaternion_from_matrix, rpy_matrix, waypoints_from_poses)
 
 EXAMPLE = os.path.join(ROOT, "test", "data", "example_semantic.ply")

@@ -109,6 +109,7 @@ class MavSimNode:
         rospy.Subscriber("frame_integrated", FrameIntegrated, self._on_integrated, queue_size=50)
         rospy.Subscriber("~load_scene", String, lambda m: self._requests.put(m.data), queue_size=2)
         self._lockstep_nodes = [_short_name(n) for n in c.lockstep_nodes]
+        self._timeouts = 0
         self.pub_coll.publish(UInt32(0))
 
     # ------------------------------------------------------------- callbacks
@@ -215,8 +216,11 @@ class MavSimNode:
                     return
                 left = deadline - time.monotonic()
                 if left <= 0:
-                    rospy.logwarn("mav_sim: lockstep: no frame_integrated from %s for frame %.3f s after %.1f s; "
-                                  "continuing", ", ".join(missing), frame_ns / NS, self.cfg.lockstep_timeout_s)
+                    self._timeouts += 1
+                    if self._timeouts <= 3 or self._timeouts % 20 == 0:  # keep the log readable
+                        rospy.logwarn("mav_sim: lockstep: no frame_integrated from %s for frame %.3f s after %.1f s; "
+                                      "continuing (%d timeouts so far)", ", ".join(missing), frame_ns / NS,
+                                      self.cfg.lockstep_timeout_s, self._timeouts)
                     return
                 self._lock.wait(min(left, 0.1))
 
