@@ -35,8 +35,9 @@ struct OccupancyMap::FrameCtx {
     int j = 0;
     while (((u1 >> j) - (u0 >> j)) > 3 || ((v1 >> j) - (v0 >> j)) > 3) ++j;
     const int w = m.pyr_dims_[j].x();
-    const float* pmn = m.pyr_min_[j].data();
-    const float* pmx = m.pyr_max_[j].data();
+    // level 0 is the validated depth itself (invalid = 0 serves both min and max)
+    const float* pmn = j == 0 ? m.depth_buf_.data() : m.pyr_min_[j].data();
+    const float* pmx = j == 0 ? m.depth_buf_.data() : m.pyr_max_[j].data();
     mn = std::numeric_limits<float>::infinity();
     mx = 0.f;
     for (int v = v0 >> j; v <= (v1 >> j); ++v)
@@ -99,24 +100,21 @@ int OccupancyMap::allocateBlock(int cell) {
       // Grow by a quarter rather than doubling: the pools are most of the memory.
       const std::size_t cap = block_cell_.capacity() + block_cell_.capacity() / 4 + 64;
       block_cell_.reserve(cap);
+      block_surf_.reserve(cap);
       block_l_.reserve(cap * bs3_);
-      block_dist_.reserve(cap * bs3_);
-      if (cfg_.integrate_colour) block_rgbw_.reserve(cap * 4 * bs3_);
       block_front_.reserve(cap * fwords_);
       block_hit_.reserve(cap * fwords_);
     }
     block_cell_.push_back(-1);
+    block_surf_.push_back(-1);
     block_l_.resize(block_l_.size() + bs3_);
-    block_dist_.resize(block_dist_.size() + bs3_);
-    if (cfg_.integrate_colour) block_rgbw_.resize(block_rgbw_.size() + 4 * bs3_);
     block_front_.resize(block_front_.size() + fwords_);
     block_hit_.resize(block_hit_.size() + fwords_);
   }
   block_cell_[b] = cell;
   const std::size_t o = static_cast<std::size_t>(b) * bs3_;
   std::fill_n(block_l_.begin() + o, bs3_, cell_value_[cell]);
-  std::fill_n(block_dist_.begin() + o, bs3_, cell_dist_[cell]);
-  if (cfg_.integrate_colour) std::fill_n(block_rgbw_.begin() + 4 * o, 4 * bs3_, 0);
+  block_surf_[b] = -1;
   std::fill_n(block_front_.begin() + static_cast<std::size_t>(b) * fwords_, fwords_, 0);
   std::fill_n(block_hit_.begin() + static_cast<std::size_t>(b) * fwords_, fwords_, 0);
   cell_block_[cell] = b;
@@ -124,9 +122,36 @@ int OccupancyMap::allocateBlock(int cell) {
   return b;
 }
 
+int OccupancyMap::ensureSurface(int b) {
+  if (block_surf_[b] >= 0) return block_surf_[b];
+  int sl;
+  if (!surf_free_.empty()) {
+    sl = surf_free_.back();
+    surf_free_.pop_back();
+  } else {
+    sl = static_cast<int>(surf_slots_++);
+    if (block_dist_.size() == block_dist_.capacity()) {
+      const std::size_t cap = block_dist_.capacity() / bs3_ + block_dist_.capacity() / bs3_ / 4 + 64;
+      block_dist_.reserve(cap * bs3_);
+      if (cfg_.integrate_colour) block_rgbw_.reserve(cap * 4 * bs3_);
+    }
+    block_dist_.resize(block_dist_.size() + bs3_);
+    if (cfg_.integrate_colour) block_rgbw_.resize(block_rgbw_.size() + 4 * bs3_);
+  }
+  const std::size_t o = static_cast<std::size_t>(sl) * bs3_;
+  std::fill_n(block_dist_.begin() + o, bs3_, kNoDist);
+  if (cfg_.integrate_colour) std::fill_n(block_rgbw_.begin() + 4 * o, 4 * bs3_, 0);
+  block_surf_[b] = sl;
+  return sl;
+}
+
 void OccupancyMap::releaseBlock(int cell) {
   const int b = cell_block_[cell];
   if (b < 0) return;
+  if (block_surf_[b] >= 0) {
+    surf_free_.push_back(block_surf_[b]);
+    block_surf_[b] = -1;
+  }
   if (cell_flags_[cell] & kBlockFrontier) {
     frontier_voxels_ -= static_cast<std::size_t>(blockFrontierBits(cell));
     --frontier_block_count_;
@@ -191,8 +216,8 @@ IntegrationStats OccupancyMap::integrate(const float* depth_m, const std::uint8_
   pyr_dims_.assign(1, Eigen::Vector2i(W, H));
   pyr_min_.resize(1);
   pyr_max_.resize(1);
-  pyr_min_[0] = depth_buf_;
-  pyr_max_[0] = depth_buf_;
+  pyr_min_[0].clear();  // level 0 is depth_buf_ itself
+  pyr_max_[0].clear();
   while (pyr_dims_.back().x() > 1 || pyr_dims_.back().y() > 1) {
     const Eigen::Vector2i pd = pyr_dims_.back();
     const Eigen::Vector2i nd((pd.x() + 1) / 2, (pd.y() + 1) / 2);
@@ -202,8 +227,8 @@ IntegrationStats OccupancyMap::integrate(const float* depth_m, const std::uint8_
     pyr_max_.resize(j + 1);
     pyr_min_[j].assign(static_cast<std::size_t>(nd.x()) * nd.y(), 0.f);
     pyr_max_[j].assign(static_cast<std::size_t>(nd.x()) * nd.y(), 0.f);
-    const auto& pmn = pyr_min_[j - 1];
-    const auto& pmx = pyr_max_[j - 1];
+    const float* pmn = j == 1 ? depth_buf_.data() : pyr_min_[j - 1].data();
+    const float* pmx = j == 1 ? depth_buf_.data() : pyr_max_[j - 1].data();
     for (int v = 0; v < nd.y(); ++v)
       for (int u = 0; u < nd.x(); ++u) {
         float mn = std::numeric_limits<float>::infinity(), mx = 0.f;
@@ -383,7 +408,7 @@ void OccupancyMap::freeCell(FrameCtx& ctx, int cell) {
     return;
   }
   std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
-  std::uint16_t* D = block_dist_.data() + static_cast<std::size_t>(b) * bs3_;
+  std::uint16_t* D = block_surf_[b] >= 0 ? block_dist_.data() + static_cast<std::size_t>(block_surf_[b]) * bs3_ : nullptr;
   bool changed = false;
   const Eigen::Vector3d c0 = origin_ + (Eigen::Vector3d(bx, by, bz) * bs_ + Eigen::Vector3d::Constant(0.5)) * res_ - ctx.cam_W;
   int i = 0;
@@ -396,7 +421,7 @@ void OccupancyMap::freeCell(FrameCtx& ctx, int cell) {
           L[i] = nv;
           changed = true;
         }
-        if (cfg_.integrate_min_distance) {
+        if (D && cfg_.integrate_min_distance) {
           const double d = (c0 + Eigen::Vector3d(x, y, z) * res_).norm();
           D[i] = std::min(D[i], toMm(static_cast<float>(d)));
         }
@@ -412,8 +437,15 @@ void OccupancyMap::updateCellVoxels(FrameCtx& ctx, int cell) {
   const int b = was_uniform ? allocateBlock(cell) : cell_block_[cell];
   const int bz = cell / (nb_.x() * nb_.y()), by = (cell / nb_.x()) % nb_.y(), bx = cell % nb_.x();
   std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
-  std::uint16_t* Dm = block_dist_.data() + static_cast<std::size_t>(b) * bs3_;
-  std::uint8_t* C = ctx.rgb ? block_rgbw_.data() + static_cast<std::size_t>(b) * bs3_ * 4 : nullptr;
+  // Surface data pointers; allocated at the first occupied update of this block.
+  std::uint16_t* Dm = nullptr;
+  std::uint8_t* C = nullptr;
+  auto attachSurface = [&] {
+    const std::size_t sl = static_cast<std::size_t>(ensureSurface(b));
+    Dm = block_dist_.data() + sl * bs3_;
+    if (cfg_.integrate_colour) C = block_rgbw_.data() + sl * bs3_ * 4;
+  };
+  if (block_surf_[b] >= 0) attachSurface();
   const Eigen::Vector3d c0_W = origin_ + (Eigen::Vector3d(bx, by, bz) * bs_ + Eigen::Vector3d::Constant(0.5)) * res_;
   const Eigen::Vector3f c0 = (ctx.R_CW * c0_W + ctx.t_CW).cast<float>();
   const Eigen::Vector3f ex = (ctx.R_CW.col(0) * res_).cast<float>();
@@ -459,7 +491,8 @@ void OccupancyMap::updateCellVoxels(FrameCtx& ctx, int cell) {
           nv = static_cast<std::int16_t>(std::max(lmin, base + lf));
         } else if (hit || p.z() <= d + band) {
           nv = static_cast<std::int16_t>(std::min(lmax, base + lo));
-          if (C && d > 0.f) {
+          if (!Dm) attachSurface();
+          if (C && ctx.rgb && d > 0.f) {
             std::uint8_t* c = C + 4 * i;
             const int w = c[3];
             const std::uint8_t* in = ctx.rgb + 3 * pix;
@@ -474,7 +507,7 @@ void OccupancyMap::updateCellVoxels(FrameCtx& ctx, int cell) {
           L[i] = nv;
           changed = true;
         }
-        if (track_dist) {
+        if (track_dist && Dm) {
           const std::uint16_t dm = toMm(p.norm());
           if (dm < Dm[i]) Dm[i] = dm;
         }
@@ -611,6 +644,7 @@ std::size_t OccupancyMap::memoryBytes() const {
        cell_dist_.capacity() * sizeof(std::uint16_t) + cell_flags_.capacity() + cell_stamp_.capacity() * sizeof(std::uint32_t);
   m += block_cell_.capacity() * sizeof(std::int32_t) + block_l_.capacity() * sizeof(std::int16_t) +
        block_dist_.capacity() * sizeof(std::uint16_t) + block_rgbw_.capacity() + block_front_.capacity() * sizeof(std::uint64_t) +
+       block_surf_.capacity() * sizeof(std::int32_t) + surf_free_.capacity() * sizeof(std::int32_t) +
        block_hit_.capacity() * sizeof(std::uint64_t) + hit_cells_.capacity() * sizeof(int) +
        free_slots_.capacity() * sizeof(std::int32_t);
   for (const Level& l : levels_) m += l.s.capacity() * sizeof(Summary);

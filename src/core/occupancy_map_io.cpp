@@ -110,8 +110,11 @@ MapBlocksData OccupancyMap::snapshot() const {
 void OccupancyMap::clearAll() {
   block_cell_.clear();
   block_l_.clear();
+  block_surf_.clear();
   block_dist_.clear();
   block_rgbw_.clear();
+  surf_free_.clear();
+  surf_slots_ = 0;
   block_front_.clear();
   block_hit_.clear();
   free_slots_.clear();
@@ -148,8 +151,10 @@ bool OccupancyMap::applyBlocks(const MapBlocksData& m) {
       const int b = cell_block_[cell] >= 0 ? cell_block_[cell] : allocateBlock(cell);
       std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
       for (int i = 0; i < bs3_; ++i) L[i] = decodeL(q[i]);
-      std::fill_n(block_dist_.begin() + static_cast<std::size_t>(b) * bs3_, bs3_, kNoDist);
-      if (cfg_.integrate_colour) std::fill_n(block_rgbw_.begin() + static_cast<std::size_t>(b) * bs3_ * 4, 4 * bs3_, 0);
+      if (block_surf_[b] >= 0) {  // colour and distance are not replicated
+        surf_free_.push_back(block_surf_[b]);
+        block_surf_[b] = -1;
+      }
     }
     changed.push_back(cell);
   }
@@ -187,8 +192,13 @@ void OccupancyMap::save(const std::string& path) const {
     const std::size_t o = static_cast<std::size_t>(b) * bs3_;
     put(f, static_cast<std::int32_t>(cell));
     putVec(f, block_l_.data() + o, bs3_);
-    putVec(f, block_dist_.data() + o, bs3_);
-    if (cfg_.integrate_colour) putVec(f, block_rgbw_.data() + 4 * o, 4 * bs3_);
+    const int sl = block_surf_[b];
+    put(f, static_cast<std::uint8_t>(sl >= 0));
+    if (sl >= 0) {
+      const std::size_t so = static_cast<std::size_t>(sl) * bs3_;
+      putVec(f, block_dist_.data() + so, bs3_);
+      if (cfg_.integrate_colour) putVec(f, block_rgbw_.data() + 4 * so, 4 * bs3_);
+    }
     putVec(f, block_front_.data() + static_cast<std::size_t>(b) * fwords_, fwords_);
   }
   std::vector<int> fb, fc;  // live entries, in list order
@@ -238,8 +248,11 @@ OccupancyMap OccupancyMap::load(const std::string& path) {
     const int b = m.allocateBlock(cell);
     const std::size_t o = static_cast<std::size_t>(b) * m.bs3_;
     getVec(f, m.block_l_.data() + o, m.bs3_);
-    getVec(f, m.block_dist_.data() + o, m.bs3_);
-    if (cfg.integrate_colour) getVec(f, m.block_rgbw_.data() + 4 * o, 4 * m.bs3_);
+    if (get<std::uint8_t>(f)) {
+      const std::size_t so = static_cast<std::size_t>(m.ensureSurface(b)) * m.bs3_;
+      getVec(f, m.block_dist_.data() + so, m.bs3_);
+      if (cfg.integrate_colour) getVec(f, m.block_rgbw_.data() + 4 * so, 4 * m.bs3_);
+    }
     getVec(f, m.block_front_.data() + static_cast<std::size_t>(b) * m.fwords_, m.fwords_);
   }
   for (int c = 0; c < static_cast<int>(m.cell_block_.size()); ++c) cells.push_back(c);

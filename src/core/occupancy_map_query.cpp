@@ -77,8 +77,9 @@ bool OccupancyMap::colour(const Eigen::Vector3d& p_W, std::uint8_t rgb[3]) const
   const int b = cell_block_[cell];
   if (b < 0) return false;
   const int m = bs_ - 1;
-  const std::uint8_t* c =
-      block_rgbw_.data() + 4 * (static_cast<std::size_t>(b) * bs3_ + ((v.x() & m) + bs_ * ((v.y() & m) + bs_ * (v.z() & m))));
+  if (block_surf_[b] < 0) return false;
+  const std::uint8_t* c = block_rgbw_.data() + 4 * (static_cast<std::size_t>(block_surf_[b]) * bs3_ +
+                                                    ((v.x() & m) + bs_ * ((v.y() & m) + bs_ * (v.z() & m))));
   if (c[3] == 0) return false;
   std::copy(c, c + 3, rgb);
   return true;
@@ -93,7 +94,9 @@ double OccupancyMap::minObservedDistance(const Eigen::Vector3d& p_W) const {
   const int m = bs_ - 1;
   const std::uint16_t d =
       b < 0 ? cell_dist_[cell]
-            : block_dist_[static_cast<std::size_t>(b) * bs3_ + ((v.x() & m) + bs_ * ((v.y() & m) + bs_ * (v.z() & m)))];
+      : block_surf_[b] < 0
+          ? kNoDist
+          : block_dist_[static_cast<std::size_t>(block_surf_[b]) * bs3_ + ((v.x() & m) + bs_ * ((v.y() & m) + bs_ * (v.z() & m)))];
   return d == kNoDist ? inf : d / 1000.0;
 }
 
@@ -284,7 +287,8 @@ std::vector<GainImages> OccupancyMap::computeGains(const std::vector<Eigen::Vect
           if (vox >= 0) {
             const Eigen::Vector3i vi(bx * bs_ + vox % bs_, by * bs_ + (vox / bs_) % bs_, bz * bs_ + vox / (bs_ * bs_));
             centre = origin_ + (vi.cast<double>() + Eigen::Vector3d::Constant(0.5)) * res_;
-            dmm = block_dist_[static_cast<std::size_t>(cell_block_[cell]) * bs3_ + vox];
+            const int sl = block_surf_[cell_block_[cell]];
+            dmm = sl < 0 ? kNoDist : block_dist_[static_cast<std::size_t>(sl) * bs3_ + vox];
           } else {
             centre = origin_ + (Eigen::Vector3d(bx, by, bz) * bs_ + Eigen::Vector3d::Constant(0.5 * bs_)) * res_;
             dmm = cell_dist_[cell];
@@ -326,8 +330,8 @@ void OccupancyMap::forEachOccupied(
         for (int x = 0; x < bs_; ++x, ++i) {
           if (L[i] == kUnknown || L[i] < 0) continue;
           const std::uint8_t* c = grey;
-          if (cfg_.integrate_colour) {
-            const std::uint8_t* cc = block_rgbw_.data() + 4 * (static_cast<std::size_t>(b) * bs3_ + i);
+          if (cfg_.integrate_colour && block_surf_[b] >= 0) {
+            const std::uint8_t* cc = block_rgbw_.data() + 4 * (static_cast<std::size_t>(block_surf_[b]) * bs3_ + i);
             if (cc[3] > 0) c = cc;
           }
           f(origin_ + (Eigen::Vector3d(bx * bs_ + x, by * bs_ + y, bz * bs_ + z) + Eigen::Vector3d::Constant(0.5)) * res_,

@@ -206,6 +206,7 @@ class OccupancyMap {
   void initGeometry();
   int cellIndex(int bx, int by, int bz) const { return bx + nb_.x() * (by + nb_.y() * bz); }
   int allocateBlock(int cell);
+  int ensureSurface(int b);  ///< surface slot of block b, allocated (distances never, no colour) if missing
   void releaseBlock(int cell);
   // integration (occupancy_map.cpp)
   void visitNode(FrameCtx& ctx, int k, int ix, int iy, int iz);
@@ -247,8 +248,13 @@ class OccupancyMap {
   // per block slot (structure of arrays)
   std::vector<std::int32_t> block_cell_;   ///< owning cell or -1 (free slot)
   std::vector<std::int16_t> block_l_;      ///< bs3 per block
-  std::vector<std::uint16_t> block_dist_;  ///< bs3 per block, mm (0xFFFF never)
-  std::vector<std::uint8_t> block_rgbw_;   ///< 4 per voxel (r, g, b, weight) if colour is on
+  // Surface data (distance, colour) only for blocks that ever held an occupied
+  // voxel: most blocks (frustum borders, free space near surfaces) never do.
+  std::vector<std::int32_t> block_surf_;   ///< surface slot of each block or -1
+  std::vector<std::uint16_t> block_dist_;  ///< bs3 per surface slot, mm (0xFFFF never)
+  std::vector<std::uint8_t> block_rgbw_;   ///< 4 per voxel (r, g, b, weight) per surface slot if colour is on
+  std::vector<std::int32_t> surf_free_;    ///< released surface slots
+  std::size_t surf_slots_ = 0;             ///< surface slots ever allocated
   std::vector<std::uint64_t> block_front_; ///< frontier bits, fwords_ per block
   std::vector<std::uint64_t> block_hit_;   ///< per-frame bits of voxels holding a measured endpoint, fwords_ per block
   std::vector<int> hit_cells_;             ///< cells with endpoint bits in the current frame
