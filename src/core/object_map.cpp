@@ -162,6 +162,7 @@ void ObjectMap::render(const PinholeCamera& camera, const Eigen::Isometry3d& T_W
       v0 = std::max(v0, static_cast<int>(std::floor(vmin)));
       v1 = std::min(v1, static_cast<int>(std::ceil(vmax)));
     }
+    if (u0 > u1 || v0 > v1) continue;  // the box projects beside the image
     const auto id = static_cast<std::uint16_t>(kv.first);
     const float front_margin = static_cast<float>(kv.second->tsdf.params().truncation_m) + 4.f * tol;
     // Ray range of pixel (u, v) and its unit direction in world.

@@ -116,6 +116,12 @@ TEST(ObjectMap, RenderOccludedByMeasuredDepth) {
   // The measured depth of the object itself does not hide it.
   map.render(cam, T_WC, depth, ids);
   EXPECT_GT(iou(ids, labels, 1), 0.9);
+  // Objects in front of the camera but beside the image render nothing.
+  const Eigen::Vector3d eye(-1.5, 0.0, 1.0);
+  map.render(cam, lookAt(eye, eye + Eigen::Vector3d(1.0, -1.5, 0.0)), cv::Mat(), ids);
+  EXPECT_EQ(cv::countNonZero(ids), 0);
+  map.render(cam, lookAt(eye, eye + Eigen::Vector3d(1.0, 0.0, 2.0)), cv::Mat(), ids);
+  EXPECT_EQ(cv::countNonZero(ids), 0);
 }
 
 TEST(ObjectMap, VisibleUndetectedObjectGainsDataWithoutForeground) {
