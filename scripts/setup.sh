@@ -28,6 +28,7 @@ DEBIAN_PKGS=(
   python3-nav-msgs python3-visualization-msgs python3-std-srvs
   python3-tf2-msgs python3-numpy python3-yaml python3-scipy
   python3-matplotlib
+  rviz xvfb xauth imagemagick libgl1-mesa-dri
 )
 
 NOETIC_PKGS=(
@@ -41,6 +42,7 @@ NOETIC_PKGS=(
   libeigen3-dev libopencv-dev libpcl-dev libgtest-dev
   python3-colcon-common-extensions python3-numpy python3-yaml python3-scipy
   python3-matplotlib
+  ros-noetic-rviz xvfb xauth imagemagick libgl1-mesa-dri
 )
 
 missing() {
