@@ -354,18 +354,27 @@ std::vector<std::vector<std::uint8_t>> PlannerNode::historyMasks(const std::vect
 
 // ---------------------------------------------------------------- iteration
 
-bool PlannerNode::pathSafe(const std::vector<Eigen::Vector3d>& path) const {
+bool PlannerNode::pathSafe(const std::vector<Eigen::Vector3d>& path, bool escaped, std::string& why) const {
   // Last guard before publishing: no point of the path within R of an
-  // occupied voxel (unknown allowed for an escape from an invalid start).
+  // occupied voxel (unknown allowed), R/2 on an escape segment out of an
+  // invalid start (as the path planner checks it).
   const double step = std::max(0.5 * replica_.resolution_m(), 1e-3);
   for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+    const double radius = (escaped && i == 0) ? 0.5 * config_.mav_radius_m : config_.mav_radius_m;
     const double len = (path[i + 1] - path[i]).norm();
     const int n = std::max(1, static_cast<int>(std::ceil(len / step)));
-    for (int k = 0; k <= n; ++k)
-      if (!replica_.sphere_not_occupied(path[i] + (path[i + 1] - path[i]) * (static_cast<double>(k) / n),
-                                        config_.mav_radius_m))
+    for (int k = 0; k <= n; ++k) {
+      const Eigen::Vector3d q = path[i] + (path[i + 1] - path[i]) * (static_cast<double>(k) / n);
+      if (!replica_.sphere_not_occupied(q, radius)) {
+        char buf[160];
+        std::snprintf(buf, sizeof(buf), "occupied voxel within %.3f m of (%.2f, %.2f, %.2f) on segment %zu of %zu",
+                      radius, q.x(), q.y(), q.z(), i + 1, path.size() - 1);
+        why = buf;
         return false;
+      }
+    }
   }
+  if (path.empty()) why = "empty path";
   return !path.empty();
 }
 
@@ -429,8 +438,11 @@ bool PlannerNode::iterate(std::string& message) {
     r.message = std::string("planning failed: ") + e.what();
   }
   bool published = false;
-  if (r.winner >= 0 && !pathSafe(r.path_W)) {
-    r.message = "the chosen path failed the final occupancy check and was not published; " + r.message;
+  std::string unsafe;
+  if (r.winner >= 0 &&
+      !pathSafe(r.path_W, r.candidates[static_cast<std::size_t>(r.winner)].plan.escaped, unsafe)) {
+    r.message = "the chosen path failed the final occupancy check (" + unsafe + ") and was not published; " +
+                r.message;
     r.winner = -1;
   }
   if (r.winner >= 0) {

@@ -68,7 +68,7 @@ class PlannerNode {
   std::vector<semexp::GainSet> computeGains(const std::vector<Eigen::Vector3d>& positions_W);
   std::vector<std::vector<std::uint8_t>> historyMasks(const std::vector<Eigen::Vector3d>& positions_W);
   void publishResult(const semexp::IterationResult& r, const ros::Time& stamp, double current_yaw);
-  bool pathSafe(const std::vector<Eigen::Vector3d>& path_W) const;
+  bool pathSafe(const std::vector<Eigen::Vector3d>& path_W, bool escaped, std::string& why) const;
 
   semexp::PlannerConfig config_;
   semexp::ExplorationConfig exploration_;

@@ -179,12 +179,29 @@ PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, con
   Eigen::Vector3d goal = goal_in;
   for (int i = 0; i < 3; ++i) goal[i] = std::clamp(goal[i], state_bounds_.min_m[i], state_bounds_.max_m[i]);
   Eigen::Vector3d projected;
-  const bool goal_valid =
-      nearest_valid(goal, 2.0 * config_.mav_radius_m + 2.0 * resolution_m_, projected);
-  if (goal_valid) goal = projected;
+  bool goal_valid = nearest_valid(goal, 2.0 * config_.mav_radius_m + 2.0 * resolution_m_, projected);
+  bool moved_far = false;
+  if (goal_valid) {
+    goal = projected;
+  } else {
+    // Deep in unknown or occupied space: take the first valid point on the
+    // line back towards the start. An exact solve to it ends early (cost
+    // threshold / convergence), where an approximate solve always spends the
+    // whole budget; the RRT* approximation below remains the fallback.
+    const double len = (start - goal).norm();
+    const int n = static_cast<int>(std::ceil(len / resolution_m_));
+    for (int k = 1; k < n; ++k) {
+      const Eigen::Vector3d q = goal + (start - goal) * (static_cast<double>(k) / n);
+      if (valid(q)) {
+        goal = q;
+        goal_valid = moved_far = true;
+        break;
+      }
+    }
+  }
 
   if (goal_valid && segment_valid(start, goal)) {
-    out.status = PlannedPath::Status::kStraight;
+    out.status = moved_far ? PlannedPath::Status::kApproximate : PlannedPath::Status::kStraight;
     out.path_W = {start, goal};
     out.distance_to_goal_m = (goal_in - goal).norm();
     return out;
@@ -253,8 +270,8 @@ PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, con
   }
   path.front() = start;  // OMPL copies the start exactly; make it bit-exact anyway
   out.path_W = std::move(path);
-  out.status = (st == ob::PlannerStatus::EXACT_SOLUTION) ? PlannedPath::Status::kExact
-                                                         : PlannedPath::Status::kApproximate;
+  out.status = (st == ob::PlannerStatus::EXACT_SOLUTION && !moved_far) ? PlannedPath::Status::kExact
+                                                                       : PlannedPath::Status::kApproximate;
   out.distance_to_goal_m = (goal_in - out.path_W.back()).norm();
   return out;
 }

@@ -45,7 +45,9 @@ struct PlannedPath {
 /// Per goal: (1) if the straight segment is valid it is the path, no planner;
 /// (2) an invalid goal (e.g. a frontier touching unknown space) is moved to
 /// the nearest valid point within goal_search_radius = 2 R + 2 resolution,
-/// searched on shells of 26 directions; (3) InformedRRTstar with the path
+/// searched on shells of 26 directions, and a goal with no valid point that
+/// close to the first valid point on the line back to the start (then the
+/// result counts as approximate); (3) InformedRRTstar with the path
 /// length objective and a cost threshold of cost_threshold_factor times the
 /// straight-line distance (so a solve stops early once near-optimal), within
 /// time_budget_s; approximate solutions are accepted; (4) the path is
