@@ -179,7 +179,11 @@ void OccupancyMap::march(const Eigen::Vector3d& o_W, const Eigen::Vector3d& dir_
   const Eigen::Vector3i nv = nb_ * bs_;
   const int m = bs_ - 1;
   double t = t0 / res_;
-  const double tend = t1 / res_;
+  double tend = t1 / res_;
+  for (int i = 0; i < 3; ++i) {  // coarse nodes may reach past the map: stop where the ray leaves it
+    if (d[i] > 0) tend = std::min(tend, (nv[i] - o[i]) * inv[i]);
+    if (d[i] < 0) tend = std::min(tend, (0.0 - o[i]) * inv[i]);
+  }
   while (t < tend) {
     const Eigen::Vector3d p = o + d * (t + 1e-7);
     int v[3];
@@ -195,9 +199,29 @@ void OccupancyMap::march(const Eigen::Vector3d& o_W, const Eigen::Vector3d& dir_
     int size = 1;
     int lo[3];
     if (b >= 0) {
-      vox = (v[0] & m) + bs_ * ((v[1] & m) + bs_ * (v[2] & m));
-      l = block_l_[static_cast<std::size_t>(b) * bs3_ + vox];
-      lo[0] = v[0], lo[1] = v[1], lo[2] = v[2];
+      // Inside a dense block: integer 3D DDA voxel by voxel until the ray leaves it.
+      const std::int16_t* Lb = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
+      int idx[3], step[3];
+      double tmax[3], tdelta[3];
+      for (int i = 0; i < 3; ++i) {
+        idx[i] = v[i] & m;
+        step[i] = d[i] > 0 ? 1 : (d[i] < 0 ? -1 : 0);
+        tmax[i] = d[i] > 0 ? (v[i] + 1 - o[i]) * inv[i] : (d[i] < 0 ? (v[i] - o[i]) * inv[i] : inf);
+        tdelta[i] = step[i] != 0 ? std::abs(inv[i]) : inf;
+      }
+      while (true) {
+        const int vx = idx[0] + bs_ * (idx[1] + bs_ * idx[2]);
+        const int a = tmax[0] < tmax[1] ? (tmax[0] < tmax[2] ? 0 : 2) : (tmax[1] < tmax[2] ? 1 : 2);
+        double tx = tmax[a];
+        if (!(tx > t)) tx = t + 1e-6;
+        if (!f(t * res_, std::min(tx, tend) * res_, Lb[vx], cell, vx)) return;
+        t = tx;
+        if (t >= tend) return;
+        idx[a] += step[a];
+        tmax[a] += tdelta[a];
+        if (idx[a] < 0 || idx[a] > m) break;  // left the block: the outer loop finds the next leaf
+      }
+      continue;
     } else {
       l = cell_value_[cell];
       int k = 0;

@@ -417,3 +417,52 @@ TEST(OccupancyMap, IncrementalFrontiersEqualABruteForceScan) {
   EXPECT_EQ(missed, 0u);
   EXPECT_EQ(empty_leaves, 0u);
 }
+
+TEST(OccupancyMap, RaycastAndEntropyGainMatchFineSampling) {
+  BackgroundMapConfig cfg;
+  PinholeCamera cam;
+  const BoxRoom scene = semexp_test::standardRoom();
+  Bounds b;
+  b.min_m = scene.room.lo - Eigen::Vector3d::Constant(0.2);
+  b.max_m = scene.room.hi + Eigen::Vector3d::Constant(0.2);
+  OccupancyMap map(cfg, b);
+  for (int i = 0; i < 6; ++i) {
+    const Eigen::Isometry3d T = lookPose({-1.0 + 0.4 * i, 0.2, 1.3}, 1.1 * i, 0.15);
+    map.integrate(scene.render(cam, T).data(), nullptr, cam, T);
+  }
+  SphericalGrid grid;
+  GainSettings gs;
+  gs.d_max_m = 4.0;  // stay mostly inside the map
+  const std::vector<Eigen::Vector3d> pos = {{0.1, 0.2, 1.2}, {-1.5, -0.5, 1.6}};
+  const auto g = map.computeGains(pos, grid, gs);
+  const double step = cfg.resolution_m / 50.0;
+  double worst_hit = 0.0, worst_ent = 0.0;
+  for (std::size_t j = 0; j < pos.size(); ++j)
+    for (int v = 0; v < grid.height; ++v)
+      for (int u = 0; u < grid.width; ++u) {
+        const Eigen::Vector3d d = grid.direction(u, v);
+        double t = 0.5 * step, ent = 0.0, hit = gs.d_max_m;
+        for (; t < gs.d_max_m; t += step) {
+          const Eigen::Vector3d p = pos[j] + t * d;
+          double l;
+          const VoxelState s = map.state(p);
+          if (s == VoxelState::kOccupied) {
+            hit = t;
+            break;
+          }
+          if ((p.array() < map.extentMin().array()).any() || (p.array() >= map.extentMax().array()).any()) break;  // left the map
+          const double h = s == VoxelState::kUnknown ? 1.0 : (map.logOdds(p, l) ? logOddsEntropy(l) : 1.0);
+          if (t >= gs.d_min_m) ent += h * step;
+        }
+        const int i = v * grid.width + u;
+        worst_hit = std::max(worst_hit, std::abs(hit - g[j].hit_depth_m[i]));
+        worst_ent = std::max(worst_ent, std::abs(ent / (gs.d_max_m - gs.d_min_m) - g[j].entropy[i]));
+        const RaycastHit h = map.raycast(pos[j], d, gs.d_max_m);
+        EXPECT_EQ(h.hit, hit < gs.d_max_m);
+        if (h.hit) {
+          EXPECT_NEAR(h.distance_m, hit, 2 * step);
+        }
+      }
+  EXPECT_LT(worst_hit, 2 * step);
+  EXPECT_LT(worst_ent, 2e-3);
+}
