@@ -25,18 +25,18 @@ struct OccupancyMap::FrameCtx {
   float fx, fy, cx, cy;
   int W, H;
   const std::uint8_t* rgb;
-  float tau, band;
+  float band;
   IntegrationStats stats;
   std::vector<int> changed;
 
-  // min over valid-or-zero pixels and max over valid pixels of the rectangle
+  // min free limit (0 where invalid) and max depth over valid pixels of the rectangle
   // (inclusive), read from the pyramid at the finest level where it spans <= 4x4 cells.
   void query(const OccupancyMap& m, int u0, int u1, int v0, int v1, float& mn, float& mx) const {
     int j = 0;
     while (((u1 >> j) - (u0 >> j)) > 3 || ((v1 >> j) - (v0 >> j)) > 3) ++j;
     const int w = m.pyr_dims_[j].x();
     // level 0 is the validated depth itself (invalid = 0 serves both min and max)
-    const float* pmn = j == 0 ? m.depth_buf_.data() : m.pyr_min_[j].data();
+    const float* pmn = j == 0 ? m.free_buf_.data() : m.pyr_min_[j].data();
     const float* pmx = j == 0 ? m.depth_buf_.data() : m.pyr_max_[j].data();
     mn = std::numeric_limits<float>::infinity();
     mx = 0.f;
@@ -194,7 +194,6 @@ IntegrationStats OccupancyMap::integrate(const float* depth_m, const std::uint8_
   ctx.cx = static_cast<float>(camera.cx);
   ctx.cy = static_cast<float>(camera.cy);
   ctx.rgb = cfg_.integrate_colour ? rgb : nullptr;
-  ctx.tau = static_cast<float>(cfg_.surface_front_m);
   ctx.band = static_cast<float>(cfg_.surface_band_m);
   const Eigen::Isometry3d T_CW = T_WC.inverse();
   ctx.R_CW = T_CW.linear();
@@ -205,18 +204,21 @@ IntegrationStats OccupancyMap::integrate(const float* depth_m, const std::uint8_
   const int W = ctx.W, H = ctx.H;
   depth_buf_.resize(static_cast<std::size_t>(W) * H);
   const float dmin = static_cast<float>(camera.d_min_m), dmax = static_cast<float>(camera.d_max_m);
+  free_buf_.resize(depth_buf_.size());
+  const float front = static_cast<float>(cfg_.surface_front_m), quad = static_cast<float>(cfg_.surface_front_quadratic_per_m);
   std::size_t invalid = 0;
   for (std::size_t i = 0; i < depth_buf_.size(); ++i) {
     const float d = depth_m[i];
     const bool ok = d > 0.f && d >= dmin && d <= dmax;  // false for NaN; inf > dmax
     depth_buf_[i] = ok ? d : 0.f;
+    free_buf_[i] = ok ? std::max(0.f, d - std::max(front, quad * d * d)) : 0.f;
     invalid += !ok;
   }
   ctx.stats.invalid_pixels = invalid;
   pyr_dims_.assign(1, Eigen::Vector2i(W, H));
   pyr_min_.resize(1);
   pyr_max_.resize(1);
-  pyr_min_[0].clear();  // level 0 is depth_buf_ itself
+  pyr_min_[0].clear();  // level 0 is free_buf_ / depth_buf_ itself
   pyr_max_[0].clear();
   while (pyr_dims_.back().x() > 1 || pyr_dims_.back().y() > 1) {
     const Eigen::Vector2i pd = pyr_dims_.back();
@@ -227,7 +229,7 @@ IntegrationStats OccupancyMap::integrate(const float* depth_m, const std::uint8_
     pyr_max_.resize(j + 1);
     pyr_min_[j].assign(static_cast<std::size_t>(nd.x()) * nd.y(), 0.f);
     pyr_max_[j].assign(static_cast<std::size_t>(nd.x()) * nd.y(), 0.f);
-    const float* pmn = j == 1 ? depth_buf_.data() : pyr_min_[j - 1].data();
+    const float* pmn = j == 1 ? free_buf_.data() : pyr_min_[j - 1].data();
     const float* pmx = j == 1 ? depth_buf_.data() : pyr_max_[j - 1].data();
     for (int v = 0; v < nd.y(); ++v)
       for (int u = 0; u < nd.x(); ++u) {
@@ -352,7 +354,7 @@ void OccupancyMap::visitNode(FrameCtx& ctx, int k, int ix, int iy, int iz) {
   float mn, mx;
   ctx.query(*this, std::max(u0, 0), std::min(u1, ctx.W - 1), std::max(v0, 0), std::min(v1, ctx.H - 1), mn, mx);
   if (zmin > mx + ctx.band) return;  // behind every measured surface (or no valid depth at all)
-  if (!partial && zmax < mn - ctx.tau) {  // wholly in front of the nearest surface: free at this scale
+  if (!partial && zmax < mn) {  // wholly in front of the nearest surface (and its margin): free at this scale
     freeRegion(ctx, k, ix, iy, iz);
     return;
   }
@@ -453,10 +455,11 @@ void OccupancyMap::updateCellVoxels(FrameCtx& ctx, int cell) {
   const Eigen::Vector3f ez = (ctx.R_CW.col(2) * res_).cast<float>();
   const float fx = ctx.fx, fy = ctx.fy, cx = ctx.cx, cy = ctx.cy;
   const float umax = ctx.W - 0.5f, vmax = ctx.H - 0.5f;
-  const float tau = ctx.tau, band = ctx.band;
+  const float band = ctx.band;
   const float half_vox_px = 0.5f * static_cast<float>(res_) * std::min(fx, fy);
   const int lf = l_free_, lo = l_occ_, lmin = l_min_, lmax = l_max_;
   const float* depth = depth_buf_.data();
+  const float* freelim = free_buf_.data();
   const int W = ctx.W;
   const bool track_dist = cfg_.integrate_min_distance;
   std::uint64_t* hits = block_hit_.data() + static_cast<std::size_t>(b) * fwords_;
@@ -469,7 +472,7 @@ void OccupancyMap::updateCellVoxels(FrameCtx& ctx, int cell) {
       for (int x = 0; x < bs_; ++x, ++i, p += ex) {
         const bool hit = (hits[i >> 6] >> (i & 63)) & 1u;
         int pix = -1;
-        float d = 0.f;
+        float d = 0.f, fl = 0.f;
         if (p.z() > 1e-3f) {
           const float iz = 1.f / p.z();
           float uf = fx * p.x() * iz + cx, vf = fy * p.y() * iz + cy;
@@ -481,13 +484,14 @@ void OccupancyMap::updateCellVoxels(FrameCtx& ctx, int cell) {
             vf = std::min(std::max(vf, 0.f), vmax - 0.5f);
             pix = static_cast<int>(vf + 0.5f) * W + static_cast<int>(uf + 0.5f);
             d = depth[pix];
+            fl = freelim[pix];
           }
         }
         if (!hit && d <= 0.f) continue;
         const std::int16_t old = L[i];
         const int base = old == kUnknown ? 0 : old;
         std::int16_t nv;
-        if (!hit && p.z() < d - tau) {
+        if (!hit && p.z() < fl) {
           nv = static_cast<std::int16_t>(std::max(lmin, base + lf));
         } else if (hit || p.z() <= d + band) {
           nv = static_cast<std::int16_t>(std::min(lmax, base + lo));
@@ -650,7 +654,7 @@ std::size_t OccupancyMap::memoryBytes() const {
   for (const Level& l : levels_) m += l.s.capacity() * sizeof(Summary);
   m += (dirty_cells_.capacity() + frontier_cand_.capacity() + frontier_blocks_.capacity() + frontier_cells_.capacity() +
         changed_scratch_.capacity()) * sizeof(int);
-  m += depth_buf_.capacity() * sizeof(float);
+  m += (depth_buf_.capacity() + free_buf_.capacity()) * sizeof(float);
   for (const auto& p : pyr_min_) m += p.capacity() * sizeof(float);
   for (const auto& p : pyr_max_) m += p.capacity() * sizeof(float);
   return m;

@@ -177,6 +177,7 @@ void OccupancyMap::save(const std::string& path) const {
   put(f, cfg_.log_odds_max);
   put(f, cfg_.surface_band_m);
   put(f, cfg_.surface_front_m);
+  put(f, cfg_.surface_front_quadratic_per_m);
   put(f, static_cast<std::uint8_t>(cfg_.integrate_colour));
   put(f, static_cast<std::uint8_t>(cfg_.integrate_min_distance));
   put(f, cfg_.publish_period_s);
@@ -229,6 +230,7 @@ OccupancyMap OccupancyMap::load(const std::string& path) {
   cfg.log_odds_max = get<double>(f);
   cfg.surface_band_m = get<double>(f);
   cfg.surface_front_m = get<double>(f);
+  cfg.surface_front_quadratic_per_m = get<double>(f);
   cfg.integrate_colour = get<std::uint8_t>(f) != 0;
   cfg.integrate_min_distance = get<std::uint8_t>(f) != 0;
   cfg.publish_period_s = get<double>(f);

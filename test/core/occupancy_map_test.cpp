@@ -466,3 +466,22 @@ TEST(OccupancyMap, RaycastAndEntropyGainMatchFineSampling) {
   EXPECT_LT(worst_hit, 2 * step);
   EXPECT_LT(worst_ent, 2e-3);
 }
+
+TEST(OccupancyMap, NoiseMarginKeepsVoxelsInFrontOfTheSurfaceFromBeingCarved) {
+  PinholeCamera cam;
+  const BoxRoom scene = wallScene();
+  const Eigen::Isometry3d T = lookPose({0.0, 0.0, 0.0}, 0.0, 0.0);
+  const std::vector<float> depth = scene.render(cam, T);
+  const Eigen::Vector3d in_front(1.94, 0.02, 0.02);  // voxel [1.92, 1.96): 5.3 to 9.3 cm before the wall at 2.013
+  BackgroundMapConfig plain;
+  OccupancyMap a(plain, smallBounds());
+  a.integrate(depth.data(), nullptr, cam, T);
+  EXPECT_EQ(a.state(in_front), VoxelState::kFree);
+  BackgroundMapConfig noisy;
+  noisy.surface_front_quadratic_per_m = 0.02;  // margin 0.02 * 2.013^2 = 8.1 cm
+  OccupancyMap b(noisy, smallBounds());
+  b.integrate(depth.data(), nullptr, cam, T);
+  EXPECT_EQ(b.state(in_front), VoxelState::kOccupied);
+  EXPECT_EQ(b.state({1.86, 0.02, 0.02}), VoxelState::kFree);  // 13 cm before the wall: beyond the margin
+  EXPECT_EQ(b.state({1.0, 0.02, 0.02}), VoxelState::kFree);
+}

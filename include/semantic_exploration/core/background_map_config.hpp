@@ -19,7 +19,8 @@ struct BackgroundMapConfig {
   double surface_band_m = 0.02;    ///< occupied band behind the measured depth (besides the voxel holding the endpoint), m
   bool integrate_colour = true;    ///< fuse colour into leaves
   bool integrate_min_distance = true;  ///< keep the minimum distance each leaf was observed from (needed by Eq. 1)
-  double surface_front_m = 0.0;    ///< voxels whose centre lies less than this in front of the measured depth are not carved free, m
+  double surface_front_m = 0.0;    ///< voxels whose centre lies less than this in front of the measured depth count as surface (occupied), not free, m
+  double surface_front_quadratic_per_m = 0.0;  ///< noise-aware margin: the surface starts max(surface_front_m, this * d^2) in front of depth d, 1/m (e.g. 2 x the sensor's s of sigma = s d^2)
   double publish_period_s = 1.0;   ///< minimum period between ~occupied point clouds, s
 
   void validate(const std::string& ns = "background_map/") const {
@@ -32,6 +33,8 @@ struct BackgroundMapConfig {
     require(log_odds_max > 0, ns + "log_odds_max", "must be > 0");
     require(surface_band_m > 0, ns + "surface_band_m", "must be > 0 m");
     require(std::isfinite(surface_front_m) && surface_front_m >= 0, ns + "surface_front_m", "must be >= 0 m");
+    require(std::isfinite(surface_front_quadratic_per_m) && surface_front_quadratic_per_m >= 0,
+            ns + "surface_front_quadratic_per_m", "must be >= 0 1/m");
     require(log_odds_min > -30 && log_odds_max < 30 && log_odds_free > -30 && log_odds_occupied < 30,
             ns + "log_odds_min", "log-odds parameters must lie in (-30, 30)");
     require(publish_period_s >= 0, ns + "publish_period_s", "must be >= 0 s");

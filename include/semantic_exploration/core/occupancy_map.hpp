@@ -272,6 +272,7 @@ class OccupancyMap {
   std::uint64_t sequence_ = 0;
   std::vector<int> changed_scratch_;  ///< reused per-frame list of changed cells
   std::vector<float> depth_buf_;  ///< validated depth of the current frame (0 = invalid)
+  std::vector<float> free_buf_;   ///< per pixel: voxels with depth below this are carved free (0 = invalid)
   std::vector<std::vector<float>> pyr_min_, pyr_max_;
   std::vector<Eigen::Vector2i> pyr_dims_;
 };
