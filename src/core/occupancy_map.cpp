@@ -101,12 +101,16 @@ int OccupancyMap::allocateBlock(int cell) {
       const std::size_t cap = block_cell_.capacity() + block_cell_.capacity() / 4 + 64;
       block_cell_.reserve(cap);
       block_surf_.reserve(cap);
+      block_nfree_.reserve(cap);
+      block_nocc_.reserve(cap);
       block_l_.reserve(cap * bs3_);
       block_front_.reserve(cap * fwords_);
       block_hit_.reserve(cap * fwords_);
     }
     block_cell_.push_back(-1);
     block_surf_.push_back(-1);
+    block_nfree_.push_back(0);
+    block_nocc_.push_back(0);
     block_l_.resize(block_l_.size() + bs3_);
     block_front_.resize(block_front_.size() + fwords_);
     block_hit_.resize(block_hit_.size() + fwords_);
@@ -532,7 +536,7 @@ void OccupancyMap::updateCellVoxels(FrameCtx& ctx, int cell) {
   }
 }
 
-OccupancyMap::Summary OccupancyMap::cellSummary(int cell) const {
+OccupancyMap::Summary OccupancyMap::cellSummary(int cell) {
   const int b = cell_block_[cell];
   if (b < 0) {
     const std::int16_t v = cell_value_[cell];
@@ -540,7 +544,7 @@ OccupancyMap::Summary OccupancyMap::cellSummary(int cell) const {
     return Summary{v, v, 1, 0};
   }
   const std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
-  int mn = INT16_MAX, mx = INT16_MIN;
+  int mn = INT16_MAX, mx = INT16_MIN, nfree = 0, nocc = 0;
   bool unk = false;
   for (int i = 0; i < bs3_; ++i) {
     const int v = L[i];
@@ -550,7 +554,11 @@ OccupancyMap::Summary OccupancyMap::cellSummary(int cell) const {
     }
     mn = std::min(mn, v);
     mx = std::max(mx, v);
+    nfree += v < 0;
+    nocc += v >= 0;
   }
+  block_nfree_[b] = static_cast<std::uint32_t>(nfree);
+  block_nocc_[b] = static_cast<std::uint32_t>(nocc);
   const bool known = mn <= mx;
   return Summary{static_cast<std::int16_t>(mn), static_cast<std::int16_t>(mx), static_cast<std::uint8_t>(known),
                  static_cast<std::uint8_t>(unk)};
@@ -618,10 +626,7 @@ double OccupancyMap::freeVolume() const {
       if (v != kUnknown && v < 0) n += bs3_;
       continue;
     }
-    const Summary& s = levels_[0].s[c];
-    if (!s.known_any || s.min_l >= 0) continue;
-    const std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
-    for (int i = 0; i < bs3_; ++i) n += (L[i] != kUnknown && L[i] < 0);
+    n += block_nfree_[b];
   }
   return static_cast<double>(n) * res_ * res_ * res_;
 }
@@ -634,10 +639,7 @@ double OccupancyMap::occupiedVolume() const {
       if (cell_value_[c] >= 0) n += bs3_;
       continue;
     }
-    const Summary& s = levels_[0].s[c];
-    if (!s.known_any || s.max_l < 0) continue;
-    const std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
-    for (int i = 0; i < bs3_; ++i) n += (L[i] >= 0);
+    n += block_nocc_[b];
   }
   return static_cast<double>(n) * res_ * res_ * res_;
 }
@@ -649,6 +651,7 @@ std::size_t OccupancyMap::memoryBytes() const {
   m += block_cell_.capacity() * sizeof(std::int32_t) + block_l_.capacity() * sizeof(std::int16_t) +
        block_dist_.capacity() * sizeof(std::uint16_t) + block_rgbw_.capacity() + block_front_.capacity() * sizeof(std::uint64_t) +
        block_surf_.capacity() * sizeof(std::int32_t) + surf_free_.capacity() * sizeof(std::int32_t) +
+       (block_nfree_.capacity() + block_nocc_.capacity()) * sizeof(std::uint32_t) +
        block_hit_.capacity() * sizeof(std::uint64_t) + hit_cells_.capacity() * sizeof(int) +
        free_slots_.capacity() * sizeof(std::int32_t);
   for (const Level& l : levels_) m += l.s.capacity() * sizeof(Summary);

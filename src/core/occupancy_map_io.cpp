@@ -111,6 +111,8 @@ void OccupancyMap::clearAll() {
   block_cell_.clear();
   block_l_.clear();
   block_surf_.clear();
+  block_nfree_.clear();
+  block_nocc_.clear();
   block_dist_.clear();
   block_rgbw_.clear();
   surf_free_.clear();

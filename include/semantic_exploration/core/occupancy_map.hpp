@@ -218,7 +218,7 @@ class OccupancyMap {
   void refreshSummaries(std::vector<int>& cells, bool track = true);
   void clearAll();
   void encodeCell(int cell, std::int8_t* out) const;
-  Summary cellSummary(int cell) const;
+  Summary cellSummary(int cell);  ///< also refreshes the block's free/occupied counts
   // queries (occupancy_map_query.cpp)
   bool sphereFreeRec(int k, int ix, int iy, int iz, const Eigen::Vector3d& c_v, double rad_v) const;
   std::int16_t voxelValue(int x, int y, int z) const;  ///< kUnknown outside
@@ -251,6 +251,7 @@ class OccupancyMap {
   // Surface data (distance, colour) only for blocks that ever held an occupied
   // voxel: most blocks (frustum borders, free space near surfaces) never do.
   std::vector<std::int32_t> block_surf_;   ///< surface slot of each block or -1
+  std::vector<std::uint32_t> block_nfree_, block_nocc_;  ///< free / occupied voxels per block (volumes without a scan)
   std::vector<std::uint16_t> block_dist_;  ///< bs3 per surface slot, mm (0xFFFF never)
   std::vector<std::uint8_t> block_rgbw_;   ///< 4 per voxel (r, g, b, weight) per surface slot if colour is on
   std::vector<std::int32_t> surf_free_;    ///< released surface slots
