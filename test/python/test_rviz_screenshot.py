@@ -1,0 +1,93 @@
+"""The headless rviz check (scripts/rviz_screenshot.py): rviz with the
+project's config, on Xvfb during a short lockstep simulation of a generated
+6 x 5 m house, shows the occupied map; the same view with the map display on
+an unused topic (everything else live: frontiers, path, TF, candidates) does
+not pass the same check, nor does a blank screen. The pixel measure itself is
+checked on synthetic screenshots first. The full run is skipped where rviz,
+Xvfb or ImageMagick are missing or the package is not built and sourced."""
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import rviz_screenshot as rs  # noqa: E402
+
+PIL = pytest.importorskip("PIL.Image")
+
+MIN_MAP_FRACTION = 0.03  # of the 3D view; measured 8-22% with the map, 0.2-0.4% without
+
+
+def shows_map(m):
+    """The check: a drawn 3D view, at least MIN_MAP_FRACTION of it map
+    pixels, and no display or global status in rviz's error colour."""
+    return m["view"] is not None and m["map_fraction"] >= MIN_MAP_FRACTION and m["error_pixels"] == 0
+
+
+def _screen(tmp_path, name, paint=None):
+    """A 1400 x 900 synthetic screenshot: Qt-grey panels on the left, the 3D
+    view (background colour, grey grid lines) on the right; paint(view) draws
+    into the view."""
+    img = np.full((900, 1400, 3), 239, np.uint8)
+    view = img[60:870, 360:1390]
+    view[:] = rs.BACKGROUND_RGB
+    view[20::40, :] = (104, 104, 106)
+    view[:, 20::40] = (104, 104, 106)
+    if paint:
+        paint(view, img)
+    path = str(tmp_path / name)
+    PIL.fromarray(img).save(path)
+    return path
+
+
+def test_measure_on_synthetic_screens(tmp_path):
+    grid = rs.map_pixels(_screen(tmp_path, "grid.png"))
+    assert grid["view"] == (60, 870, 360, 1390)
+    assert grid["map_pixels"] == 0 and not shows_map(grid)
+
+    def walls(view, _):
+        view[200:500, 300:700] = (180, 176, 165)  # lit wall colour
+    m = rs.map_pixels(_screen(tmp_path, "walls.png", walls))
+    assert abs(m["map_pixels"] - 300 * 400) < 0.05 * 300 * 400 and shows_map(m)
+
+    def frontiers_and_path(view, _):
+        view[200:500, 300:700] = (230, 150, 0)  # frontier orange
+        view[100:104, 100:900] = (25, 255, 0)  # path green
+    m = rs.map_pixels(_screen(tmp_path, "frontiers.png", frontiers_and_path))
+    assert m["map_pixels"] == 0 and not shows_map(m)
+
+    def walls_and_error(view, img):
+        walls(view, img)
+        img[550:560, 40:160] = rs.ERROR_RGB  # "Global Status: Error" in the displays panel
+    m = rs.map_pixels(_screen(tmp_path, "error.png", walls_and_error))
+    assert m["error_pixels"] == 1200 and not shows_map(m)
+
+    black = str(tmp_path / "black.png")  # rviz before its first frame: no 3D view drawn
+    PIL.fromarray(np.zeros((900, 1400, 3), np.uint8)).save(black)
+    assert not shows_map(rs.map_pixels(black))
+
+
+@pytest.mark.skipif(bool(rs.missing_tools()) or shutil.which("roslaunch") is None
+                    or "ROS_PACKAGE_PATH" not in os.environ and "CMAKE_PREFIX_PATH" not in os.environ, reason="rviz, Xvfb, import or ROS environment missing")
+def test_rviz_shows_the_map(tmp_path):
+    out = tmp_path / "shot"
+    proc = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "rviz_screenshot.py"), "--out", str(out),
+                           "--control", "--timeout-s", "75"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          universal_newlines=True, timeout=240)
+    print(proc.stdout)
+    assert proc.returncode == 0, proc.stdout
+    with_map = rs.map_pixels(str(out / "rviz.png"))
+    without = rs.map_pixels(str(out / "rviz_no_map.png"))
+    print("with the map: %s\nmap display on an unused topic: %s" % (with_map, without))
+    assert with_map["view"] is not None, "rviz drew no 3D view"
+    assert with_map["error_pixels"] == 0, "a display or the global status is in error"
+    assert shows_map(with_map), with_map
+    assert without["view"] == with_map["view"]  # same layout: the difference is the map
+    assert not shows_map(without), without
+    # no node of the simulation survives the script (their command lines name its log directory)
+    left = subprocess.run(["pgrep", "-f", str(out)], stdout=subprocess.PIPE, universal_newlines=True).stdout.split()
+    assert left == [], left
