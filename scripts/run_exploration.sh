@@ -23,4 +23,7 @@ if [ "${1:-}" = "--experiments" ]; then
   shift
   exec "$SEMEXP_VENV/bin/python" "$ROOT/scripts/run_experiments.py" --out "$ROOT/results/experiments" "$@"
 fi
-exec "$SEMEXP_VENV/bin/python" "$ROOT/scripts/run_mission.py" --out "$ROOT/results/run-$(date +%Y%m%d-%H%M%S)" "$@"
+SHOT=()  # rviz.png in the results when rviz can run headless
+command -v rviz >/dev/null && command -v Xvfb >/dev/null && command -v import >/dev/null && SHOT=(--rviz-screenshot)
+exec "$SEMEXP_VENV/bin/python" "$ROOT/scripts/run_mission.py" --out "$ROOT/results/run-$(date +%Y%m%d-%H%M%S)" \
+  "${SHOT[@]}" "$@"

@@ -150,6 +150,24 @@ def call_save(service, directory):
         return {"success": False, "message": "%s: %s" % (service, e), "files": []}
 
 
+def rviz_screenshot(out, env, gt, timeout_s=60.0):
+    """out/rviz.png: rviz with the project's config on Xvfb, its view fitted to
+    the scene (scripts/rviz_screenshot.py); never fails the mission."""
+    png = os.path.join(out, "rviz.png")
+    try:
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        import rviz_screenshot as shot
+        missing = shot.missing_tools()
+        if missing:
+            return {"success": False, "message": "rviz screenshot: missing %s" % ", ".join(missing), "files": []}
+        m = shot.screenshot_scene(env, png, gt["bounds_min"], gt["bounds_max"], os.path.join(out, "rviz_logs"),
+                                  timeout_s)[png]
+        return {"success": True, "files": [png], "message": "rviz screenshot: %.0f%% of the 3D view shows the map" % (
+            100 * m["map_fraction"])}
+    except Exception as e:
+        return {"success": False, "message": "rviz screenshot: %s" % e, "files": []}
+
+
 def evaluate(out, gt, classes, saved):
     """Final figures from the saved meshes and map (empty where a map was not saved)."""
     from semantic_exploration.eval import metrics
@@ -268,6 +286,8 @@ def main(argv=None):
     ap.add_argument("--real-time-factor", type=float, default=0.0, help="0 = as fast as lockstep allows")
     ap.add_argument("--no-lockstep", action="store_true")
     ap.add_argument("--rviz", action="store_true")
+    ap.add_argument("--rviz-screenshot", action="store_true",
+                    help="at the end, save rviz.png: rviz with the project's config on Xvfb (scripts/rviz_screenshot.py)")
     ap.add_argument("--progress-period-s", type=float, default=10.0)
     ap.add_argument("--extra-overrides", default="", help="YAML for the C++ nodes loaded after the scene's")
     args = ap.parse_args(argv)
@@ -353,6 +373,10 @@ def main(argv=None):
         if writer is not None:
             writer.writerow(mon.row(rospy.get_time(), time.time() - t0, gt_objs))
         series.close()
+        if args.rviz_screenshot and launch.poll() is None:
+            print("[mission] rviz screenshot (headless)", flush=True)
+            saved["rviz"] = rviz_screenshot(out, env, gt)
+            print("[mission] %s" % saved["rviz"]["message"], flush=True)
         print("[mission] stopping: %s; saving maps" % reason, flush=True)
         saved["background_map"] = call_save("/background_map/save", os.path.join(out, "map"))
         saved["object_map"] = call_save("/object_map/save", os.path.join(out, "objects"))
