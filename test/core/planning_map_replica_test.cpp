@@ -2,6 +2,12 @@
 // against hand-placed voxels.
 #include <gtest/gtest.h>
 
+#include <random>
+
+#include <opencv2/core.hpp>
+
+#include "planning_test_map.hpp"
+#include "semantic_exploration/core/occupancy_map.hpp"
 #include "semantic_exploration/core/planning/map_replica.hpp"
 
 namespace semexp {
@@ -80,6 +86,90 @@ TEST_F(ReplicaTest, SequenceHandling) {
   EXPECT_EQ(m.state({4.05, 4.05, 4.05}), MapReplica::State::kFree);
   payload.pop_back();
   EXPECT_EQ(m.apply(update(10, false)), MapReplica::Result::kBadInput);
+}
+
+MapReplica::Update to_update(const MapBlocksData& m) {
+  MapReplica::Update u;
+  u.sequence = m.sequence;
+  u.full = m.full;
+  u.resolution_m = m.resolution_m;
+  u.block_size = m.block_size;
+  u.origin_W = m.origin_m;
+  u.coords = m.coords.data();
+  u.coord_count = m.coords.size();
+  u.payload = reinterpret_cast<const std::uint8_t*>(m.payload.data());
+  u.payload_size = m.payload.size();
+  return u;
+}
+
+// The contract with the background map: a replica fed by OccupancyMap's
+// incremental updates (and, after a gap, its snapshot) agrees with the map on
+// voxel states and sphere queries. Frames are rendered from a box room.
+TEST(ReplicaOfOccupancyMap, AgreesWithTheMap) {
+  Bounds b;
+  b.min_m = {0.0, 0.0, 0.0};
+  b.max_m = {5.0, 4.0, 2.4};
+  semexp_test::TestGrid room(b, 0.04, semexp_test::TestGrid::kOccupied);
+  room.fill_box({0.2, 0.2, 0.1}, {4.8, 3.8, 2.3}, semexp_test::TestGrid::kFree);
+  room.fill_box({2.0, 1.0, 0.1}, {2.6, 1.6, 0.9}, semexp_test::TestGrid::kOccupied);  // a table
+  PinholeCamera cam;
+  cam.width = 160;
+  cam.height = 120;
+  cam.fx = cam.fy = 131.25;
+  cam.cx = 79.5;
+  cam.cy = 59.5;
+  BackgroundMapConfig cfg;
+  OccupancyMap map(cfg, b);
+  MapReplica replica, late;
+  auto frame = [&](const Eigen::Vector3d& p, double yaw) {
+    Eigen::Matrix3d R;
+    R.col(0) = Eigen::Vector3d(std::sin(yaw), -std::cos(yaw), 0.0);
+    R.col(1) = -Eigen::Vector3d::UnitZ();
+    R.col(2) = Eigen::Vector3d(std::cos(yaw), std::sin(yaw), 0.0);
+    cv::Mat depth(cam.height, cam.width, CV_32FC1);
+    for (int v = 0; v < cam.height; ++v)
+      for (int u = 0; u < cam.width; ++u) {
+        const Eigen::Vector3d r = cam.ray_C(static_cast<float>(u), static_cast<float>(v)).cast<double>();
+        const double t = room.first_hit(p, R * r.normalized(), cam.d_max_m * r.norm());
+        depth.at<float>(v, u) = std::isfinite(t) ? static_cast<float>(t / r.norm()) : 0.f;
+      }
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = R;
+    T.translation() = p;
+    map.integrate(depth, cv::Mat(), cam, T);
+    return map.takeUpdate();
+  };
+  for (int k = 0; k < 6; ++k) {
+    const MapBlocksData up = frame({1.2 + 0.3 * k, 2.0, 1.2}, 0.9 * k);
+    ASSERT_EQ(replica.apply(to_update(up)), MapReplica::Result::kApplied) << "update " << k;
+    if (k == 0) continue;  // `late` misses the first update: gap, then the snapshot
+    if (late.sequence() == 0) {
+      EXPECT_EQ(late.apply(to_update(up)), MapReplica::Result::kGap);
+      ASSERT_EQ(late.apply(to_update(map.snapshot())), MapReplica::Result::kApplied);
+    } else {
+      ASSERT_EQ(late.apply(to_update(up)), MapReplica::Result::kApplied);
+    }
+  }
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> ux(0.0, 5.0), uy(0.0, 4.0), uz(0.0, 2.4);
+  int same = 0, same_late = 0, free_agree = 0, map_free = 0, unsafe = 0;
+  const int n = 20000;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d p(ux(rng), uy(rng), uz(rng));
+    const VoxelState s = map.state(p);
+    const MapReplica::State t = replica.state(p);
+    same += static_cast<int>(s) == static_cast<int>(t);  // same enum order: unknown, free, occupied
+    same_late += late.state(p) == t;
+    const bool mf = map.isSphereFree(p, 0.125), rf = replica.sphere_free(p, 0.125);
+    map_free += mf;
+    free_agree += mf == rf;
+    unsafe += rf && !mf;  // the replica must never call free what the map does not
+  }
+  EXPECT_GT(map_free, 1000);
+  EXPECT_GE(same, n - n / 1000) << "voxel states agree at " << same << " of " << n << " points";
+  EXPECT_EQ(same_late, n);
+  EXPECT_GE(free_agree, n - n / 100);
+  EXPECT_EQ(unsafe, 0);
 }
 
 }  // namespace
