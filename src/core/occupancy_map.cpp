@@ -615,6 +615,51 @@ void OccupancyMap::refreshSummaries(std::vector<int>& cells, bool track) {
   }
 }
 
+void OccupancyMap::markFreeSphere(const Eigen::Vector3d& centre_W, double radius_m) {
+  if (!(radius_m > 0.0) || !centre_W.allFinite()) return;
+  const Eigen::Vector3d c = (centre_W - origin_) / res_;  // voxel units
+  const double r = radius_m / res_, r2 = r * r;
+  const std::int16_t lf = static_cast<std::int16_t>(std::max<int>(l_free_, l_min_));
+  Eigen::Vector3i lo, hi;
+  for (int i = 0; i < 3; ++i) {
+    lo[i] = std::max(0, static_cast<int>(std::floor((c[i] - r) / bs_)));
+    hi[i] = std::min(nb_[i] - 1, static_cast<int>(std::floor((c[i] + r) / bs_)));
+  }
+  std::vector<int> changed;
+  for (int bz = lo.z(); bz <= hi.z(); ++bz)
+    for (int by = lo.y(); by <= hi.y(); ++by)
+      for (int bx = lo.x(); bx <= hi.x(); ++bx) {
+        const int cell = cellIndex(bx, by, bz);
+        if (!levels_[0].s[cell].unknown_any) continue;  // nothing unknown to mark
+        // voxel-centre distances: is every centre of the cell inside the sphere, or any?
+        double far2 = 0.0, near2 = 0.0;
+        for (int i = 0; i < 3; ++i) {
+          const double a = (Eigen::Vector3i(bx, by, bz)[i] * bs_ + 0.5) - c[i];
+          const double b = a + (bs_ - 1);
+          far2 += std::max(a * a, b * b);
+          const double e = std::max({a, 0.0, -b});
+          near2 += e * e;
+        }
+        if (near2 > r2) continue;
+        if (cell_block_[cell] < 0 && far2 <= r2) {
+          cell_value_[cell] = lf;  // wholly inside and uniform unknown
+          changed.push_back(cell);
+          continue;
+        }
+        const int b = cell_block_[cell] >= 0 ? cell_block_[cell] : allocateBlock(cell);
+        std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
+        int i = 0;
+        for (int z = 0; z < bs_; ++z)
+          for (int y = 0; y < bs_; ++y)
+            for (int x = 0; x < bs_; ++x, ++i) {
+              const Eigen::Vector3d v(bx * bs_ + x + 0.5, by * bs_ + y + 0.5, bz * bs_ + z + 0.5);
+              if (L[i] == kUnknown && (v - c).squaredNorm() <= r2) L[i] = lf;
+            }
+        changed.push_back(cell);
+      }
+  refreshSummaries(changed);
+}
+
 // --------------------------------------------------------------- figures
 
 double OccupancyMap::freeVolume() const {

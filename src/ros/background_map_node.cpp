@@ -70,6 +70,8 @@ BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) 
   if (!(frontier_period_s_ >= 0)) throw semexp::ConfigError("background_map/frontier_period_s", "must be >= 0 s");
   p.get("background_map/colour_wait_s", colour_wait_s_);
   if (!(colour_wait_s_ >= 0)) throw semexp::ConfigError("background_map/colour_wait_s", "must be >= 0 s");
+  p.get("background_map/start_free_radius_m", start_free_radius_m_);
+  if (!(start_free_radius_m_ >= 0)) throw semexp::ConfigError("background_map/start_free_radius_m", "must be >= 0 m");
   map_ = std::make_unique<semexp::OccupancyMap>(config_, bounds_);
 
   occupied_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("occupied", 1, true);
@@ -194,6 +196,11 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
     st = map_->integrate(depth_m, rgb, camera_, T_WC);
   } catch (const std::exception& e) {
     return fail("bad_input", e.what());
+  }
+  if (frames_integrated_ == 0 && start_free_radius_m_ > 0) {
+    // The paper assumes free space around the start: the camera cannot see the MAV's own position.
+    map_->markFreeSphere(T_WC.translation(), start_free_radius_m_);
+    ROS_INFO("background_map: unknown space within %.2f m of the first camera pose marked free", start_free_radius_m_);
   }
   last_integration_ms_ = static_cast<float>((ros::WallTime::now() - t_int).toSec() * 1e3);
   const auto t_fr = ros::WallTime::now();

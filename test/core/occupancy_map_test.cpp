@@ -485,3 +485,23 @@ TEST(OccupancyMap, NoiseMarginKeepsVoxelsInFrontOfTheSurfaceFromBeingCarved) {
   EXPECT_EQ(b.state({1.86, 0.02, 0.02}), VoxelState::kFree);  // 13 cm before the wall: beyond the margin
   EXPECT_EQ(b.state({1.0, 0.02, 0.02}), VoxelState::kFree);
 }
+
+TEST(OccupancyMap, FreeSphereAtTheStartMarksOnlyUnknownVoxels) {
+  BackgroundMapConfig cfg;
+  PinholeCamera cam;
+  const BoxRoom scene = wallScene();
+  OccupancyMap map(cfg, smallBounds());
+  const Eigen::Isometry3d T = lookPose({1.7, 0.0, 0.0}, 0.0, 0.0);  // 0.31 m from the wall
+  map.integrate(scene.render(cam, T).data(), nullptr, cam, T);
+  EXPECT_EQ(map.state({1.7, 0.0, 0.0}), VoxelState::kUnknown);  // the camera cannot see itself
+  EXPECT_FALSE(map.isSphereFree({1.7, 0.0, 0.0}, 0.125));
+  map.markFreeSphere({1.7, 0.0, 0.0}, 0.5);
+  map.updateFrontiers();
+  EXPECT_TRUE(map.isSphereFree({1.7, 0.0, 0.0}, 0.125));
+  EXPECT_TRUE(map.isSphereFree({1.5, 0.0, 0.0}, 0.25));
+  EXPECT_EQ(map.state({2.02, 0.02, 0.02}), VoxelState::kOccupied);  // observed wall stays occupied
+  EXPECT_EQ(map.state({2.1, 0.02, 0.02}), VoxelState::kFree);      // unknown behind it within 0.5 m: assumed free
+  EXPECT_EQ(map.state({1.0, 0.02, 0.02}), VoxelState::kUnknown);   // outside the sphere
+  const MapBlocksData u = map.takeUpdate();
+  EXPECT_GT(u.blockCount(), 0u);
+}

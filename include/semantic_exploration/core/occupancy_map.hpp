@@ -110,6 +110,11 @@ class OccupancyMap {
   IntegrationStats integrate(const cv::Mat& depth, const cv::Mat& rgb, const PinholeCamera& camera,
                              const Eigen::Isometry3d& T_WC);
 
+  /// Marks the unknown voxels whose centre lies within `radius_m` of `centre_W`
+  /// as free (one free update), leaving observed voxels alone: the "enough
+  /// free space around the initial position" the paper assumes (Section IV).
+  void markFreeSphere(const Eigen::Vector3d& centre_W, double radius_m);
+
   /// Re-checks frontier candidates (previous frontiers + cells changed since
   /// the last call) at the finest allocated level. Call after integrate().
   void updateFrontiers();

@@ -60,6 +60,7 @@ class BackgroundMapNode {
   double tf_timeout_s_ = 0.1;
   double frontier_period_s_ = 0.5;  ///< minimum period between ~frontiers clouds, s
   double colour_wait_s_ = 0.05;     ///< how long a depth frame waits for its colour image, s (wall)
+  double start_free_radius_m_ = 0.5;  ///< unknown space this close to the first camera pose is assumed free, m
 
   std::unique_ptr<semexp::OccupancyMap> map_;
   tf2_ros::Buffer tf_buffer_;
