@@ -287,7 +287,8 @@ def main(argv=None):
     ap.add_argument("--no-lockstep", action="store_true")
     ap.add_argument("--rviz", action="store_true")
     ap.add_argument("--rviz-screenshot", action="store_true",
-                    help="at the end, save rviz.png: rviz with the project's config on Xvfb (scripts/rviz_screenshot.py)")
+                    help="at the end, save rviz.png: rviz with the project's config on Xvfb "
+                    "(scripts/rviz_screenshot.py)")
     ap.add_argument("--progress-period-s", type=float, default=10.0)
     ap.add_argument("--extra-overrides", default="", help="YAML for the C++ nodes loaded after the scene's")
     args = ap.parse_args(argv)

@@ -11,8 +11,9 @@ The 3D view is aimed at the scene: the screenshot uses a copy of the config
 whose orbit view looks at the centre of the scene's box from a distance that
 fits it; every display is the project's.
 
-run_mission.py uses HeadlessRviz from here for results/<run>/rviz.png, and
-test/python/test_rviz_screenshot.py uses main() and map_pixels().
+run_mission.py --rviz-screenshot calls screenshot_scene() for
+results/<run>/rviz.png at the end of a mission; test/python/test_rviz_screenshot.py
+runs this script and checks its PNGs with map_pixels().
 
 Example:
   rviz_screenshot.py --out /tmp/shot              # -> /tmp/shot/rviz.png
@@ -74,19 +75,31 @@ def write_view_config(src, dst, bounds_min, bounds_max, occupied_topic=None):
 
 
 def _stop(proc, grace_s=10.0):
-    """SIGINT to the process group of proc (started with start_new_session), then SIGKILL."""
+    """SIGINT to the process group of proc (started with start_new_session),
+    then SIGTERM, then SIGKILL; whatever of the group outlives its leader is
+    killed. A proc that had already ended is left alone (its group id may be reused)."""
     if proc is None or proc.poll() is not None:
         return
     for sig, wait_s in ((signal.SIGINT, grace_s), (signal.SIGTERM, 3.0), (signal.SIGKILL, 3.0)):
+        if proc.poll() is not None:
+            break
         try:
             os.killpg(proc.pid, sig)
         except ProcessLookupError:
-            return
+            break
         try:
             proc.wait(timeout=wait_s)
-            return
+            break
         except subprocess.TimeoutExpired:
             pass
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)  # stragglers of the group, if any
+    except (ProcessLookupError, PermissionError):
+        pass
+
+
+class RvizExited(RuntimeError):
+    """rviz ended by itself (it occasionally crashes while starting on Xvfb)."""
 
 
 class HeadlessRviz:
@@ -158,6 +171,12 @@ class HeadlessRviz:
                 pass
             time.sleep(0.5)
         return False
+
+    def check_alive(self):
+        """Raises RvizExited if rviz has ended."""
+        if self.rviz is None or self.rviz.poll() is not None:
+            raise RvizExited("rviz exited with code %s (see %s)" % (
+                self.rviz.returncode if self.rviz else None, os.path.join(self.log_dir, "rviz.log")))
 
     def screenshot(self, png):
         """Saves the whole virtual screen as png (ImageMagick import)."""
@@ -242,6 +261,7 @@ def settled_screenshot(rviz, png, timeout_s, period_s=1.5):
     deadline = time.time() + timeout_s
     prev = None
     while True:
+        rviz.check_alive()
         rviz.screenshot(png)
         m = map_pixels(png)
         if m["view"] is not None and prev is not None and prev["view"] == m["view"] and \
@@ -279,12 +299,14 @@ def take(rviz, png, config, watch, timeout_s, wait_topic=OCCUPIED_TOPIC):
     rviz.start_rviz(config)
     try:
         if not rviz.wait_subscribed(wait_topic, deadline - time.time()):
+            rviz.check_alive()
             raise RuntimeError("rviz did not subscribe to %s (see %s)" % (
                 wait_topic, os.path.join(rviz.log_dir, "rviz.log")))
         n0 = watch.count
         while watch.count < n0 + 2:  # the second: rviz has had one cloud for a publish period
             if time.time() > deadline:
                 raise RuntimeError("no occupied map was published while rviz ran")
+            rviz.check_alive()
             time.sleep(0.2)
         return settled_screenshot(rviz, png, max(3.0, deadline - time.time()))
     finally:
@@ -307,7 +329,14 @@ def screenshot_scene(env, png, bounds_min, bounds_max, log_dir, timeout_s=90.0, 
             for i, (path, topic) in enumerate(shots):
                 cfg = write_view_config(find_config(), os.path.join(work, "view%d.rviz" % i), bounds_min,
                                         bounds_max, topic)
-                res[path] = take(rviz, path, cfg, watch, timeout_s, topic or OCCUPIED_TOPIC)
+                for attempt in (1, 2):
+                    try:
+                        res[path] = take(rviz, path, cfg, watch, timeout_s, topic or OCCUPIED_TOPIC)
+                        break
+                    except RvizExited as e:
+                        if attempt == 2:
+                            raise
+                        print("[rviz] %s; starting it again" % e, file=sys.stderr, flush=True)
     finally:
         watch.close()
         shutil.rmtree(work, ignore_errors=True)
