@@ -152,7 +152,8 @@ class HeadlessRviz:
 
     def start_rviz(self, config):
         self.stop_rviz()
-        self.rviz = subprocess.Popen(["rviz", "-d", config], env=self.env, stdout=self._log("rviz.log"),
+        line_buffered = ["stdbuf", "-oL"] if shutil.which("stdbuf") else []  # keep the log of a crash
+        self.rviz = subprocess.Popen(line_buffered + ["rviz", "-d", config], env=self.env, stdout=self._log("rviz.log"),
                                      stderr=subprocess.STDOUT, start_new_session=True)
 
     def wait_subscribed(self, topic, timeout_s=60.0):
