@@ -54,8 +54,8 @@ def find_config():
 
 
 def write_view_config(src, dst, bounds_min, bounds_max, occupied_topic=None):
-    """Copies the rviz config src to dst with the orbit view fitted to the box
-    [bounds_min, bounds_max] (m, world); occupied_topic replaces the occupied
+    """Copies the rviz config src to dst with the orbit view and the grid
+    fitted to the box [bounds_min, bounds_max] (m, world); occupied_topic replaces the occupied
     map display's topic (the control screenshot points it at an unused one)."""
     import yaml
     with open(src) as f:
@@ -65,6 +65,11 @@ def write_view_config(src, dst, bounds_min, bounds_max, occupied_topic=None):
     diag = math.dist(bounds_min, bounds_max)
     view["Focal Point"] = {"X": centre[0], "Y": centre[1], "Z": bounds_min[2]}
     view["Distance"] = 1.3 * diag  # whole box in the view at rviz's default field of view
+    for d in cfg["Visualization Manager"]["Displays"]:
+        if d.get("Class") == "rviz/Grid":  # under the whole scene, 1 m cells
+            d["Offset"] = {"X": round(centre[0]), "Y": round(centre[1]), "Z": bounds_min[2]}
+            n = int(math.ceil(max(b - a for a, b in zip(bounds_min[:2], bounds_max[:2])))) + 4
+            d["Plane Cell Count"] = n + n % 2  # even: lines on whole metres round the whole-metre offset
     if occupied_topic is not None:
         for d in cfg["Visualization Manager"]["Displays"]:
             if d.get("Topic") == OCCUPIED_TOPIC:
