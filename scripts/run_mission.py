@@ -281,7 +281,7 @@ def main(argv=None):
     ap.add_argument("--size", type=float, nargs=3, default=[15.0, 12.0, 3.0], metavar=("X", "Y", "H"))
     ap.add_argument("--classes", nargs="+", default=["chair"], help="classes of interest")
     ap.add_argument("--out", default=os.path.join("results", "run-" + time.strftime("%Y%m%d-%H%M%S")))
-    ap.add_argument("--wall-limit-s", type=float, default=840.0, help="stop after this wall time, s")
+    ap.add_argument("--wall-limit-s", type=float, default=600.0, help="stop after this wall time, s")
     ap.add_argument("--sim-limit-s", type=float, default=600.0, help="stop after this sim time, s")
     ap.add_argument("--real-time-factor", type=float, default=0.0, help="0 = as fast as lockstep allows")
     ap.add_argument("--no-lockstep", action="store_true")
