@@ -51,7 +51,9 @@ MatchingOutput matchDetections(const cv::Mat& instance_image, const std::vector<
     int det;
     std::uint16_t obj;
     float iou;
-    float inside;  // fraction of the detection's pixels on the object
+    float inside;   // fraction of the detection's pixels on the object
+    float covered;  // fraction of the object's rendered pixels inside the detection
+    std::uint32_t inter;
   };
   std::vector<Pair> pairs;
   for (const auto& kv : intersection) {
@@ -61,7 +63,8 @@ MatchingOutput matchDetections(const cv::Mat& instance_image, const std::vector<
     if (r.dropped) continue;
     const double inter = kv.second;
     const double uni = static_cast<double>(r.mask_pixels) + object_pixels[o] - inter;
-    pairs.push_back({d, o, static_cast<float>(inter / uni), static_cast<float>(inter / r.mask_pixels)});
+    pairs.push_back({d, o, static_cast<float>(inter / uni), static_cast<float>(inter / r.mask_pixels),
+                     static_cast<float>(inter / object_pixels[o]), kv.second});
   }
   std::sort(pairs.begin(), pairs.end(), [&](const Pair& a, const Pair& b) {
     if (a.iou != b.iou) return a.iou > b.iou;
@@ -79,13 +82,40 @@ MatchingOutput matchDetections(const cv::Mat& instance_image, const std::vector<
     out.detections[p.det].object_id = p.obj;
     out.detections[p.det].iou = p.iou;
   }
-  // Fragments: fraction > 0.5 means at most one object can qualify per detection.
+  // Fragments: an unmatched detection lying mostly on rendered objects goes
+  // to the one covering most of it (several renders may share it, e.g. an
+  // object seen in pieces before).
+  std::vector<float> inside_total(n_det, 0.f);
+  std::vector<const Pair*> best(n_det, nullptr);
   for (const Pair& p : pairs) {
-    if (matched[p.det] || p.inside < config.fragment_fraction) continue;
-    matched[p.det] = true;
-    out.detections[p.det].object_id = p.obj;
-    out.detections[p.det].iou = p.iou;
-    out.detections[p.det].fragment = true;
+    inside_total[p.det] += p.inside;
+    if (!best[p.det] || p.inside > best[p.det]->inside ||
+        (p.inside == best[p.det]->inside && p.obj < best[p.det]->obj))
+      best[p.det] = &p;
+  }
+  for (size_t d = 0; d < n_det; ++d) {
+    if (matched[d] || !best[d] || inside_total[d] < config.fragment_fraction) continue;
+    matched[d] = true;
+    out.detections[d].object_id = best[d]->obj;
+    out.detections[d].iou = best[d]->iou;
+    out.detections[d].fragment = true;
+  }
+  // The other way round: a known object rendered mostly inside an unmatched
+  // detection (so far seen only in part) is the object it detects; the one
+  // with the largest overlap wins. Renders under a quarter of min_mask_pixels
+  // are too small to tell.
+  const std::uint32_t min_render = std::max<std::uint32_t>(1, static_cast<std::uint32_t>(config.min_mask_pixels) / 4);
+  std::vector<const Pair*> cover(n_det, nullptr);
+  for (const Pair& p : pairs) {
+    if (matched[p.det] || p.covered < config.fragment_fraction || object_pixels[p.obj] < min_render) continue;
+    if (!cover[p.det] || p.inter > cover[p.det]->inter) cover[p.det] = &p;
+  }
+  for (size_t d = 0; d < n_det; ++d) {
+    if (!cover[d]) continue;
+    matched[d] = true;
+    out.detections[d].object_id = cover[d]->obj;
+    out.detections[d].iou = cover[d]->iou;
+    out.detections[d].fragment = true;
   }
 
   if (cleaned) {

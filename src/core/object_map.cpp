@@ -98,11 +98,53 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
     else
       it->second |= mask;
   }
+  // Merge visible undetected objects whose render lies mostly inside a
+  // detection of the same class: they are pieces of the detected object.
+  std::map<std::uint32_t, std::uint32_t> merged_into;
+  {
+    std::map<std::uint32_t, int> rendered_pixels;
+    for (int v = 0; v < rendered.rows; ++v) {
+      const std::uint16_t* row = rendered.ptr<std::uint16_t>(v);
+      for (int u = 0; u < rendered.cols; ++u)
+        if (row[u]) ++rendered_pixels[row[u]];
+    }
+    for (const auto& rp : rendered_pixels) {
+      const std::uint32_t y = rp.first;
+      if (masks.count(y) || !objects_.count(y)) continue;
+      const MappedObject& oy = *objects_.at(y);
+      for (const auto& kv : masks) {
+        const MappedObject& ox = *objects_.at(kv.first);
+        if (ox.class_id != oy.class_id || ox.resolution_m != oy.resolution_m) continue;
+        const int inside = cv::countNonZero((rendered == static_cast<int>(y)) & kv.second);
+        if (inside < config_.merge_fraction * rp.second) continue;
+        // A detector may also merge two neighbouring objects into one mask:
+        // only merge if y's surface also lies mostly inside x's box in 3D.
+        const TsdfSummary sx = ox.tsdf.summarize(0.0), sy = oy.tsdf.summarize(0.0);
+        if (sx.voxel_count == 0 || sy.voxel_count == 0) continue;
+        const Eigen::Vector3d pad = Eigen::Vector3d::Constant(2.0 * ox.resolution_m);
+        const Eigen::AlignedBox3d bx(sx.bbox_min_W - pad, sx.bbox_max_W + pad);
+        const Eigen::AlignedBox3d by(sy.bbox_min_W - pad, sy.bbox_max_W + pad);
+        if (bx.intersection(by).volume() < config_.merge_fraction * by.volume()) continue;
+        merged_into[y] = kv.first;
+        break;
+      }
+    }
+    for (const auto& m : merged_into) {
+      MappedObject& into = *objects_.at(m.second);
+      const MappedObject& from = *objects_.at(m.first);
+      into.tsdf.mergeFrom(from.tsdf);
+      into.detection_count += from.detection_count;
+      objects_.erase(m.first);
+      result.merged.emplace_back(m.first, m.second);
+    }
+  }
   for (auto& kv : masks) {
     // Pixels where another known object is rendered belong to that object
     // (a detection spanning two objects only feeds the one it was matched to).
     // Grown by 2 px: rendered silhouettes are good to about that (a voxel spans several pixels up close).
     cv::Mat other = (rendered != 0) & (rendered != static_cast<int>(kv.first));
+    for (const auto& m : merged_into)
+      if (m.second == kv.first) other.setTo(0, rendered == static_cast<int>(m.first));
     cv::dilate(other, other, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
     kv.second.setTo(0, other);
     MappedObject& obj = *objects_.at(kv.first);
@@ -132,6 +174,7 @@ void ObjectMap::render(const PinholeCamera& camera, const Eigen::Isometry3d& T_W
   const Eigen::Isometry3f T_CWf = T_WCf.inverse();
   const Eigen::Vector3f o_W = T_WCf.translation();
   const float tol = static_cast<float>(config_.render_depth_tolerance_m);
+  const float tol_rel = static_cast<float>(config_.render_depth_tolerance_rel);
   const float d_max = static_cast<float>(camera.d_max_m);
 
   for (const auto& kv : objects_) {
@@ -175,9 +218,9 @@ void ObjectMap::render(const PinholeCamera& camera, const Eigen::Isometry3d& T_W
       if (occlude) {
         const float d = depth_m.at<float>(v, u);
         if (std::isfinite(d) && d > 0.f && d >= camera.d_min_m && d <= camera.d_max_m) {
-          t_max = std::min(t_max, d * n + tol);
+          t_max = std::min(t_max, d * n * (1.f + tol_rel) + tol);
           // A surface well in front of the measured one would have been measured instead.
-          t_min = std::max(0.f, d * n - front_margin);
+          t_min = std::max(0.f, d * n * (1.f - tol_rel) - front_margin);
         }
       }
     };

@@ -296,6 +296,32 @@ bool TsdfMapT<V>::castRay(const Eigen::Vector3f& o, const Eigen::Vector3f& dir, 
 }
 
 template <class V>
+void TsdfMapT<V>::mergeFrom(const TsdfMapT& other) {
+  if (other.params_.resolution_m != params_.resolution_m || other.params_.block_size != params_.block_size)
+    throw std::invalid_argument("TsdfMap::mergeFrom: maps differ in resolution or block size");
+  const float trunc = truncation_m_, other_trunc = other.truncation_m_;
+  const float max_w = static_cast<float>(params_.max_weight);
+  for (const auto& kv : other.blocks_) {
+    Block& dst = allocate(kv.first);
+    for (int i = 0; i < voxels_per_block_; ++i) {
+      const V& s = kv.second[i];
+      const float w2 = s.weight();
+      if (w2 <= 0.f) continue;
+      V& d = dst[i];
+      const float w1 = d.weight(), w = w1 + w2;
+      const float sdf = (d.sdf(trunc) * w1 + std::max(-trunc, std::min(trunc, s.sdf(other_trunc))) * w2) / w;
+      d.setSdf(sdf, trunc);
+      if (sdf < 0.f) dst.has_negative = true;
+      d.setForeground((d.foreground() * w1 + s.foreground() * w2) / w);
+      for (int k = 0; k < 3; ++k) d.rgb[k] = static_cast<std::uint8_t>(std::lround((d.rgb[k] * w1 + s.rgb[k] * w2) / w));
+      if (s.minDistance() < d.minDistance()) d.setMinDistance(s.minDistance());
+      d.setWeight(std::min(w, max_w));
+    }
+  }
+  rebuildIndex();
+}
+
+template <class V>
 Mesh TsdfMapT<V>::extractMesh() const {
   const auto& table = MarchingCubesTable::get();
   const int B = params_.block_size;

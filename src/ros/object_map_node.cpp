@@ -135,6 +135,7 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
   if (r.dropped_full) drops_.drop("too_many_objects", "all 65535 object ids are used");
   for (const auto id : r.created)
     ROS_INFO("object_map: new object %u (%s)", id, map_->object(id)->class_name.c_str());
+  for (const auto& m : r.merged) ROS_INFO("object_map: object %u is part of object %u: merged", m.first, m.second);
   last_stamp_ = matched->header.stamp;
   const double ms = (ros::WallTime::now() - t0).toSec() * 1e3;
   reportFrame(matched->header, true, ms);

@@ -101,6 +101,35 @@ TEST(Matching, SmallDetectionWhollyOnAnObjectIsAFragmentEvenBelowThreshold) {
   EXPECT_TRUE(r.fragment);
 }
 
+TEST(Matching, DetectionOnAnObjectRenderedInPiecesGoesToTheLargestPiece) {
+  cv::Mat obj = blank(), det = blank();
+  fill(obj, 10, 21, 10, 29, 3);  // one object rendered as two ids (e.g. duplicates): 240 + 160 px
+  fill(obj, 22, 29, 10, 29, 4);
+  fill(det, 10, 29, 10, 31, 1);  // 440 px, 91% on rendered objects; IoU with 3: 240/440
+  auto r = matchDetections(det, {1}, obj, config()).detections[0];
+  EXPECT_EQ(r.object_id, 3u);
+  EXPECT_FALSE(r.fragment);
+  MatchingConfig strict = config();
+  strict.iou_threshold = 0.6;  // now no IoU match: the coverage rule takes it to the larger piece
+  r = matchDetections(det, {1}, obj, strict).detections[0];
+  EXPECT_EQ(r.object_id, 3u);
+  EXPECT_TRUE(r.fragment);
+  EXPECT_NEAR(r.iou, 240.0 / 440.0, 1e-6);
+}
+
+TEST(Matching, ObjectSeenOnlyInPartIsMatchedByADetectionCoveringItsRender) {
+  cv::Mat obj = blank(), det = blank();
+  fill(obj, 20, 29, 20, 29, 6);  // 100 px rendered (the part seen so far)
+  fill(det, 10, 39, 10, 39, 1);  // 900 px detection around it: IoU 0.11
+  const auto r = matchDetections(det, {1}, obj, config()).detections[0];
+  EXPECT_EQ(r.object_id, 6u);
+  EXPECT_TRUE(r.fragment);
+  EXPECT_NEAR(r.iou, 100.0 / 900.0, 1e-6);
+  cv::Mat tiny = blank();
+  fill(tiny, 20, 23, 20, 23, 6);  // 16 px < min_mask_pixels / 4: too small to tell
+  EXPECT_EQ(matchDetections(det, {1}, tiny, config()).detections[0].object_id, 0u);
+}
+
 TEST(Matching, DetectionSplitAcrossTwoObjectsGoesToHigherIou) {
   Scene s;
   fill(s.obj, 30, 39, 10, 29, 7);  // object 7: 200 px

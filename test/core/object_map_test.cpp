@@ -161,6 +161,31 @@ TEST(ObjectMap, DetectionSpanningTwoObjectsOnlyFeedsTheMatchedOne) {
   for (const auto& v : mesh.vertices_W) ASSERT_LT(std::abs(kA.sdf(v.cast<double>())), 0.02);
 }
 
+TEST(ObjectMap, PieceOfAnObjectIsMergedIntoIt) {
+  PinholeCamera cam;
+  ObjectMap map(config(), ClassTable());
+  const auto poses = ring(kA.centre, 0.9, 0.3, 10);
+  cv::Mat depth, labels;
+  // A first detection saw only a patch of A: object 1.
+  renderShapes(cam, poses[0], {&kA}, depth, labels);
+  cv::Mat patch = cv::Mat::zeros(labels.size(), CV_16UC1);
+  labels(cv::Rect(150, 100, 20, 20)).copyTo(patch(cv::Rect(150, 100, 20, 20)));
+  map.integrateFrame(cam, poses[0], depth, cv::Mat(), patch, {{1, 0, kChair}});
+  ASSERT_EQ(map.objects().size(), 1u);
+  // Later A is taken for a new object (2) and tracked all round: the patch is part of it.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> merged;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    renderShapes(cam, poses[i], {&kA}, depth, labels);
+    const FrameIntegration r =
+        map.integrateFrame(cam, poses[i], depth, cv::Mat(), labels, {{1, i == 0 ? 0u : 2u, kChair}});
+    merged.insert(merged.end(), r.merged.begin(), r.merged.end());
+  }
+  EXPECT_EQ(merged, (std::vector<std::pair<std::uint32_t, std::uint32_t>>{{1, 2}}));
+  ASSERT_EQ(map.objects().size(), 1u);
+  EXPECT_EQ(map.objects().begin()->first, 2u);
+  for (const auto& v : map.object(2)->tsdf.extractMesh().vertices_W) ASSERT_LT(std::abs(kA.sdf(v.cast<double>())), 0.02);
+}
+
 TEST(ObjectMap, GainImagesFollowEquationOne) {
   PinholeCamera cam;
   const ObjectMap map = twoObjects(cam);  // surfaces seen from ~0.65-0.75 m

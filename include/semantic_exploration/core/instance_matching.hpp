@@ -12,10 +12,14 @@
 ///    object: when two detections compete for one object the higher IoU wins
 ///    and the other falls back to its next-best free object above the threshold.
 /// 4. A detection still unmatched whose mask lies with at least
-///    `fragment_fraction` of its pixels on one rendered object is a fragment of
-///    it (the detector split the object, or it lost the competition for it)
-///    and is matched to that object as well (`fragment`), rather than
-///    starting a duplicate.
+///    `fragment_fraction` of its pixels on rendered objects is a fragment of
+///    known geometry (the detector split the object, it lost the competition
+///    for it, or the object is rendered in pieces) and is matched to the
+///    object covering most of it (`fragment`), rather than starting a
+///    duplicate. Likewise, a known object whose render lies with at least
+///    `fragment_fraction` of its pixels inside an unmatched detection (it was
+///    seen only in part so far) takes that detection; renders smaller than
+///    min_mask_pixels / 4 are too small to tell. Largest overlap wins.
 /// 5. Everything else is a new object (object id 0).
 /// A detection spanning two objects goes to the one with the higher IoU; the
 /// object map then integrates it without the pixels rendered as the other

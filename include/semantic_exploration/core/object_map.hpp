@@ -12,6 +12,7 @@
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "semantic_exploration/core/camera.hpp"
@@ -47,6 +48,8 @@ struct FrameIntegration {
   std::vector<std::uint32_t> created;     ///< new object ids
   std::vector<std::uint32_t> detected;    ///< objects updated as detected (incl. created)
   std::vector<std::uint32_t> undetected;  ///< visible objects updated without foreground probability
+  /// (merged, into): objects found to be the same as a detected one (see ObjectMapConfig::merge_fraction), now gone
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> merged;
   std::uint32_t dropped_unknown_class = 0;   ///< detections with a class id outside the class table
   std::uint32_t dropped_not_of_interest = 0; ///< detections of classes without object maps
   std::uint32_t dropped_unknown_object = 0;  ///< detections matched to an object id the map does not have
@@ -77,6 +80,9 @@ class ObjectMap {
   ///    object_id == 0) through its mask minus the pixels rendered as another
   ///    object, foreground probability included; detections of one object are
   ///    merged, so detection_count grows by one per frame.
+  ///    A visible undetected object of the same class whose render lies
+  ///    mostly inside such a mask (merge_fraction) is the same object seen
+  ///    in pieces before: it is merged into the detected one.
   /// 3. Every other rendered object updates SDF and colour through its
   ///    rendered mask, without the foreground probability.
   /// @param depth_m CV_32FC1 m; rgb CV_8UC3 or empty; instance_image CV_16UC1 (same size)
@@ -93,7 +99,7 @@ class ObjectMap {
   /// Renders all objects from T_WC into `object_ids` (CV_16UC1, 0 = none).
   /// Each pixel shows the nearest object surface (foreground probability >
   /// 0.5), hidden if it lies farther than the measured depth plus
-  /// render_depth_tolerance_m (`depth_m` CV_32FC1 m, or empty for no occlusion;
+  /// render_depth_tolerance_m + render_depth_tolerance_rel * depth (`depth_m` CV_32FC1 m, or empty for no occlusion;
   /// invalid depth pixels do not occlude).
   /// @param depth_out optional CV_32FC1 z-depth of the shown surface, m (0 = none)
   void render(const PinholeCamera& camera, const Eigen::Isometry3d& T_WC, const cv::Mat& depth_m,

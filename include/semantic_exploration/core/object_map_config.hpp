@@ -17,8 +17,16 @@ struct ObjectMapConfig {
   /// How far behind the measured surface voxels are still updated, in voxels
   /// (<= truncation_voxels); keeps free space hidden behind edges from being dug in.
   double behind_surface_voxels = 2.0;
-  /// A rendered object surface farther than the measured depth plus this is hidden, m.
-  double render_depth_tolerance_m = 0.05;
+  /// A rendered object surface farther than the measured depth d plus
+  /// render_depth_tolerance_m + render_depth_tolerance_rel * d is hidden
+  /// (the relative part follows the depth noise, which grows with distance).
+  double render_depth_tolerance_m = 0.05;  ///< m
+  double render_depth_tolerance_rel = 0.03; ///< fraction of the measured depth
+  /// A visible object that was not detected in a frame, whose rendered pixels
+  /// lie at least this much (fraction) inside the mask of a detected object
+  /// of the same class and whose surface box lies this much inside that
+  /// object's box, is the same object: it is merged into that one.
+  double merge_fraction = 0.8;
 
   void validate(const std::string& ns = "object_map/") const {
     require(std::isfinite(truncation_voxels) && truncation_voxels >= 1, ns + "truncation_voxels", "must be >= 1");
@@ -32,6 +40,10 @@ struct ObjectMapConfig {
             ns + "behind_surface_voxels", "must be in [1, truncation_voxels]");
     require(std::isfinite(render_depth_tolerance_m) && render_depth_tolerance_m >= 0, ns + "render_depth_tolerance_m",
             "must be >= 0 m");
+    require(std::isfinite(merge_fraction) && merge_fraction > 0.5 && merge_fraction <= 1, ns + "merge_fraction",
+            "must be in (0.5, 1]");
+    require(std::isfinite(render_depth_tolerance_rel) && render_depth_tolerance_rel >= 0 && render_depth_tolerance_rel < 1,
+            ns + "render_depth_tolerance_rel", "must be in [0, 1)");
   }
 };
 
@@ -39,9 +51,10 @@ struct MatchingConfig {
   double iou_threshold = 0.25;  ///< minimum IoU to match a detection to a rendered object
   int min_mask_pixels = 100;    ///< detections with fewer pixels are dropped
   /// A detection left without a match whose mask lies at least this much
-  /// (fraction of its pixels) on one rendered object is a fragment of it and
-  /// is matched to it too (a detector split the object, or it competes with a
-  /// better detection of the same object). In (0.5, 1].
+  /// (fraction of its pixels) on rendered objects is a fragment of known
+  /// geometry and is matched to the object covering most of it (a detector
+  /// split the object, or it competes with a better detection of the same
+  /// object). In (0.5, 1].
   double fragment_fraction = 0.8;
 
   void validate(const std::string& ns = "matching/") const {

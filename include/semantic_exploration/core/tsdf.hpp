@@ -159,6 +159,12 @@ class TsdfMapT {
   bool castRay(const Eigen::Vector3f& origin_W, const Eigen::Vector3f& dir_W, float t_min, float t_max,
                TsdfRayHit& hit) const;
 
+  /// Fuses `other` (same resolution and block size) into this map: weights
+  /// add (capped), SDF, foreground and colour are weight-averaged, minimum
+  /// distances take the minimum. Used to merge two maps of one object.
+  /// @throws std::invalid_argument if the grids differ
+  void mergeFrom(const TsdfMapT& other);
+
   /// Marching-cubes mesh of the zero crossing where foreground probability > 0.5, with colour.
   Mesh extractMesh() const;
 
