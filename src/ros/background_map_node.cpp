@@ -118,8 +118,9 @@ void BackgroundMapNode::depthCallback(const sensor_msgs::ImageConstPtr& msg) {
   }
   if (!config_.integrate_colour) return processFrame(msg, nullptr);
   if (auto rgb = matchingRgb(msg->header.stamp)) return processFrame(msg, rgb);
-  // Wait briefly for the colour image only while a colour stream is alive.
-  if (!last_rgb_wall_.isZero() && (ros::WallTime::now() - last_rgb_wall_).toSec() < 1.0) {
+  // Wait briefly for the colour image while someone publishes colour.
+  if (rgb_sub_.getNumPublishers() > 0 ||
+      (!last_rgb_wall_.isZero() && (ros::WallTime::now() - last_rgb_wall_).toSec() < 1.0)) {
     pending_depth_ = msg;
     pending_since_ = ros::WallTime::now();
     return;

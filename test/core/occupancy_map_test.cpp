@@ -102,7 +102,7 @@ TEST(Gains, EntropyOfUnknownAndOfClampedFreeSpace) {
     for (int y = 0; y < nb.y(); ++y)
       for (int x = 0; x < nb.x(); ++x) {
         all.coords.insert(all.coords.end(), {x, y, z});
-        all.payload.insert(all.payload.end(), 512, static_cast<std::int8_t>(-20));
+        all.payload.insert(all.payload.end(), cfg.block_size * cfg.block_size * cfg.block_size, static_cast<std::int8_t>(-20));
       }
   ASSERT_TRUE(map.applyBlocks(all));
   g = map.computeGains({Eigen::Vector3d(0.1, 0.1, 0.1)}, grid, gs);

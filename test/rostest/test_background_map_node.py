@@ -71,14 +71,17 @@ class TestBackgroundMapNode(unittest.TestCase):
         rospy.Subscriber("/background_map/map_update", MapBlocks, lambda m: cls.updates.append(m), queue_size=100)
         rospy.Subscriber("/frame_integrated", FrameIntegrated, lambda m: cls.done.append(m), queue_size=100)
         rospy.Subscriber("/background_map/frontiers", PointCloud2, lambda m: cls.frontiers.append(m), queue_size=10)
+        cls.occupied = []
+        rospy.Subscriber("/background_map/occupied", PointCloud2, lambda m: cls.occupied.append(m), queue_size=10)
         cls.depth_pub = rospy.Publisher("/camera/depth/image_raw", Image, queue_size=10)
+        cls.rgb_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=10)
         cls.info_pub = rospy.Publisher("/camera/camera_info", CameraInfo, queue_size=10, latch=True)
         cls.tfb = tf2_ros.StaticTransformBroadcaster()
         cls.tfb.sendTransform([static_tf("camera", 0.0), static_tf("far_camera", 100.0)])
         for srv in ("/background_map/get_map", "/background_map/compute_gains", "/background_map/save"):
             rospy.wait_for_service(srv, timeout=30.0)
         deadline = time.time() + 10.0
-        while cls.depth_pub.get_num_connections() == 0 and time.time() < deadline:
+        while (cls.depth_pub.get_num_connections() == 0 or cls.rgb_pub.get_num_connections() == 0) and time.time() < deadline:
             time.sleep(0.05)
         time.sleep(0.5)
 
@@ -106,9 +109,22 @@ class TestBackgroundMapNode(unittest.TestCase):
         self.info_pub.publish(camera_info(rospy.Time.now()))
         time.sleep(0.5)
 
-        # 2. A good frame integrates; an update with sequence 1 follows.
-        d = self.send(depth_image(rospy.Time.now(), self.wall()))
+        # 2. A good frame (with its colour image) integrates; an update with sequence 1 follows.
+        stamp = rospy.Time.now()
+        rgb = np.zeros((H, W, 3), dtype=np.uint8)
+        rgb[..., 0] = 200
+        self.rgb_pub.publish(depth_image(stamp, rgb, "rgb8"))
+        d = self.send(depth_image(stamp, self.wall()))
         self.assertTrue(d.integrated)
+        deadline = time.time() + 5.0
+        while not self.occupied and time.time() < deadline:
+            time.sleep(0.05)
+        self.assertTrue(self.occupied)
+        c = self.occupied[-1]
+        self.assertGreater(c.width * c.height, 1000)
+        off = {f.name: f.offset for f in c.fields}
+        reds = [c.data[i * c.point_step + off["rgb"] + 2] for i in range(0, c.width, 50)]  # bgra byte order: r at +2
+        self.assertGreater(sum(1 for r in reds if r == 200), 0.9 * len(reds))
         s = self.stats[-1]
         self.assertEqual(s.frames_integrated, 1)
         self.assertGreater(s.free_volume_m3, 5.0)     # the frustum up to the wall (~9.6 m^3)
