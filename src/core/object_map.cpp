@@ -149,6 +149,14 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
     kv.second.setTo(0, other);
     MappedObject& obj = *objects_.at(kv.first);
     obj.tsdf.integrate(camera, T_WC, depth_m, rgb, kv.second, true);
+    const bool is_new = std::find(result.created.begin(), result.created.end(), kv.first) != result.created.end();
+    if (is_new && obj.tsdf.blockCount() == 0) {
+      // Nothing of the detection was left (all on other objects or without depth): no object.
+      objects_.erase(kv.first);
+      result.created.erase(std::find(result.created.begin(), result.created.end(), kv.first));
+      ++result.dropped_empty;
+      continue;
+    }
     ++obj.detection_count;
     result.detected.push_back(kv.first);
   }

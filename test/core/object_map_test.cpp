@@ -69,6 +69,12 @@ TEST(ObjectMap, DetectionsCreateObjectsAtClassResolution) {
   EXPECT_DOUBLE_EQ(map.object(2)->resolution_m, 0.04);
   EXPECT_EQ(map.object(1)->detection_count, 1u);
   EXPECT_GT(map.object(1)->tsdf.summarize(1.0).voxel_count, 100u);
+  // A new detection lying wholly on a known object, or without depth, makes no object.
+  cv::Mat no_depth = cv::Mat::zeros(depth.size(), CV_32FC1);
+  const FrameIntegration e = map.integrateFrame(cam, T_WC, no_depth, cv::Mat(), labels, {{1, 0, kChair}});
+  EXPECT_TRUE(e.created.empty());
+  EXPECT_EQ(e.dropped_empty, 1u);
+  EXPECT_EQ(map.objects().size(), 2u);
   EXPECT_THROW(map.integrateFrame(cam, T_WC, depth, cv::Mat(), cv::Mat::zeros(10, 10, CV_16UC1), {}),
                std::invalid_argument);
 }
