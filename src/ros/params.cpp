@@ -229,6 +229,16 @@ semexp::PlannerConfig loadPlanner(const ParamReader& p) {
   p.get(n + "time_budget_s", c.time_budget_s);
   p.get(n + "time_limit_s", c.time_limit_s);
   p.get(n + "max_failed_iterations", c.max_failed_iterations);
+  p.get(n + "object_observed_fraction", c.object_observed_fraction);
+  p.get(n + "object_standoff_factor", c.object_standoff_factor);
+  p.get(n + "min_path_time_s", c.min_path_time_s);
+  p.get(n + "cost_threshold_factor", c.cost_threshold_factor);
+  p.get(n + "simplify_time_s", c.simplify_time_s);
+  p.get(n + "convergence_solutions", c.convergence_solutions);
+  p.get(n + "convergence_epsilon", c.convergence_epsilon);
+  p.get(n + "planning_threads", c.planning_threads);
+  p.get(n + "stall_iterations", c.stall_iterations);
+  p.get(n + "stall_volume_m3", c.stall_volume_m3);
   int seed = static_cast<int>(c.seed);
   p.get(n + "seed", seed);
   if (seed < 0) throw ConfigError(n + "seed", "must be >= 0");
