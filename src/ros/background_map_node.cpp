@@ -57,11 +57,6 @@ BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) 
   camera_ = loadCamera(p);
   bounds_ = loadBounds(p);
   config_ = loadBackgroundMap(p);
-  // Fields not (yet) read by loadBackgroundMap.
-  p.get("background_map/surface_front_m", config_.surface_front_m);
-  p.get("background_map/surface_front_quadratic_per_m", config_.surface_front_quadratic_per_m);
-  p.get("background_map/integrate_min_distance", config_.integrate_min_distance);
-  config_.validate("background_map/");
   exploration_ = loadExploration(p);
   frames_ = loadFrames(p);
   p.get("tf_timeout_s", tf_timeout_s_);

@@ -180,6 +180,9 @@ semexp::BackgroundMapConfig loadBackgroundMap(const ParamReader& p) {
   p.get(n + "log_odds_max", c.log_odds_max);
   p.get(n + "surface_band_m", c.surface_band_m);
   p.get(n + "integrate_colour", c.integrate_colour);
+  p.get(n + "integrate_min_distance", c.integrate_min_distance);
+  p.get(n + "surface_front_m", c.surface_front_m);
+  p.get(n + "surface_front_quadratic_per_m", c.surface_front_quadratic_per_m);
   p.get(n + "publish_period_s", c.publish_period_s);
   c.validate(n);
   return c;
