@@ -7,6 +7,7 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "semantic_exploration/core/marching_cubes.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 
 namespace semexp {
@@ -301,6 +302,15 @@ void OccupancyMap::exportOctomap(const std::string& path) const {
   }
   tree.updateInnerOccupancy();
   if (!tree.writeBinary(path)) throw std::runtime_error("cannot write " + path);
+}
+
+void OccupancyMap::exportOccupiedPly(const std::string& path) const {
+  Mesh cloud;
+  forEachOccupied([&cloud](const Eigen::Vector3d& c, double, const std::uint8_t rgb[3]) {
+    cloud.vertices_W.push_back(c.cast<float>());
+    cloud.colours.push_back({rgb[0], rgb[1], rgb[2]});
+  });
+  if (!writePly(cloud, path)) throw std::runtime_error("cannot write " + path);
 }
 
 }  // namespace semexp

@@ -345,11 +345,13 @@ bool BackgroundMapNode::save(semantic_exploration::SaveMap::Request& req, semant
     fs::create_directories(dir);
     const std::string bt = (dir / "background_map.bt").string();
     const std::string own = (dir / "background_map.semexpmap").string();
+    const std::string cloud = (dir / "occupied.ply").string();
     map_->exportOctomap(bt);
     map_->save(own);
-    res.files = {bt, own};
+    map_->exportOccupiedPly(cloud);
+    res.files = {bt, own, cloud};
     res.success = true;
-    res.message = "wrote " + bt + " (OctoMap) and " + own + " (own format)";
+    res.message = "wrote " + bt + " (OctoMap), " + own + " (own format) and " + cloud + " (occupied voxel centres)";
   } catch (const std::exception& e) {
     res.success = false;
     res.message = std::string("background_map: save failed: ") + e.what();

@@ -15,6 +15,7 @@
 
 #include "occupancy_test_scene.hpp"
 #include "semantic_exploration/core/gains.hpp"
+#include "semantic_exploration/core/marching_cubes.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 
 using namespace semexp;
@@ -357,6 +358,20 @@ TEST(OccupancyMap, SaveLoadRoundTripIsBitIdentical) {
     same += n && tree.isNodeOccupied(n);
   });
   EXPECT_EQ(same, checked);
+  // The occupied point cloud holds exactly the occupied leaves, with colour.
+  const std::string ply = tempPath("d.ply");
+  map.exportOccupiedPly(ply);
+  Mesh cloud;
+  ASSERT_TRUE(readPly(ply, cloud));
+  EXPECT_EQ(cloud.vertices_W.size(), checked);
+  EXPECT_TRUE(cloud.triangles.empty());
+  std::size_t green = 0;
+  for (std::size_t i = 0; i < cloud.vertices_W.size(); ++i) {
+    EXPECT_EQ(map.state(cloud.vertices_W[i].cast<double>()), VoxelState::kOccupied);
+    green += cloud.colours[i][1] == 200;
+  }
+  EXPECT_EQ(green, coloured);
+  std::remove(ply.c_str());
   std::remove(p1.c_str());
   std::remove(p2.c_str());
   std::remove(bt.c_str());

@@ -157,6 +157,8 @@ class TestBackgroundMapNode(unittest.TestCase):
         self.assertTrue(r.success, r.message)
         for f in r.files:
             self.assertTrue(os.path.getsize(f) > 0, f)
+        self.assertEqual(sorted(os.path.basename(f) for f in r.files),
+                         ["background_map.bt", "background_map.semexpmap", "occupied.ply"])
 
         # 4. Bad input: each dropped and counted, the node keeps running.
         before = self.stats[-1]

@@ -182,6 +182,9 @@ class OccupancyMap {
   static OccupancyMap load(const std::string& path);
   /// OctoMap binary tree (.bt) with every known voxel, via liboctomap.
   void exportOctomap(const std::string& path) const;
+  /// Centres and colours of the occupied leaves as a PLY point cloud (no
+  /// faces; the layout of writePly), e.g. for evaluation against a mesh.
+  void exportOccupiedPly(const std::string& path) const;
 
   // Internals shared by the implementation files (not part of the API).
   struct Summary {
