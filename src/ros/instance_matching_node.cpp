@@ -41,7 +41,13 @@ InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle&
   info_sub_ = nh.subscribe("camera/camera_info", 1, &InstanceMatchingNode::infoCallback, this);
   detections_sub_.subscribe(nh, "detections", 5);
   depth_sub_.subscribe(nh, "camera/depth/image_raw", 5);
-  sync_ = std::make_unique<message_filters::Synchronizer<SyncPolicy>>(SyncPolicy(10), detections_sub_, depth_sub_);
+  // Detections pair only with their own depth frame (see object_map_node.cpp).
+  double max_gap_s = 0.02;
+  p.get("sync_max_interval_s", max_gap_s);
+  if (!(max_gap_s >= 0)) throw semexp::ConfigError("sync_max_interval_s", "must be >= 0 s");
+  SyncPolicy policy(10);
+  policy.setMaxIntervalDuration(ros::Duration(max_gap_s));
+  sync_ = std::make_unique<message_filters::Synchronizer<SyncPolicy>>(static_cast<const SyncPolicy&>(policy), detections_sub_, depth_sub_);
   sync_->registerCallback(&InstanceMatchingNode::frameCallback, this);
   ROS_INFO("instance_matching: iou_threshold %.2f, min_mask_pixels %d, fragment_fraction %.2f",
            config_.iou_threshold, config_.min_mask_pixels, config_.fragment_fraction);

@@ -57,8 +57,14 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_lis
   matched_sub_.subscribe(nh, "matched_detections", 5);
   depth_sub_.subscribe(nh, "camera/depth/image_raw", 5);
   rgb_sub_.subscribe(nh, "camera/rgb/image_raw", 5);
-  sync_ = std::make_unique<message_filters::Synchronizer<SyncPolicy>>(SyncPolicy(10), matched_sub_, depth_sub_,
-                                                                       rgb_sub_);
+  // Frames pair only with their own images: a detection paired with the next
+  // depth frame would paint its mask onto whatever moved into it.
+  double max_gap_s = 0.02;
+  p.get("sync_max_interval_s", max_gap_s);
+  if (!(max_gap_s >= 0)) throw semexp::ConfigError("sync_max_interval_s", "must be >= 0 s");
+  SyncPolicy policy(10);
+  policy.setMaxIntervalDuration(ros::Duration(max_gap_s));
+  sync_ = std::make_unique<message_filters::Synchronizer<SyncPolicy>>(static_cast<const SyncPolicy&>(policy), matched_sub_, depth_sub_, rgb_sub_);
   sync_->registerCallback(&ObjectMapNode::frameCallback, this);
   std::string interest;
   for (const auto& c : classes_.of_interest) interest += (interest.empty() ? "" : ", ") + c;
