@@ -20,6 +20,7 @@ BIN="$ROOT/.colcon/install/semantic_exploration/lib/semantic_exploration"
 status=0
 for b in "$BIN"/bench_*; do
   [ -x "$b" ] || continue
+  case "$(basename "$b")" in *.*) continue ;; esac  # scripts/bench_*.py run below, in the venv
   name=$(basename "$b")
   rm -f "$OUT/$name.jsonl"
   echo "== $name"
