@@ -185,7 +185,8 @@ def evaluate(out, gt, classes, saved):
                                "completeness": m.score.completeness if m.score else None} for m in ev.matches]
         occ = [f for f in saved.get("background_map", {}).get("files", []) if f.endswith("occupied.ply")]
         if occ:
-            b = metrics.evaluate_background(metrics.load_ground_truth(gt["gt_dir"]), metrics.read_ply_vertices(occ[0]))
+            b = metrics.evaluate_background(metrics.load_ground_truth(gt["gt_dir"]), metrics.read_ply_vertices(occ[0]),
+                                            classes)
             res["background"] = {"rmse_m": b.rmse_m, "completeness": b.completeness,
                                  "n_reconstructed": b.n_reconstructed}
     except Exception as e:  # a failed evaluation must not lose the rest of the report

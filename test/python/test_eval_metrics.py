@@ -80,3 +80,11 @@ def test_objects_are_matched_to_the_surface_they_lie_on(tmp_path):
     # Box vertices 1 cm outside each face: distance to the surface sqrt(3) cm at
     # the corners (the only vertices of a trimesh box).
     assert by_id[7].score.rmse_m == pytest.approx(0.01 * np.sqrt(3), abs=2e-3)
+
+
+def test_point_cloud_ply_is_read(tmp_path):
+    pts = grid(0, 1, 0, 1, 0.0, 0.25)
+    trimesh.PointCloud(pts).export(str(tmp_path / "cloud.ply"))
+    got = metrics.read_ply_vertices(str(tmp_path / "cloud.ply"))
+    assert got.shape == (25, 3)
+    assert np.allclose(np.sort(got, 0), np.sort(pts, 0))

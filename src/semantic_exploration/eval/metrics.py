@@ -21,10 +21,10 @@ COMPLETENESS_THRESHOLD_M = 0.05  # "within 5 cm" (paper Section V-B)
 
 
 def read_ply_vertices(path: str) -> np.ndarray:
-    """Vertex positions (N x 3, float64) of a PLY file (ASCII or binary)."""
+    """Vertex positions (N x 3, float64) of a PLY mesh or point cloud (ASCII or binary)."""
     import trimesh
-    mesh = trimesh.load(path, process=False, force="mesh")
-    return np.asarray(mesh.vertices, dtype=np.float64).reshape(-1, 3)
+    geom = trimesh.load(path, process=False)  # a PLY without faces loads as a PointCloud
+    return np.asarray(geom.vertices, dtype=np.float64).reshape(-1, 3)
 
 
 def sample_surface(path: str, spacing_m: float, seed: int = 0) -> np.ndarray:
@@ -128,9 +128,12 @@ def evaluate_objects(gt: Dict, rec: Dict, classes: List[str], spacing_m: float =
     return ev
 
 
-def evaluate_background(gt: Dict, occupied_points: np.ndarray, spacing_m: float = 0.01,
+def evaluate_background(gt: Dict, occupied_points: np.ndarray, classes: List[str], spacing_m: float = 0.01,
                         threshold_m: float = COMPLETENESS_THRESHOLD_M, seed: int = 0) -> SurfaceScore:
     """Accuracy and completeness of the background map's occupied voxel
-    centres against the ground-truth background mesh."""
-    truth = sample_surface(os.path.join(gt["dir"], gt["background_mesh"]), spacing_m, seed)
+    centres against everything in the scene but the objects of interest
+    (walls, floors and the furniture of other classes, which the background
+    map holds too)."""
+    meshes = [gt["background_mesh"]] + [o["mesh"] for o in gt["objects"] if o["class"] not in classes]
+    truth = np.vstack([sample_surface(os.path.join(gt["dir"], m), spacing_m, seed) for m in meshes])
     return score_surface(occupied_points, truth, threshold_m)
