@@ -59,14 +59,10 @@ BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) 
   config_ = loadBackgroundMap(p);
   exploration_ = loadExploration(p);
   frames_ = loadFrames(p);
-  p.get("tf_timeout_s", tf_timeout_s_);
-  if (!(tf_timeout_s_ >= 0)) throw semexp::ConfigError("tf_timeout_s", "must be >= 0 s");
-  p.get("background_map/frontier_period_s", frontier_period_s_);
-  if (!(frontier_period_s_ >= 0)) throw semexp::ConfigError("background_map/frontier_period_s", "must be >= 0 s");
-  p.get("background_map/colour_wait_s", colour_wait_s_);
-  if (!(colour_wait_s_ >= 0)) throw semexp::ConfigError("background_map/colour_wait_s", "must be >= 0 s");
-  p.get("background_map/start_free_radius_m", start_free_radius_m_);
-  if (!(start_free_radius_m_ >= 0)) throw semexp::ConfigError("background_map/start_free_radius_m", "must be >= 0 m");
+  p.getAtLeast("tf_timeout_s", tf_timeout_s_, 0.0, "s");
+  p.getAtLeast("background_map/frontier_period_s", frontier_period_s_, 0.0, "s");
+  p.getAtLeast("background_map/colour_wait_s", colour_wait_s_, 0.0, "s");
+  p.getAtLeast("background_map/start_free_radius_m", start_free_radius_m_, 0.0, "m");
   map_ = std::make_unique<semexp::OccupancyMap>(config_, bounds_);
 
   occupied_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("occupied", 1, true);

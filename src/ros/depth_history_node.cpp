@@ -15,11 +15,8 @@ DepthHistoryNode::DepthHistoryNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : 
   camera_ = loadCamera(p);
   bounds_ = loadBounds(p);
   frames_ = loadFrames(p);
-  p.get("tf_timeout_s", tf_timeout_s_);
-  if (!(tf_timeout_s_ >= 0)) throw semexp::ConfigError("tf_timeout_s", "must be >= 0 s");
-  p.get("depth_history/marker_period_s", marker_period_s_);
-  if (!(marker_period_s_ >= 0))
-    throw semexp::ConfigError("depth_history/marker_period_s", "must be >= 0 s");
+  p.getAtLeast("tf_timeout_s", tf_timeout_s_, 0.0, "s");
+  p.getAtLeast("depth_history/marker_period_s", marker_period_s_, 0.0, "s");
   markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("markers", 1, true);
   integrated_pub_ = nh.advertise<semantic_exploration::FrameIntegrated>("frame_integrated", 10);
   masks_srv_ = pnh.advertiseService("get_masks", &DepthHistoryNode::getMasks, this);

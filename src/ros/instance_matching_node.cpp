@@ -34,8 +34,7 @@ InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle&
   classes_ = loadClasses(p);
   camera_ = loadCamera(p);
   frames_ = loadFrames(p);
-  p.get("tf_timeout_s", tf_timeout_s_);
-  if (!(tf_timeout_s_ >= 0)) throw semexp::ConfigError("tf_timeout_s", "must be >= 0 s");
+  p.getAtLeast("tf_timeout_s", tf_timeout_s_, 0.0, "s");
   matched_pub_ = nh.advertise<semantic_exploration::MatchedDetections>("matched_detections", 10);
   render_client_ = nh.serviceClient<semantic_exploration::RenderInstances>("object_map/render_instances");
   info_sub_ = nh.subscribe("camera/camera_info", 1, &InstanceMatchingNode::infoCallback, this);
@@ -43,8 +42,7 @@ InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle&
   depth_sub_.subscribe(nh, "camera/depth/image_raw", 5);
   // Detections pair only with their own depth frame (see object_map_node.cpp).
   double max_gap_s = 0.02;
-  p.get("sync_max_interval_s", max_gap_s);
-  if (!(max_gap_s >= 0)) throw semexp::ConfigError("sync_max_interval_s", "must be >= 0 s");
+  p.getAtLeast("sync_max_interval_s", max_gap_s, 0.0, "s");
   SyncPolicy policy(10);
   policy.setMaxIntervalDuration(ros::Duration(max_gap_s));
   sync_ = std::make_unique<message_filters::Synchronizer<SyncPolicy>>(static_cast<const SyncPolicy&>(policy), detections_sub_, depth_sub_);

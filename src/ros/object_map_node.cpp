@@ -43,8 +43,7 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_lis
   exploration_ = loadExploration(p);
   camera_ = loadCamera(p);
   frames_ = loadFrames(p);
-  p.get("tf_timeout_s", tf_timeout_s_);
-  if (!(tf_timeout_s_ >= 0)) throw semexp::ConfigError("tf_timeout_s", "must be >= 0 s");
+  p.getAtLeast("tf_timeout_s", tf_timeout_s_, 0.0, "s");
   map_ = std::make_unique<semexp::ObjectMap>(config_, classes_);
 
   objects_pub_ = pnh.advertise<semantic_exploration::ObjectArray>("objects", 1, true);
@@ -60,8 +59,7 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_lis
   // Frames pair only with their own images: a detection paired with the next
   // depth frame would paint its mask onto whatever moved into it.
   double max_gap_s = 0.02;
-  p.get("sync_max_interval_s", max_gap_s);
-  if (!(max_gap_s >= 0)) throw semexp::ConfigError("sync_max_interval_s", "must be >= 0 s");
+  p.getAtLeast("sync_max_interval_s", max_gap_s, 0.0, "s");
   SyncPolicy policy(10);
   policy.setMaxIntervalDuration(ros::Duration(max_gap_s));
   sync_ = std::make_unique<message_filters::Synchronizer<SyncPolicy>>(static_cast<const SyncPolicy&>(policy), matched_sub_, depth_sub_, rgb_sub_);

@@ -3,6 +3,7 @@
 #include <ros/node_handle.h>
 
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 namespace semexp_ros {
@@ -107,6 +108,17 @@ void ParamReader::get(const std::string& path, std::vector<double>& out) const {
   out = r;
 }
 
+void ParamReader::getAtLeast(const std::string& path, double& out, double min_value, const std::string& unit) const {
+  double v = out;
+  get(path, v);
+  if (!(v >= min_value)) {
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), "must be >= %g %s", min_value, unit.c_str());
+    throw ConfigError(path, buf);
+  }
+  out = v;
+}
+
 namespace {
 
 Eigen::Vector3d getVec3(const ParamReader& p, const std::string& path, const Eigen::Vector3d& def) {
@@ -195,6 +207,10 @@ semexp::ObjectMapConfig loadObjectMap(const ParamReader& p) {
   p.get(n + "max_weight", c.max_weight);
   p.get(n + "block_size", c.block_size);
   p.get(n + "publish_period_s", c.publish_period_s);
+  p.get(n + "behind_surface_voxels", c.behind_surface_voxels);
+  p.get(n + "render_depth_tolerance_m", c.render_depth_tolerance_m);
+  p.get(n + "render_depth_tolerance_rel", c.render_depth_tolerance_rel);
+  p.get(n + "merge_fraction", c.merge_fraction);
   c.validate(n);
   return c;
 }
@@ -203,6 +219,7 @@ semexp::MatchingConfig loadMatching(const ParamReader& p) {
   semexp::MatchingConfig c;
   p.get("matching/iou_threshold", c.iou_threshold);
   p.get("matching/min_mask_pixels", c.min_mask_pixels);
+  p.get("matching/fragment_fraction", c.fragment_fraction);
   c.validate("matching/");
   return c;
 }

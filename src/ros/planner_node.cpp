@@ -102,14 +102,12 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listene
   camera_ = loadCamera(p);
   bounds_ = loadBounds(p);
   frames_ = loadFrames(p);
-  p.get("tf_timeout_s", tf_timeout_s_);
-  if (!(tf_timeout_s_ >= 0)) throw semexp::ConfigError("tf_timeout_s", "must be >= 0 s");
+  p.getAtLeast("tf_timeout_s", tf_timeout_s_, 0.0, "s");
   p.get("planner/service_timeout_s", service_timeout_s_);
   if (!(service_timeout_s_ > 0)) throw semexp::ConfigError("planner/service_timeout_s", "must be > 0 s");
   p.get("planner/retry_period_s", retry_period_s_);
   if (!(retry_period_s_ > 0)) throw semexp::ConfigError("planner/retry_period_s", "must be > 0 s");
-  p.get("planner/goal_timeout_factor", goal_timeout_factor_);
-  if (!(goal_timeout_factor_ >= 1)) throw semexp::ConfigError("planner/goal_timeout_factor", "must be >= 1");
+  p.getAtLeast("planner/goal_timeout_factor", goal_timeout_factor_, 1.0, "(a factor)");
 
   path_pub_ = pnh.advertise<nav_msgs::Path>("path", 1, true);
   candidates_pub_ = pnh.advertise<semantic_exploration::CandidateViewArray>("candidates", 1, true);

@@ -99,3 +99,18 @@ TEST(Params, ClassResolutionMapAndBounds) {
   bad["bounds"]["min_m"][0] = 1.0;
   EXPECT_EQ(rejected([&] { semexp_ros::loadBounds(ParamReader(bad)); }), "bounds/min_m");
 }
+
+TEST(Params, AtLeastNamesTheParameterAndKeepsTheDefault) {
+  XmlRpcValue p;
+  p["tf_timeout_s"] = -0.5;
+  p["background_map"]["colour_wait_s"] = 0.25;
+  const ParamReader r(p);
+  double v = 0.1;
+  EXPECT_EQ(rejected([&] { r.getAtLeast("tf_timeout_s", v, 0.0, "s"); }), "tf_timeout_s");
+  EXPECT_DOUBLE_EQ(v, 0.1);  // unchanged on error
+  r.getAtLeast("background_map/colour_wait_s", v, 0.0, "s");
+  EXPECT_DOUBLE_EQ(v, 0.25);
+  double d = 3.0;
+  r.getAtLeast("absent", d, 1.0, "");
+  EXPECT_DOUBLE_EQ(d, 3.0);
+}

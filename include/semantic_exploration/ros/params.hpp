@@ -50,6 +50,8 @@ class ParamReader {
   void get(const std::string& path, std::string& out) const;
   void get(const std::string& path, std::vector<std::string>& out) const;
   void get(const std::string& path, std::vector<double>& out) const;
+  /// Optional number that must be >= `min_value` (`unit` names its unit in the error).
+  void getAtLeast(const std::string& path, double& out, double min_value, const std::string& unit) const;
   /// Required parameters: throw ConfigError("missing") if absent.
   template <typename T>
   void require(const std::string& path, T& out) const {
