@@ -1,0 +1,241 @@
+"""Replay test (issue 7): a short lockstep simulation of a generated 6 x 5 m
+house is recorded with record.launch; the bag is played with replay.launch
+into fresh mapping nodes at a reduced rate; the replayed background map must
+know the same volume as the live one had at the bag's last frame (within 1%)
+and the object map must hold the same objects (class, centroid within 5 cm).
+
+The live volume is taken from the live background_map/stats message whose
+stamp is the bag's last depth frame, so frames the live nodes integrated
+after the recorder stopped do not count. Skipped where ROS is not sourced or
+the package is not built."""
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+
+ROS_SOURCED = shutil.which("roslaunch") is not None and shutil.which("rosbag") is not None and (
+    "ROS_PACKAGE_PATH" in os.environ or "CMAKE_PREFIX_PATH" in os.environ)
+
+SIM_S = 25.0  # sim seconds of the live run
+REPLAY_RATE = 0.5  # bag playback rate: the nodes keep up without lockstep
+VOLUME_TOL = 0.01  # relative known-volume difference allowed
+CENTROID_TOL_M = 0.05
+DEPTH = "/camera/depth/image_raw"
+DROP_FIELDS = ("dropped_bad_encoding", "dropped_size_mismatch", "dropped_no_tf", "dropped_out_of_bounds",
+               "dropped_no_camera_info")
+
+
+def _ros_env(port, home):
+    return dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOSTNAME="127.0.0.1", ROS_HOME=home)
+
+
+def _start(cmd, env, log):
+    return subprocess.Popen(cmd, env=env, stdout=open(log, "w"), stderr=subprocess.STDOUT, start_new_session=True)
+
+
+def _wait_master(env, proc, timeout_s=30.0):
+    import rosgraph
+    master = rosgraph.Master("/replay_test", master_uri=env["ROS_MASTER_URI"])
+    deadline = time.time() + timeout_s
+    while True:
+        try:
+            master.getPid()
+            return master
+        except Exception:
+            if proc.poll() is not None or time.time() > deadline:
+                raise RuntimeError("ROS master on %s did not come up" % env["ROS_MASTER_URI"])
+            time.sleep(0.3)
+
+
+def _wait_subscribed(master, topic, node_prefix, timeout_s=30.0):
+    deadline = time.time() + timeout_s
+    while time.time() < deadline:
+        _, subs, _ = master.getSystemState()
+        if any(t == topic and any(n.startswith(node_prefix) for n in nodes) for t, nodes in subs):
+            return
+        time.sleep(0.3)
+    raise RuntimeError("%s does not subscribe to %s" % (node_prefix, topic))
+
+
+def _node_py(env, name):
+    """Makes this process a rospy node on env's master (one per process: the
+    replay phase runs in a child process, see _replay_phase)."""
+    os.environ.update(ROS_MASTER_URI=env["ROS_MASTER_URI"], ROS_HOSTNAME="127.0.0.1", ROS_HOME=env["ROS_HOME"])
+    import rospy
+    rospy.init_node(name, anonymous=True, disable_signals=True)
+    return rospy
+
+
+def _bag_last_depth_stamp(bag_path):
+    import rosbag
+    last = None
+    n = 0
+    with rosbag.Bag(bag_path) as bag:
+        for _, msg, _ in bag.read_messages(topics=[DEPTH]):
+            last = msg.header.stamp
+            n += 1
+    return last, n
+
+
+def _objects(path):
+    with open(os.path.join(path, "objects.json")) as f:
+        return json.load(f)["objects"]
+
+
+def live_phase(work):
+    """Records a lockstep run; returns (bag, live stats at the bag's last frame, frames in the bag)."""
+    import rviz_screenshot as rs
+    import run_mission as mission
+    ply, gt = mission.prepare_scene(argparse.Namespace(scene="", seed=0, size=[6.0, 5.0, 3.0]), work)
+    overrides = os.path.join(work, "overrides.yaml")
+    mission.write_overrides(overrides, gt, ["chair"])
+    port = mission._free_port()
+    env = _ros_env(port, os.path.join(work, "ros_home_live"))
+    bag = os.path.join(work, "run.bag")
+    procs = []
+    try:
+        # master first, then the recorder, then the simulation: the bag starts with the first frame
+        procs.append(_start(["roscore", "-p", str(port)], env, os.path.join(work, "roscore.log")))
+        master = _wait_master(env, procs[-1])
+        rec = _start(["roslaunch", "semantic_exploration", "record.launch", "bag:=" + bag], env,
+                     os.path.join(work, "record.log"))
+        procs.append(rec)
+        _wait_subscribed(master, DEPTH, "/record")
+        sim = _start(["roslaunch", "semantic_exploration", "sim.launch", "scene:=" + ply, "overrides:=" + overrides,
+                      "lockstep:=true", "real_time_factor:=0", "rviz:=false", "output:=log"], env,
+                     os.path.join(work, "sim.log"))
+        procs.append(sim)
+        deadline = time.time() + 60.0
+        while not master.hasParam("/use_sim_time"):  # rospy reads it once, at init
+            assert time.time() < deadline and sim.poll() is None, "sim.launch did not come up"
+            time.sleep(0.2)
+        rospy = _node_py(env, "replay_test_live")
+        from semantic_exploration.msg import MapStats
+        history = {}
+        rospy.Subscriber("/background_map/stats", MapStats,
+                         lambda m: history.__setitem__(m.header.stamp.to_nsec(), m), queue_size=100)
+        deadline = time.time() + 120.0
+        while rospy.get_time() < SIM_S:
+            assert sim.poll() is None, "the simulation stopped (see %s)" % os.path.join(work, "sim.log")
+            assert time.time() < deadline, "the live run reached only %.1f s sim time" % rospy.get_time()
+            time.sleep(0.2)
+        rs._stop(rec, grace_s=15.0)  # SIGINT: rosbag closes the bag
+        mission.call_save("/background_map/save", os.path.join(work, "live_map"))
+        saved = mission.call_save("/object_map/save", os.path.join(work, "live_objects"))
+        assert saved["success"], saved
+        last, n_frames = _bag_last_depth_stamp(bag)
+        assert last is not None and n_frames > 0.5 * SIM_S * 10, "bag holds %d depth frames" % n_frames
+        t_end = time.time() + 10.0
+        while last.to_nsec() not in history and time.time() < t_end:
+            time.sleep(0.2)
+        assert last.to_nsec() in history, "no live stats for the bag's last frame"
+        return bag, history[last.to_nsec()], n_frames
+    finally:
+        for p in reversed(procs):
+            rs._stop(p, grace_s=20.0)
+
+
+def replay_phase(work, bag):
+    """replay.launch on a fresh master; writes replay.json with the final stats."""
+    import rviz_screenshot as rs
+    import run_mission as mission
+    overrides = os.path.join(work, "overrides.yaml")
+    port = mission._free_port()
+    env = _ros_env(port, os.path.join(work, "ros_home_replay"))
+    launch = _start(["roslaunch", "-p", str(port), "semantic_exploration", "replay.launch", "bag:=" + bag,
+                     "rate:=%g" % REPLAY_RATE, "overrides:=" + overrides, "classes_of_interest:=[chair]",
+                     "output:=log"], env, os.path.join(work, "replay.log"))
+    try:
+        _wait_master(env, launch)
+        rospy = _node_py(env, "replay_test_replay")
+        from semantic_exploration.msg import MapStats
+        latest = {}
+        rospy.Subscriber("/background_map/stats", MapStats, lambda m: latest.__setitem__("s", m), queue_size=100)
+        master = _wait_master(env, launch)
+        deadline = time.time() + 150.0
+        _wait_subscribed(master, "/clock", "/background_map", timeout_s=60.0)
+        while not any(n.startswith("/play") for n in _nodes(master)):
+            assert time.time() < deadline, "rosbag play did not start"
+            time.sleep(0.2)
+        while any(n.startswith("/play") for n in _nodes(master)):  # rosbag play runs until the bag ends
+            assert launch.poll() is None, "replay.launch stopped (see %s)" % os.path.join(work, "replay.log")
+            assert time.time() < deadline, "the replay did not finish"
+            time.sleep(0.5)
+        time.sleep(2.0)  # last frames and stats
+        mission.call_save("/background_map/save", os.path.join(work, "replay_map"))
+        saved = mission.call_save("/object_map/save", os.path.join(work, "replay_objects"))
+        assert saved["success"], saved
+        s = latest["s"]
+        with open(os.path.join(work, "replay.json"), "w") as f:
+            json.dump({k: getattr(s, k) for k in ("explored_volume_m3", "occupied_volume_m3", "free_volume_m3",
+                                                  "frames_integrated") + DROP_FIELDS}, f)
+    finally:
+        rs._stop(launch, grace_s=20.0)
+
+
+def _nodes(master):
+    pubs, subs, srvs = master.getSystemState()
+    return {n for group in (pubs, subs, srvs) for _, nodes in group for n in nodes}
+
+
+@pytest.mark.skipif(not ROS_SOURCED, reason="ROS environment (roslaunch, rosbag) not sourced")
+def test_replay_matches_live(tmp_path):
+    work = str(tmp_path)
+    t0 = time.time()
+    # each phase in its own process: rospy allows one node per process and one master
+    live = subprocess.run([sys.executable, __file__, "live", work], stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, universal_newlines=True, timeout=200)
+    print(live.stdout)
+    assert live.returncode == 0, live.stdout
+    with open(os.path.join(work, "live.json")) as f:
+        lv = json.load(f)
+    rp = subprocess.run([sys.executable, __file__, "replay", work, lv["bag"]], stdout=subprocess.PIPE,
+                        stderr=subprocess.STDOUT, universal_newlines=True, timeout=200)
+    print(rp.stdout)
+    assert rp.returncode == 0, rp.stdout
+    with open(os.path.join(work, "replay.json")) as f:
+        rv = json.load(f)
+    print("live at the bag's last frame: %s\nreplay: %s\nwall time %.0f s" % (lv["stats"], rv, time.time() - t0))
+    for k in DROP_FIELDS:
+        assert rv[k] == 0, "replay dropped frames: %s = %d" % (k, rv[k])
+    assert rv["frames_integrated"] == lv["n_frames"], "replay integrated %d of %d frames" % (
+        rv["frames_integrated"], lv["n_frames"])
+    live_v = lv["stats"]["explored_volume_m3"]
+    assert live_v > 1.0
+    assert abs(rv["explored_volume_m3"] - live_v) <= VOLUME_TOL * live_v, (rv["explored_volume_m3"], live_v)
+    live_objs = _objects(os.path.join(work, "live_objects"))
+    replay_objs = _objects(os.path.join(work, "replay_objects"))
+    print("objects live %s\nobjects replay %s" % (
+        [(o["class_name"], o["centroid"]) for o in live_objs], [(o["class_name"], o["centroid"]) for o in replay_objs]))
+    assert len(replay_objs) == len(live_objs)
+    unmatched = list(replay_objs)
+    for o in live_objs:
+        near = [r for r in unmatched if r["class_name"] == o["class_name"] and
+                max(abs(a - b) for a, b in zip(r["centroid"], o["centroid"])) <= CENTROID_TOL_M]
+        assert near, "live object %s has no replayed counterpart" % o
+        unmatched.remove(near[0])
+
+
+def _main(argv):
+    phase, work = argv[0], argv[1]
+    if phase == "live":
+        bag, stats, n = live_phase(work)
+        with open(os.path.join(work, "live.json"), "w") as f:
+            json.dump({"bag": bag, "n_frames": n, "stats": {
+                k: getattr(stats, k) for k in ("explored_volume_m3", "occupied_volume_m3", "free_volume_m3",
+                                               "frames_integrated") + DROP_FIELDS}}, f)
+    else:
+        replay_phase(work, argv[2])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(_main(sys.argv[1:]))
