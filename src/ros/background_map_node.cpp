@@ -37,19 +37,6 @@ semantic_exploration::MapBlocks toMsg(const semexp::MapBlocksData& d, const ros:
   return m;
 }
 
-sensor_msgs::Image floatImage(const std::vector<float>& v, int w, int h, const std_msgs::Header& header) {
-  sensor_msgs::Image img;
-  img.header = header;
-  img.width = static_cast<std::uint32_t>(w);
-  img.height = static_cast<std::uint32_t>(h);
-  img.encoding = sensor_msgs::image_encodings::TYPE_32FC1;
-  img.is_bigendian = 0;
-  img.step = static_cast<std::uint32_t>(w * sizeof(float));
-  img.data.resize(v.size() * sizeof(float));
-  if (!v.empty()) std::memcpy(img.data.data(), v.data(), img.data.size());
-  return img;
-}
-
 }  // namespace
 
 BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listener_(tf_buffer_) {
@@ -322,9 +309,9 @@ bool BackgroundMapNode::computeGains(semantic_exploration::ComputeGains::Request
   header.stamp = ros::Time::now();
   header.frame_id = frames_.world;
   for (const auto& g : gains) {
-    res.entropy_gain.push_back(floatImage(g.entropy, w, h, header));
-    res.distance_gain.push_back(floatImage(g.distance, w, h, header));
-    res.hit_depth.push_back(floatImage(g.hit_depth_m, w, h, header));
+    res.entropy_gain.push_back(floatImageMsg(header, g.entropy, w, h));
+    res.distance_gain.push_back(floatImageMsg(header, g.distance, w, h));
+    res.hit_depth.push_back(floatImageMsg(header, g.hit_depth_m, w, h));
   }
   return true;
 }

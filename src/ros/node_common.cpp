@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 #include <opencv2/imgproc.hpp>
 
 namespace semexp_ros {
@@ -63,6 +64,31 @@ std::string colourToRgb(const sensor_msgs::Image& msg, cv::Mat& rgb) {
     return "";
   }
   return "unsupported colour encoding '" + msg.encoding + "' (expected rgb8, bgr8, rgba8, bgra8 or mono8)";
+}
+
+sensor_msgs::Image toImageMsg(const std_msgs::Header& header, const cv::Mat& m) {
+  sensor_msgs::Image img;
+  img.header = header;
+  switch (m.type()) {
+    case CV_32FC1: img.encoding = enc::TYPE_32FC1; break;
+    case CV_16UC1: img.encoding = enc::TYPE_16UC1; break;
+    case CV_8UC1: img.encoding = enc::MONO8; break;
+    default: throw std::invalid_argument("toImageMsg: unsupported cv::Mat type " + std::to_string(m.type()));
+  }
+  img.height = static_cast<uint32_t>(m.rows);
+  img.width = static_cast<uint32_t>(m.cols);
+  img.is_bigendian = 0;
+  img.step = static_cast<uint32_t>(m.cols * m.elemSize());
+  img.data.resize(static_cast<size_t>(img.step) * m.rows);
+  for (int v = 0; v < m.rows; ++v) std::memcpy(&img.data[static_cast<size_t>(v) * img.step], m.ptr(v), img.step);
+  return img;
+}
+
+sensor_msgs::Image floatImageMsg(const std_msgs::Header& header, const std::vector<float>& values, int w, int h) {
+  cv::Mat m = cv::Mat::zeros(h, w, CV_32FC1);
+  if (values.size() == static_cast<size_t>(w) * static_cast<size_t>(h))
+    cv::Mat(h, w, CV_32FC1, const_cast<float*>(values.data())).copyTo(m);
+  return toImageMsg(header, m);
 }
 
 std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, double d_max_m,

@@ -12,20 +12,6 @@ namespace semexp_ros {
 
 namespace {
 
-sensor_msgs::Image toImageMsg(const std_msgs::Header& header, const cv::Mat& m) {
-  sensor_msgs::Image img;
-  img.header = header;
-  img.height = static_cast<uint32_t>(m.rows);
-  img.width = static_cast<uint32_t>(m.cols);
-  img.encoding = m.type() == CV_16UC1 ? sensor_msgs::image_encodings::TYPE_16UC1
-                                      : sensor_msgs::image_encodings::TYPE_32FC1;
-  img.is_bigendian = 0;
-  img.step = static_cast<uint32_t>(m.cols * m.elemSize());
-  img.data.resize(static_cast<size_t>(img.step) * m.rows);
-  for (int v = 0; v < m.rows; ++v) std::memcpy(&img.data[static_cast<size_t>(v) * img.step], m.ptr(v), img.step);
-  return img;
-}
-
 geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
   geometry_msgs::Point q;
   q.x = p.x();

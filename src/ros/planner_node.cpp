@@ -70,20 +70,6 @@ semexp::GainImage toGainImage(const sensor_msgs::Image& img, int w, int h, const
   return out;
 }
 
-sensor_msgs::Image fromGainImage(const semexp::GainImage& g, int w, int h, const std::string& frame,
-                                 const ros::Time& stamp) {
-  sensor_msgs::Image img;
-  img.header.frame_id = frame;
-  img.header.stamp = stamp;
-  img.width = static_cast<uint32_t>(w);
-  img.height = static_cast<uint32_t>(h);
-  img.encoding = sensor_msgs::image_encodings::TYPE_32FC1;
-  img.step = img.width * 4;
-  img.data.assign(static_cast<std::size_t>(img.step) * img.height, 0);
-  if (!g.empty() && g.width == w && g.height == h) std::memcpy(img.data.data(), g.values.data(), img.data.size());
-  return img;
-}
-
 std_msgs::ColorRGBA colour(float r, float g, float b, float a) {
   std_msgs::ColorRGBA c;
   c.r = r;
@@ -566,10 +552,13 @@ void PlannerNode::publishResult(const semexp::IterationResult& r, const ros::Tim
   candidates_pub_.publish(arr);
   markers_pub_.publish(markers);
   if (r.winner >= 0) {
-    gain_pubs_[0].publish(fromGainImage(r.winner_gains.entropy, w, h, frames_.world, stamp));
-    gain_pubs_[1].publish(fromGainImage(r.winner_gains.background, w, h, frames_.world, stamp));
-    gain_pubs_[2].publish(fromGainImage(r.winner_gains.object, w, h, frames_.world, stamp));
-    gain_pubs_[3].publish(fromGainImage(r.winner_combined, w, h, frames_.world, stamp));
+    std_msgs::Header gain_header;
+    gain_header.frame_id = frames_.world;
+    gain_header.stamp = stamp;
+    gain_pubs_[0].publish(floatImageMsg(gain_header, r.winner_gains.entropy.values, w, h));
+    gain_pubs_[1].publish(floatImageMsg(gain_header, r.winner_gains.background.values, w, h));
+    gain_pubs_[2].publish(floatImageMsg(gain_header, r.winner_gains.object.values, w, h));
+    gain_pubs_[3].publish(floatImageMsg(gain_header, r.winner_combined.values, w, h));
   }
 }
 

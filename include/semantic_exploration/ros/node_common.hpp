@@ -13,6 +13,7 @@
 #include <map>
 #include <opencv2/core.hpp>
 #include <string>
+#include <vector>
 
 #include "semantic_exploration/core/camera.hpp"
 #include "semantic_exploration/core/config_error.hpp"
@@ -26,6 +27,14 @@ std::string depthToMeters(const sensor_msgs::Image& msg, cv::Mat& depth_m);
 /// Converts colour (rgb8, bgr8, rgba8, bgra8, mono8) to a CV_8UC3 RGB image.
 /// Returns "" on success, else why it was rejected.
 std::string colourToRgb(const sensor_msgs::Image& msg, cv::Mat& rgb);
+
+/// Image message holding a copy of `m`: CV_32FC1 -> 32FC1, CV_16UC1 -> 16UC1,
+/// CV_8UC1 -> mono8 (other types throw std::invalid_argument).
+sensor_msgs::Image toImageMsg(const std_msgs::Header& header, const cv::Mat& m);
+
+/// 32FC1 image message of a row-major w x h float buffer; all zeros if
+/// `values` does not hold w * h values (e.g. a gain the planner skipped).
+sensor_msgs::Image floatImageMsg(const std_msgs::Header& header, const std::vector<float>& values, int w, int h);
 
 /// Builds the core camera model from camera_info (K) and a depth range.
 /// Returns "" on success, else why the camera_info is unusable.
