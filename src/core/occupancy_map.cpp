@@ -334,18 +334,22 @@ void OccupancyMap::visitNode(FrameCtx& ctx, int k, int ix, int iy, int iz) {
     vmax = std::max(vmax, v);
   }
   if (zmax <= 1e-3) return;  // wholly behind the camera
-  if (crosses) {             // contains or touches the camera plane: cannot bound the footprint
-    if (k > 0) {
-      const Eigen::Vector3i& cd = levels_[k - 1].dims;
-      for (int dz = 0; dz < 2; ++dz)
-        for (int dy = 0; dy < 2; ++dy)
-          for (int dx = 0; dx < 2; ++dx) {
-            const int cx = 2 * ix + dx, cy = 2 * iy + dy, cz = 2 * iz + dz;
-            if (cx < cd.x() && cy < cd.y() && cz < cd.z()) visitNode(ctx, k - 1, cx, cy, cz);
-          }
-    } else {
+  // Visit the children (or, at the cell level, update the voxels).
+  const auto descend = [&]() {
+    if (k == 0) {
       updateCellVoxels(ctx, cellIndex(ix, iy, iz));
+      return;
     }
+    const Eigen::Vector3i& cd = levels_[k - 1].dims;
+    for (int dz = 0; dz < 2; ++dz)
+      for (int dy = 0; dy < 2; ++dy)
+        for (int dx = 0; dx < 2; ++dx) {
+          const int cx = 2 * ix + dx, cy = 2 * iy + dy, cz = 2 * iz + dz;
+          if (cx < cd.x() && cy < cd.y() && cz < cd.z()) visitNode(ctx, k - 1, cx, cy, cz);
+        }
+  };
+  if (crosses) {  // contains or touches the camera plane: cannot bound the footprint
+    descend();
     return;
   }
   const double lim = 1e7;
@@ -362,17 +366,7 @@ void OccupancyMap::visitNode(FrameCtx& ctx, int k, int ix, int iy, int iz) {
     freeRegion(ctx, k, ix, iy, iz);
     return;
   }
-  if (k > 0) {
-    const Eigen::Vector3i& cd = levels_[k - 1].dims;
-    for (int dz = 0; dz < 2; ++dz)
-      for (int dy = 0; dy < 2; ++dy)
-        for (int dx = 0; dx < 2; ++dx) {
-          const int cx = 2 * ix + dx, cy = 2 * iy + dy, cz = 2 * iz + dz;
-          if (cx < cd.x() && cy < cd.y() && cz < cd.z()) visitNode(ctx, k - 1, cx, cy, cz);
-        }
-  } else {
-    updateCellVoxels(ctx, cellIndex(ix, iy, iz));
-  }
+  descend();
 }
 
 void OccupancyMap::freeRegion(FrameCtx& ctx, int k, int ix, int iy, int iz) {
