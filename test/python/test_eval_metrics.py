@@ -88,3 +88,12 @@ def test_point_cloud_ply_is_read(tmp_path):
     got = metrics.read_ply_vertices(str(tmp_path / "cloud.ply"))
     assert got.shape == (25, 3)
     assert np.allclose(np.sort(got, 0), np.sort(pts, 0))
+
+
+def test_empty_mesh_reads_as_no_vertices(tmp_path):
+    # What object_map/save writes for an object whose TSDF has no surface yet.
+    with open(str(tmp_path / "empty.ply"), "wb") as f:
+        f.write(b"ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                b"property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+                b"element face 0\nproperty list uchar uint vertex_indices\nend_header\n")
+    assert metrics.read_ply_vertices(str(tmp_path / "empty.ply")).shape == (0, 3)

@@ -24,6 +24,8 @@ def read_ply_vertices(path: str) -> np.ndarray:
     """Vertex positions (N x 3, float64) of a PLY mesh or point cloud (ASCII or binary)."""
     import trimesh
     geom = trimesh.load(path, process=False)  # a PLY without faces loads as a PointCloud
+    if not hasattr(geom, "vertices"):  # an empty PLY loads as an empty Scene
+        return np.zeros((0, 3))
     return np.asarray(geom.vertices, dtype=np.float64).reshape(-1, 3)
 
 
