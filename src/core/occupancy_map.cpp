@@ -10,6 +10,22 @@
 namespace semexp {
 
 namespace {
+
+// Calls f(cx, cy, cz) for each of the (up to eight) children of node
+// (ix, iy, iz) that exist in the finer level of dimensions `child_dims`.
+template <typename F>
+inline void forEachChild(const Eigen::Vector3i& child_dims, int ix, int iy, int iz, F&& f) {
+  for (int dz = 0; dz < 2; ++dz)
+    for (int dy = 0; dy < 2; ++dy)
+      for (int dx = 0; dx < 2; ++dx) {
+        const int cx = 2 * ix + dx, cy = 2 * iy + dy, cz = 2 * iz + dz;
+        if (cx < child_dims.x() && cy < child_dims.y() && cz < child_dims.z()) f(cx, cy, cz);
+      }
+}
+
+}  // namespace
+
+namespace {
 constexpr std::uint16_t kNoDist = 0xFFFF;
 
 inline std::uint16_t toMm(float d_m) {
@@ -340,13 +356,7 @@ void OccupancyMap::visitNode(FrameCtx& ctx, int k, int ix, int iy, int iz) {
       updateCellVoxels(ctx, cellIndex(ix, iy, iz));
       return;
     }
-    const Eigen::Vector3i& cd = levels_[k - 1].dims;
-    for (int dz = 0; dz < 2; ++dz)
-      for (int dy = 0; dy < 2; ++dy)
-        for (int dx = 0; dx < 2; ++dx) {
-          const int cx = 2 * ix + dx, cy = 2 * iy + dy, cz = 2 * iz + dz;
-          if (cx < cd.x() && cy < cd.y() && cz < cd.z()) visitNode(ctx, k - 1, cx, cy, cz);
-        }
+    forEachChild(levels_[k - 1].dims, ix, iy, iz, [&](int cx, int cy, int cz) { visitNode(ctx, k - 1, cx, cy, cz); });
   };
   if (crosses) {  // contains or touches the camera plane: cannot bound the footprint
     descend();
@@ -378,13 +388,7 @@ void OccupancyMap::freeRegion(FrameCtx& ctx, int k, int ix, int iy, int iz) {
     freeCell(ctx, cellIndex(ix, iy, iz));
     return;
   }
-  const Eigen::Vector3i& cd = levels_[k - 1].dims;
-  for (int dz = 0; dz < 2; ++dz)
-    for (int dy = 0; dy < 2; ++dy)
-      for (int dx = 0; dx < 2; ++dx) {
-        const int cx = 2 * ix + dx, cy = 2 * iy + dy, cz = 2 * iz + dz;
-        if (cx < cd.x() && cy < cd.y() && cz < cd.z()) freeRegion(ctx, k - 1, cx, cy, cz);
-      }
+  forEachChild(levels_[k - 1].dims, ix, iy, iz, [&](int cx, int cy, int cz) { freeRegion(ctx, k - 1, cx, cy, cz); });
 }
 
 void OccupancyMap::freeCell(FrameCtx& ctx, int cell) {

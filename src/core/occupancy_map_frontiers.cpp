@@ -13,6 +13,20 @@ namespace semexp {
 
 namespace {
 
+// Keeps the cells of `list` whose flags still hold `keep` and clears the
+// `listed` flag of the ones dropped (stale entries of a lazily pruned list).
+void compactCellList(std::vector<int>& list, std::vector<std::uint8_t>& flags, std::uint8_t keep,
+                     std::uint8_t listed) {
+  std::size_t k = 0;
+  for (int c : list) {
+    if (flags[c] & keep)
+      list[k++] = c;
+    else
+      flags[c] &= static_cast<std::uint8_t>(~listed);
+  }
+  list.resize(k);
+}
+
 inline int popcount64(std::uint64_t x) { return __builtin_popcountll(x); }
 }  // namespace
 
@@ -188,26 +202,10 @@ void OccupancyMap::updateFrontiers() {
   for (int c : extra) cell_flags_[c] &= clear;
   frontier_cand_.clear();
   // Drop stale list entries once they dominate.
-  if (frontier_blocks_.size() > 2 * frontier_block_count_ + 256) {
-    std::size_t k = 0;
-    for (int c : frontier_blocks_) {
-      if (cell_flags_[c] & kBlockFrontier)
-        frontier_blocks_[k++] = c;
-      else
-        cell_flags_[c] &= static_cast<std::uint8_t>(~kListedBlock);
-    }
-    frontier_blocks_.resize(k);
-  }
-  if (frontier_cells_.size() > 2 * frontier_cell_count_ + 256) {
-    std::size_t k = 0;
-    for (int c : frontier_cells_) {
-      if (cell_flags_[c] & kCoarseFrontier)
-        frontier_cells_[k++] = c;
-      else
-        cell_flags_[c] &= static_cast<std::uint8_t>(~kListedCell);
-    }
-    frontier_cells_.resize(k);
-  }
+  if (frontier_blocks_.size() > 2 * frontier_block_count_ + 256)
+    compactCellList(frontier_blocks_, cell_flags_, kBlockFrontier, kListedBlock);
+  if (frontier_cells_.size() > 2 * frontier_cell_count_ + 256)
+    compactCellList(frontier_cells_, cell_flags_, kCoarseFrontier, kListedCell);
 }
 
 std::size_t OccupancyMap::frontierCount() const { return frontier_voxels_ + frontier_cell_count_; }
