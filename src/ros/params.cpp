@@ -244,6 +244,7 @@ semexp::PlannerConfig loadPlanner(const ParamReader& p) {
   p.get(n + "v_max_mps", c.v_max_mps);
   p.get(n + "omega_max_radps", c.omega_max_radps);
   p.get(n + "mav_radius_m", c.mav_radius_m);
+  p.get(n + "clearance_margin_m", c.clearance_margin_m);
   p.get(n + "raycast_width", c.raycast_width);
   p.get(n + "raycast_height", c.raycast_height);
   p.get(n + "time_budget_s", c.time_budget_s);

@@ -339,12 +339,12 @@ std::vector<std::vector<std::uint8_t>> PlannerNode::historyMasks(const std::vect
 // ---------------------------------------------------------------- iteration
 
 bool PlannerNode::pathSafe(const std::vector<Eigen::Vector3d>& path, bool escaped, std::string& why) const {
-  // Last guard before publishing: no point of the path within R of an
-  // occupied voxel (unknown allowed), R/2 on an escape segment out of an
-  // invalid start (as the path planner checks it).
+  // Last guard before publishing: no point of the path within R plus the
+  // clearance margin of an occupied voxel (unknown allowed), R/2 on an escape
+  // segment out of an invalid start (as the path planner checks it).
   const double step = std::max(0.5 * replica_.resolution_m(), 1e-3);
   for (std::size_t i = 0; i + 1 < path.size(); ++i) {
-    const double radius = (escaped && i == 0) ? 0.5 * config_.mav_radius_m : config_.mav_radius_m;
+    const double radius = (escaped && i == 0) ? 0.5 * config_.mav_radius_m : config_.clearance_radius_m();
     const double len = (path[i + 1] - path[i]).norm();
     const int n = std::max(1, static_cast<int>(std::ceil(len / step)));
     for (int k = 0; k <= n; ++k) {

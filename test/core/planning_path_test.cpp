@@ -73,7 +73,7 @@ TEST_F(PathPlannerTest, StraightSegmentNeedsNoPlanner) {
   ASSERT_EQ(p.path_W.size(), 2u);
   EXPECT_TRUE(p.path_W.back() == goal);
   EXPECT_NEAR(p.distance_to_goal_m, 0.0, 1e-12);
-  expect_safe_path(g, p.path_W, config.mav_radius_m, start);
+  expect_safe_path(g, p.path_W, config.clearance_radius_m(), start);
 }
 
 TEST_F(PathPlannerTest, GoalBehindWallThroughDoorway) {
@@ -85,15 +85,15 @@ TEST_F(PathPlannerTest, GoalBehindWallThroughDoorway) {
     ASSERT_TRUE(p.ok()) << PlannedPath::name(p.status);
     EXPECT_EQ(p.status, PlannedPath::Status::kExact);
     EXPECT_LT(p.distance_to_goal_m, kRes);
-    expect_safe_path(g, p.path_W, config.mav_radius_m, start);
+    expect_safe_path(g, p.path_W, config.clearance_radius_m(), start);
     // The path crosses the wall plane x = 3 inside the doorway.
     bool crossed = false;
     for (std::size_t i = 0; i + 1 < p.path_W.size(); ++i) {
       const Eigen::Vector3d a = p.path_W[i], b = p.path_W[i + 1];
       if ((a.x() - 3.0) * (b.x() - 3.0) <= 0 && a.x() != b.x()) {
         const double y = a.y() + (b.y() - a.y()) * (3.0 - a.x()) / (b.x() - a.x());
-        EXPECT_GT(y, 2.6 + config.mav_radius_m - 1e-6);
-        EXPECT_LT(y, 3.4 - config.mav_radius_m + 1e-6);
+        EXPECT_GT(y, 2.6 + config.clearance_radius_m() - 1e-6);
+        EXPECT_LT(y, 3.4 - config.clearance_radius_m() + 1e-6);
         crossed = true;
       }
     }
@@ -116,9 +116,9 @@ TEST_F(PathPlannerTest, ApproximateWhenGoalInUnknownSpace) {
   const PlannedPath p = planner.plan(start, goal);
   ASSERT_TRUE(p.ok()) << PlannedPath::name(p.status);
   EXPECT_EQ(p.status, PlannedPath::Status::kApproximate);
-  expect_safe_path(g, p.path_W, config.mav_radius_m, start);
-  // As close as possible: the sphere must stay R from the unknown at x = 3.5,
-  // so the end is near x = 3.35, i.e. about 1.65 m from the goal.
+  expect_safe_path(g, p.path_W, config.clearance_radius_m(), start);
+  // As close as possible: the sphere must stay R + margin from the unknown at
+  // x = 3.5, so the end is near x = 3.33, i.e. about 1.67 m from the goal.
   EXPECT_GT(p.path_W.back().x(), 3.0);
   EXPECT_NEAR(p.distance_to_goal_m, (goal - p.path_W.back()).norm(), 1e-12);
   EXPECT_LT(p.distance_to_goal_m, 2.2);
@@ -133,8 +133,30 @@ TEST_F(PathPlannerTest, FrontierGoalIsProjectedToNearbyFreeSpace) {
   const Eigen::Vector3d start(1, 1, 1), goal(3.475, 2.0, 1.0);  // a frontier voxel centre
   const PlannedPath p = planner.plan(start, goal);
   ASSERT_TRUE(p.ok());
-  expect_safe_path(g, p.path_W, config.mav_radius_m, start);
+  expect_safe_path(g, p.path_W, config.clearance_radius_m(), start);
   EXPECT_LT(p.distance_to_goal_m, 2 * config.mav_radius_m + 2 * kRes + 1e-9);
+}
+
+TEST_F(PathPlannerTest, KeepsClearOfASurfaceInsideAFreeVoxel) {
+  // A wall fills y >= 3.5; a glass pane 1.5 cm in front of it (y = 3.485)
+  // returns no depth, so its voxel [3.45, 3.5] is mapped free. The goal asks
+  // for a point touching the wall: the path must keep R from the pane, which
+  // only the clearance margin beyond R from the wall's voxels guarantees
+  // (sqrt(R^2 + (r/2)^2) = 0.1275 m would stop 0.1125 m from the pane).
+  TestGrid g(room_bounds(), kRes, TestGrid::kFree);
+  g.fill_box({0.0, 3.5, 0.0}, {6.0, 4.0, 2.0}, TestGrid::kOccupied);
+  const double pane_y = 3.485;
+  const PathPlanner planner = make(g);
+  ASSERT_GE(planner.check_radius_m(), config.mav_radius_m + 0.04 - 1e-12);
+  const Eigen::Vector3d start(1, 1, 1);
+  for (const Eigen::Vector3d& goal : {Eigen::Vector3d(3, 3.45, 1), Eigen::Vector3d(4, 3.3, 1.5)}) {
+    const PlannedPath p = planner.plan(start, goal);
+    ASSERT_TRUE(p.ok()) << PlannedPath::name(p.status);
+    expect_safe_path(g, p.path_W, config.clearance_radius_m(), start);
+    for (const Eigen::Vector3d& q : p.path_W) EXPECT_LT(q.y(), pane_y - config.mav_radius_m) << q.transpose();
+    // It still gets as close as the margin allows (within the goal search).
+    EXPECT_GT(p.path_W.back().y(), 3.5 - config.clearance_radius_m() - 2 * kRes);
+  }
 }
 
 TEST_F(PathPlannerTest, ParallelCandidatesAllSafe) {
@@ -150,7 +172,7 @@ TEST_F(PathPlannerTest, ParallelCandidatesAllSafe) {
   for (std::size_t i = 0; i < paths.size(); ++i) {
     SCOPED_TRACE(i);
     ASSERT_TRUE(paths[i].ok()) << PlannedPath::name(paths[i].status);
-    expect_safe_path(g, paths[i].path_W, config.mav_radius_m, start);
+    expect_safe_path(g, paths[i].path_W, config.clearance_radius_m(), start);
   }
 }
 
@@ -170,7 +192,7 @@ TEST_F(PathPlannerTest, InvalidStart) {
   EXPECT_TRUE(esc.path_W.front() == start);
   EXPECT_LT((esc.path_W[1] - start).norm(), 1.0);
   std::vector<Eigen::Vector3d> rest(esc.path_W.begin() + 1, esc.path_W.end());
-  expect_safe_path(g, rest, config.mav_radius_m, rest.front());
+  expect_safe_path(g, rest, config.clearance_radius_m(), rest.front());
   // Start inside the occupied wall: no escape through occupied space.
   const PlannedPath wall = make(g, true).plan({2.1, 1.0, 1.0}, goal);
   EXPECT_EQ(wall.status, PlannedPath::Status::kStartInvalid);

@@ -43,17 +43,46 @@ class SimTest(unittest.TestCase):
         cls.path_pub = rospy.Publisher("/planner/path", Path, queue_size=10)
         cls.scene_pub = rospy.Publisher("/mav_sim/load_scene", String, queue_size=1)
 
+        # Like a real lockstep node, the test reports a frame once all of its
+        # streams have arrived, so the simulator never runs ahead of a stream
+        # still in transit (its image publishers keep only a few frames). A
+        # frame missing a stream (subscriptions still connecting at start-up)
+        # is reported after 2 s, as the newest depth frame.
+        frame_keys = {"depth", "rgb", "info", "inst", "cls", "det"}
+        arrived = {}
+        cls.newest_depth = None  # (stamp, wall time it arrived)
+
         def keep(key):
             def cb(m):
                 with cls.lock:
                     cls.msgs[key].append(m)
+                    if key not in frame_keys:
+                        return
+                    if key == "depth":
+                        cls.newest_depth = (m.header.stamp, time.monotonic())
+                    stamp = m.header.stamp.to_nsec()
+                    got = arrived.setdefault(stamp, set())
+                    got.add(key)
+                    complete = got == frame_keys
+                    if complete:
+                        del arrived[stamp]
+                if complete and cls.auto_report:
+                    cls.report(m.header.stamp)
             return cb
 
-        def on_depth(m):
-            keep("depth")(m)
-            if cls.auto_report:
-                cls.report(m.header.stamp)
-        rospy.Subscriber("/camera/depth/image_raw", Image, on_depth, queue_size=50)
+        def report_stragglers():
+            while not rospy.is_shutdown():
+                time.sleep(0.5)
+                with cls.lock:
+                    newest = cls.newest_depth
+                    late = newest is not None and newest[0].to_nsec() in arrived and time.monotonic() - newest[1] > 2.0
+                    if late:
+                        del arrived[newest[0].to_nsec()]
+                if late and cls.auto_report:
+                    cls.report(newest[0])
+        threading.Thread(target=report_stragglers, daemon=True).start()
+
+        rospy.Subscriber("/camera/depth/image_raw", Image, keep("depth"), queue_size=50)
         for key, topic, typ in (("rgb", "/camera/rgb/image_raw", Image), ("info", "/camera/camera_info", CameraInfo),
                                 ("inst", "/camera/instance_gt", Image), ("cls", "/camera/class_gt", Image),
                                 ("det", "/detections", Detections), ("pose", "/mav/pose", PoseStamped),

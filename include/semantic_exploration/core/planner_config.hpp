@@ -31,6 +31,11 @@ struct PlannerConfig {
   double v_max_mps = 1.5;           ///< maximum speed, m/s
   double omega_max_radps = 0.75;    ///< maximum yaw rate, rad/s
   double mav_radius_m = 0.125;      ///< collision sphere radius R, m
+  /// Clearance kept beyond R from occupied (and, where unknown is not free,
+  /// unknown) voxel boxes, m. A surface can sit inside a voxel the map
+  /// carved free (grazing rays, glass that returns no depth), so R alone
+  /// lets the MAV touch it.
+  double clearance_margin_m = 0.04;
   int raycast_width = 36;           ///< 360-degree raycast width w
   int raycast_height = 10;          ///< raycast height h
   double time_budget_s = 0.1;       ///< OMPL time per candidate, s
@@ -48,6 +53,9 @@ struct PlannerConfig {
   int stall_iterations = 20;              ///< stop ("no_progress") when the explored volume grew less than stall_volume_m3 over this many iterations; 0 = off
   double stall_volume_m3 = 0.1;           ///< see stall_iterations, m^3
 
+  /// Radius of the sphere that must be free along paths and at view points, m.
+  double clearance_radius_m() const { return mav_radius_m + clearance_margin_m; }
+
   void validate(const std::string& ns = "planner/") const {
     require(n_candidates > 0, ns + "n_candidates", "must be > 0");
     require(std::isfinite(p_frontier) && p_frontier >= 0 && p_frontier <= 1, ns + "p_frontier", "must be in [0, 1]");
@@ -59,6 +67,7 @@ struct PlannerConfig {
     require(std::isfinite(v_max_mps) && v_max_mps > 0, ns + "v_max_mps", "must be > 0 m/s");
     require(std::isfinite(omega_max_radps) && omega_max_radps > 0, ns + "omega_max_radps", "must be > 0 rad/s");
     require(std::isfinite(mav_radius_m) && mav_radius_m > 0, ns + "mav_radius_m", "must be > 0 m");
+    require(std::isfinite(clearance_margin_m) && clearance_margin_m >= 0, ns + "clearance_margin_m", "must be >= 0 m");
     require(raycast_width > 0, ns + "raycast_width", "must be > 0");
     require(raycast_height > 0, ns + "raycast_height", "must be > 0");
     require(std::isfinite(time_budget_s) && time_budget_s > 0, ns + "time_budget_s", "must be > 0 s");

@@ -77,7 +77,7 @@ std::vector<CandidateSample> CandidateSampler::sample(const std::vector<Eigen::V
       if (is_free) {
         for (int k = 0; k < 8; ++k) {
           const Eigen::Vector3d p = object_view_point(o, yaw0 + k * M_PI / 4.0);
-          if (is_free(p, planner_.mav_radius_m)) {
+          if (is_free(p, planner_.clearance_radius_m())) {
             s.position_W = p;
             break;
           }

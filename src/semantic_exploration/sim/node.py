@@ -83,7 +83,7 @@ class MavSimNode:
             rospy.logerr("mav_sim: cannot load scene: %s. Waiting for a valid scene on %s.", e,
                          rospy.resolve_name("~load_scene"))
 
-        latch = dict(queue_size=2)
+        latch = dict(queue_size=5)  # frames a slow subscriber (rosbag, rviz) may lag behind
         self.pub_depth = rospy.Publisher("camera/depth/image_raw", Image, **latch)
         self.pub_rgb = rospy.Publisher("camera/rgb/image_raw", Image, **latch)
         self.pub_info = rospy.Publisher("camera/camera_info", CameraInfo, **latch)
