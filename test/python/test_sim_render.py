@@ -252,3 +252,25 @@ def test_detector_drop_fraction_and_bleeding():
     assert not np.any(chair & (inst == 9))
     assert chair[8, 15] and chair[15, 8] and not chair[7, 15]
 
+
+def test_detector_hides_chosen_objects_without_changing_the_others():
+    inst, cls, ct = _gt_images()
+    cfg = dict(min_mask_pixels=0, drop_fraction=0.3, bleed_probability=0.5, bleed_pixels=1, seed=4)
+    plain = Detector(DetectorConfig(**cfg), ct)
+    hiding = Detector(DetectorConfig(hidden_object_ids=[5], **cfg), ct)
+    seen = 0
+    for k in range(30):
+        if k == 20:
+            hiding.set_hidden([])  # shown again: the same detections as a detector that never hid it
+        m0, d0 = plain.detect(inst, cls)
+        m1, d1 = hiding.detect(inst, cls)
+        if k < 20:
+            assert 5 not in [d["object_id"] for d in d1]
+            # The rest is what the plain detector reports (the random stream does not depend on hiding).
+            assert [d["object_id"] for d in d1] == [d["object_id"] for d in d0 if d["object_id"] != 5]
+            seen += sum(d["object_id"] == 5 for d in d0)
+            assert not np.any(m1[11:29, 11:29])  # the chair's pixels (a neighbour may bleed 1 px onto its rim)
+        else:
+            assert d1 == d0 and np.array_equal(m1, m0)
+    assert seen > 5  # the plain detector did report the hidden chair
+

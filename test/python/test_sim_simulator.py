@@ -47,6 +47,8 @@ def test_sim_yaml_is_valid_and_complete():
     ({"start_pose": [1, 2]}, "start_pose"),
     ({"bounds_min_m": [0, 0, 0]}, "bounds_max_m"),
     ({"detector": {"drop_fraction": 2.0}}, "detector/drop_fraction"),
+    ({"detector": {"hidden_object_ids": [3, -1]}}, "detector/hidden_object_ids"),
+    ({"detector": {"hidden_object_ids": [2.5]}}, "detector/hidden_object_ids"),
     ({"lockstep": "yes"}, "lockstep"),
     ({"camera": {"nonsense": 1}}, "camera/nonsense"),
 ])

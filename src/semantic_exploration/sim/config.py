@@ -81,6 +81,9 @@ class DetectorConfig:
     confidence_min: float = 0.6      # reported confidence range
     confidence_max: float = 1.0
     seed: int = 2
+    # Scene object ids never reported (they stay in depth and the ground-truth images): an object that is
+    # in view but undetected. mav_sim's ~hide_detections topic replaces the list at run time.
+    hidden_object_ids: List[int] = field(default_factory=list)
 
     def validate(self, ns="detector/"):
         _req(isinstance(self.min_mask_pixels, int) and self.min_mask_pixels >= 0, ns + "min_mask_pixels",
@@ -94,6 +97,9 @@ class DetectorConfig:
         _req(_finite(self.confidence_max) and self.confidence_min <= self.confidence_max <= 1, ns + "confidence_max",
              "must be in [confidence_min, 1]")
         _req(isinstance(self.seed, int) and self.seed >= 0, ns + "seed", "must be an integer >= 0")
+        _req(isinstance(self.hidden_object_ids, list)
+             and all(isinstance(i, int) and not isinstance(i, bool) and i > 0 for i in self.hidden_object_ids),
+             ns + "hidden_object_ids", "must be a list of scene object ids (integers > 0)")
 
 
 @dataclass

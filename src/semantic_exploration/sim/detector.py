@@ -4,7 +4,8 @@ Like a detector trained for the classes of interest it reports only those
 classes, with per-frame instance ids (not the scene's object ids). Options make
 it imperfect in the ways real detectors are: small masks are missed, a
 fraction of detections is dropped, and masks bleed over their borders onto
-neighbouring surfaces.
+neighbouring surfaces. Chosen objects can be hidden from it altogether (in
+view, never detected), to test what a map does with visible undetected objects.
 """
 
 from typing import Dict, List, Tuple
@@ -22,6 +23,7 @@ class Detector:
         self.cfg = cfg
         self.classes = classes
         self.rng = np.random.default_rng(cfg.seed)
+        self.hidden = frozenset(cfg.hidden_object_ids)  # scene object ids never reported
         self._interest = np.zeros(65536, bool)
         for n in classes.of_interest:
             self._interest[classes.id(n)] = True
@@ -42,7 +44,7 @@ class Detector:
             # Draw every random number for every candidate so that the stream
             # does not depend on which detections survive.
             r_drop, r_bleed, r_conf = self.rng.random(3)
-            if n < c.min_mask_pixels or r_drop < c.drop_fraction:
+            if n < c.min_mask_pixels or r_drop < c.drop_fraction or oid in self.hidden:
                 continue
             k = len(dets) + 1
             mask = instance == oid
@@ -57,3 +59,7 @@ class Detector:
             grown = ndimage.binary_dilation(mask, np.ones((3, 3), bool), iterations=self.cfg.bleed_pixels)
             out[grown & (out == 0)] = k  # bleed onto neighbouring surfaces, not onto other detections
         return out, dets
+
+    def set_hidden(self, object_ids) -> None:
+        """Replaces the set of hidden scene object ids (from the next detect() on)."""
+        self.hidden = frozenset(int(i) for i in object_ids)

@@ -3,7 +3,9 @@ detector would, for a scene rendered by :class:`Simulator`.
 
 Topics (relative names, resolved in the node's namespace):
   sub  planner/path (nav_msgs/Path, yaw in orientation), frame_integrated (FrameIntegrated, lockstep),
-       ~load_scene (std_msgs/String: "mesh" or "mesh;labels" of a scene to switch to)
+       ~load_scene (std_msgs/String: "mesh" or "mesh;labels" of a scene to switch to),
+       ~hide_detections (std_msgs/UInt32MultiArray: scene object ids the detector stops reporting
+       from the next frame on, replacing detector/hidden_object_ids; [] = hide none)
   pub  camera/depth/image_raw (32FC1 m), camera/rgb/image_raw (rgb8), camera/camera_info (also as
        camera/depth/camera_info and camera/rgb/camera_info),
        camera/instance_gt (16UC1 object id), camera/class_gt (16UC1 class id), detections,
@@ -33,7 +35,7 @@ from geometry_msgs.msg import PoseStamped, TransformStamped
 from nav_msgs.msg import Path
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image
-from std_msgs.msg import Header, String, UInt32
+from std_msgs.msg import Header, String, UInt32, UInt32MultiArray
 
 from semantic_exploration.msg import Detection, Detections, FrameIntegrated
 
@@ -108,6 +110,8 @@ class MavSimNode:
         rospy.Subscriber("planner/path", Path, self._on_path, queue_size=5)
         rospy.Subscriber("frame_integrated", FrameIntegrated, self._on_integrated, queue_size=50)
         rospy.Subscriber("~load_scene", String, lambda m: self._requests.put(m.data), queue_size=2)
+        self._hidden = list(c.detector.hidden_object_ids)
+        rospy.Subscriber("~hide_detections", UInt32MultiArray, self._on_hide, queue_size=5)
         self._lockstep_nodes = [_short_name(n) for n in c.lockstep_nodes]
         self._timeouts = 0
         self.pub_coll.publish(UInt32(0))
@@ -130,6 +134,12 @@ class MavSimNode:
         with self._lock:
             self._pending_path = wps
 
+    def _on_hide(self, msg: UInt32MultiArray) -> None:
+        self._hidden = [int(i) for i in msg.data]
+        if self.sim is not None:
+            self.sim.detector.set_hidden(self._hidden)  # one attribute swap: safe against the frame loop
+        rospy.loginfo("mav_sim: detector hides objects %s", self._hidden)
+
     def _reject(self, why: str) -> None:
         rospy.logerr("mav_sim: rejected %s; keeping the previous path", why)
         self.pub_rejected.publish(String(why))
@@ -143,6 +153,7 @@ class MavSimNode:
     # ---------------------------------------------------------------- helpers
     def _install(self, sim: Simulator) -> None:
         c = self.cfg
+        sim.detector.set_hidden(getattr(self, "_hidden", c.detector.hidden_object_ids))
         self.sim = sim
         lo, hi = sim.bounds
         rospy.loginfo("mav_sim: scene '%s': %d triangles, %d objects (%d of known classes), bounds [%s] - [%s], "
