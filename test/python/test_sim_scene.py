@@ -11,7 +11,7 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 sys.path.insert(0, os.path.join(ROOT, "src"))
 
 from semantic_exploration.sim.classes import DEFAULT_CLASS_NAMES  # noqa: E402
-from semantic_exploration.sim.generator import generate  # noqa: E402
+from semantic_exploration.sim.generator import generate, three_chairs_room  # noqa: E402
 from semantic_exploration.sim.scene import (Scene, SceneError, export_ground_truth, load_habitat,  # noqa: E402
                                             load_scene, read_house, save_habitat,
                                             write_semantic_ply)
@@ -69,6 +69,22 @@ def test_example_scene_loads_with_its_house_table():
     assert np.allclose(s.triangles(), g.triangles(), atol=1e-5)
     assert np.array_equal(s.face_object, g.face_object)
     assert np.array_equal(s.face_colors, g.face_colors)
+
+
+def test_three_chairs_scene_is_the_generators_and_has_three_separate_chairs():
+    path = os.path.join(os.path.dirname(EXAMPLE), "three_chairs_semantic.ply")
+    s = load_scene(path)
+    assert s.name == "three_chairs" and s.start == (0.6, 2.25, 1.4, 0.0)
+    counts = collections.Counter(s.objects.values())
+    assert counts["chair"] == 3 and counts["table"] == 1 and counts["cabinet"] == 1
+    g = three_chairs_room()
+    assert np.allclose(s.triangles(), g.triangles(), atol=1e-5)
+    assert np.array_equal(s.face_object, g.face_object) and np.array_equal(s.face_colors, g.face_colors)
+    chairs = [s.vertices[np.unique(s.faces[s.face_object == i])] for i, c in s.objects.items() if c == "chair"]
+    centres = [(v.min(0) + v.max(0)) / 2 for v in chairs]
+    for i in range(3):
+        for j in range(i):
+            assert np.linalg.norm((centres[i] - centres[j])[:2]) > 2.0
 
 
 def test_matterport_object_indices_start_at_zero(tmp_path):

@@ -604,3 +604,30 @@ def generate(seed: int = 0, size_m=(15.0, 12.0, 3.0), name: Optional[str] = None
     if name is None:
         name = "gen_s%d_%gx%g" % (seed, X, Y)
     return b.scene(name, start)
+
+
+def three_chairs_room(seed: int = 0, name: str = "three_chairs") -> Scene:
+    """A fixed 6 x 4.5 x 2.5 m room with exactly three chairs, for tests with known objects.
+
+    Chair 1 stands alone in the south-west, chair 2 is pulled up to a table on
+    the north side, chair 3 stands in the south-east next to a cabinet; the
+    chairs are over 2 m apart, so a camera can hold one in view while another
+    is outside it. Only the colours depend on ``seed``. Start: (0.6, 2.25, 1.4, 0).
+    """
+    X, Y, H = 6.0, 4.5, 2.5
+    rng = np.random.default_rng(seed)
+    b = MeshBuilder(rng)
+    wall_col = _vary(rng, (225, 220, 205), 10)
+    floor_id, ceil_id, wall_id = b.new_object("floor"), b.new_object("ceiling"), b.new_object("wall")
+    b.box_minmax(floor_id, _vary(rng, (150, 120, 90), 15), (-WALL_T, -WALL_T, -0.05), (X + WALL_T, Y + WALL_T, 0.0))
+    b.box_minmax(ceil_id, (240, 240, 240), (-WALL_T, -WALL_T, H), (X + WALL_T, Y + WALL_T, H + 0.05))
+    _wall_x(b, wall_id, wall_col, -WALL_T / 2, -WALL_T, X + WALL_T, H)
+    _wall_x(b, wall_id, wall_col, Y + WALL_T / 2, -WALL_T, X + WALL_T, H)
+    _wall_y(b, wall_id, wall_col, -WALL_T / 2, 0, Y, H)
+    _wall_y(b, wall_id, wall_col, X + WALL_T / 2, 0, Y, H)
+    chair(b, (1.3, 1.0, 0.6))
+    table(b, (3.0, 3.75, math.pi / 2), 1.2, 0.7)  # spans x 2.4..3.6, y 3.4..4.1
+    chair(b, (3.0, 3.05, math.pi / 2))           # faces the table
+    chair(b, (4.6, 1.0, 2.5))
+    cabinet(b, (X - 0.25, 2.6, math.pi), 0.9, 0.45, 1.0)
+    return b.scene(name, (0.6, Y / 2, 1.4, 0.0))
