@@ -7,9 +7,12 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <cstring>
+#include <mutex>
 #include <stdexcept>
 
 #include "semantic_exploration/CandidateViewArray.h"
@@ -81,7 +84,7 @@ std_msgs::ColorRGBA colour(float r, float g, float b, float a) {
 
 }  // namespace
 
-PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listener_(tf_buffer_) {
+PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listener_(tf_buffer_), nh_(nh) {
   const auto p = ParamReader::fromNodeHandle(pnh);
   config_ = loadPlanner(p);
   exploration_ = loadExploration(p);
@@ -102,10 +105,6 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listene
   const char* gains[4] = {"gain_images/entropy", "gain_images/background", "gain_images/object",
                           "gain_images/combined"};
   for (int i = 0; i < 4; ++i) gain_pubs_[i] = pnh.advertise<sensor_msgs::Image>(gains[i], 1, true);
-  bg_gains_client_ = nh.serviceClient<semantic_exploration::ComputeGains>("background_map/compute_gains");
-  obj_gains_client_ = nh.serviceClient<semantic_exploration::ComputeGains>("object_map/compute_gains");
-  masks_client_ = nh.serviceClient<semantic_exploration::GetHistoryMasks>("depth_history/get_masks");
-  get_map_client_ = nh.serviceClient<semantic_exploration::GetMap>("background_map/get_map");
   plan_srv_ = pnh.advertiseService("plan_once", &PlannerNode::planOnce, this);
   update_sub_ = nh.subscribe("background_map/map_update", 50, &PlannerNode::mapUpdateCallback, this);
   frontiers_sub_ = nh.subscribe("background_map/frontiers", 1, &PlannerNode::frontiersCallback, this);
@@ -121,6 +120,11 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listene
   publishStatus(state_, "waiting for the map");
 }
 
+PlannerNode::~PlannerNode() {
+  for (auto& c : pending_calls_)
+    if (c.worker.joinable()) c.worker.join();
+}
+
 void PlannerNode::publishStatus(uint8_t state, const std::string& message) {
   ExplorationStatus s;
   s.header.stamp = ros::Time::now();
@@ -128,7 +132,106 @@ void PlannerNode::publishStatus(uint8_t state, const std::string& message) {
   s.state = state;
   s.iteration = iteration_;
   s.message = message;
+  s.service_timeouts = static_cast<uint32_t>(drops_.count("service_timeout"));
   status_pub_.publish(s);
+}
+
+// ---------------------------------------------------------------- bounded service calls
+
+struct PlannerNode::CallState {
+  std::mutex mutex;
+  std::condition_variable done_cv;
+  bool available = false;  ///< the service was found
+  bool done = false;       ///< the worker has finished
+  bool ok = false;         ///< the call returned an answer
+};
+
+void PlannerNode::reapCalls() {
+  for (auto it = pending_calls_.begin(); it != pending_calls_.end();) {
+    bool done = false;
+    {
+      std::lock_guard<std::mutex> lock(it->state->mutex);
+      done = it->state->done;
+    }
+    if (!done) {
+      ++it;
+      continue;
+    }
+    it->worker.join();
+    it = pending_calls_.erase(it);
+  }
+}
+
+template <class Srv>
+PlannerNode::CallResult PlannerNode::callService(const std::string& service, Srv& srv, std::string& why) {
+  reapCalls();
+  char buf[256];
+  const auto earlier = timed_out_now_.find(service);
+  if (earlier != timed_out_now_.end()) {  // waiting again in the same iteration would only double the stall
+    why = earlier->second;
+    return CallResult::kTimedOut;
+  }
+  const auto pending = std::count_if(pending_calls_.begin(), pending_calls_.end(),
+                                     [&service](const PendingCall& c) { return c.service == service; });
+  if (pending >= kMaxPendingCalls) {
+    std::snprintf(buf, sizeof(buf), "service %s not called: %d earlier calls are still unanswered", service.c_str(),
+                  static_cast<int>(pending));
+    why = buf;
+    drops_.drop("service_busy", why);
+    return CallResult::kBusy;
+  }
+  // The worker owns its client, request and response: a call abandoned here
+  // may answer later into its own copy, which nobody reads. A fresh
+  // non-persistent client per call finds a restarted service again and is
+  // never used by two threads at once. It is made here, not in the worker:
+  // a NodeHandle made after shutdown would start roscpp again.
+  auto state = std::make_shared<CallState>();
+  auto call = std::make_shared<Srv>(srv);
+  ros::ServiceClient client = nh_.serviceClient<Srv>(service);
+  const double timeout_s = service_timeout_s_;
+  std::thread worker([state, call, client, timeout_s]() mutable {
+    const bool available = client.waitForExistence(ros::Duration(timeout_s));
+    {
+      std::lock_guard<std::mutex> lock(state->mutex);
+      state->available = available;
+    }
+    const bool ok = available && client.call(*call);
+    {
+      std::lock_guard<std::mutex> lock(state->mutex);
+      state->ok = ok;
+      state->done = true;
+    }
+    state->done_cv.notify_all();
+  });
+  std::unique_lock<std::mutex> lock(state->mutex);
+  const bool done =
+      state->done_cv.wait_for(lock, std::chrono::duration<double>(timeout_s), [&state] { return state->done; });
+  const bool available = state->available, ok = state->ok;
+  lock.unlock();
+  if (done) {
+    worker.join();
+    if (ok) {
+      srv.response = std::move(call->response);
+      return CallResult::kOk;
+    }
+    if (!available) {
+      std::snprintf(buf, sizeof(buf), "service %s timed out after %.1f s (not available)", service.c_str(), timeout_s);
+      why = buf;
+      timed_out_now_[service] = why;
+      drops_.drop("service_timeout", why);
+      return CallResult::kUnavailable;
+    }
+    why = "service " + service + " failed";
+    drops_.drop("service_failed", why);
+    return CallResult::kFailed;
+  }
+  std::snprintf(buf, sizeof(buf), "service %s timed out after %.1f s%s", service.c_str(), timeout_s,
+                available ? " (no answer)" : " (not available)");
+  why = buf;
+  pending_calls_.push_back(PendingCall{service, state, std::move(worker)});
+  timed_out_now_[service] = why;
+  drops_.drop("service_timeout", why);
+  return CallResult::kTimedOut;
 }
 
 // ---------------------------------------------------------------- map input
@@ -160,8 +263,10 @@ bool PlannerNode::applyBlocks(const semantic_exploration::MapBlocks& msg, bool& 
 
 bool PlannerNode::resync() {
   semantic_exploration::GetMap srv;
-  if (!get_map_client_.waitForExistence(ros::Duration(service_timeout_s_)) || !get_map_client_.call(srv)) {
-    drops_.drop("resync_failed", "background_map/get_map unavailable or failed; the replica may be stale");
+  std::string why;
+  timed_out_now_.erase("background_map/get_map");  // a resync is not part of an iteration
+  if (callService("background_map/get_map", srv, why) != CallResult::kOk) {
+    drops_.drop("resync_failed", why + "; the replica may be stale until the next gap");
     return false;
   }
   bool gap = false;
@@ -264,16 +369,20 @@ bool PlannerNode::planOnce(std_srvs::Trigger::Request&, std_srvs::Trigger::Respo
 
 // ---------------------------------------------------------------- providers
 
+void PlannerNode::addServiceNote(const std::string& note) {
+  // The intermediate-yaw call may fail the same way as the candidates' call.
+  if (std::find(service_notes_.begin(), service_notes_.end(), note) == service_notes_.end())
+    service_notes_.push_back(note);
+}
+
 std::vector<semexp::GainSet> PlannerNode::computeGains(const std::vector<Eigen::Vector3d>& positions) {
   const int w = config_.raycast_width, h = config_.raycast_height;
   semantic_exploration::ComputeGains bg;
   bg.request.width = static_cast<uint16_t>(w);
   bg.request.height = static_cast<uint16_t>(h);
   for (const auto& p : positions) bg.request.positions.push_back(toPoint(p));
-  if (!bg_gains_client_.waitForExistence(ros::Duration(service_timeout_s_)))
-    throw std::runtime_error("service background_map/compute_gains not available after " +
-                             std::to_string(service_timeout_s_) + " s");
-  if (!bg_gains_client_.call(bg)) throw std::runtime_error("background_map/compute_gains failed");
+  std::string why;
+  if (callService("background_map/compute_gains", bg, why) != CallResult::kOk) throw std::runtime_error(why);
   const auto& r = bg.response;
   if (r.entropy_gain.size() != positions.size() || r.distance_gain.size() != positions.size())
     throw std::runtime_error("background_map/compute_gains returned " + std::to_string(r.entropy_gain.size()) +
@@ -299,9 +408,15 @@ std::vector<semexp::GainSet> PlannerNode::computeGains(const std::vector<Eigen::
       obj.request.max_depth_m.insert(obj.request.max_depth_m.end(), d.values.begin(), d.values.end());
     }
   }
-  if (!obj_gains_client_.waitForExistence(ros::Duration(service_timeout_s_)) || !obj_gains_client_.call(obj) ||
-      obj.response.distance_gain.size() != positions.size()) {
-    drops_.drop("no_object_gains", "object_map/compute_gains unavailable or failed; planning without object gains");
+  if (callService("object_map/compute_gains", obj, why) != CallResult::kOk) {
+    addServiceNote(why + ": planned without object gains");
+    return out;
+  }
+  if (obj.response.distance_gain.size() != positions.size()) {
+    drops_.drop("no_object_gains", "object_map/compute_gains returned " +
+                                       std::to_string(obj.response.distance_gain.size()) + " images for " +
+                                       std::to_string(positions.size()) + " positions; planning without object gains");
+    addServiceNote("object_map/compute_gains answered with the wrong number of images");
     return out;
   }
   for (std::size_t i = 0; i < positions.size(); ++i)
@@ -315,9 +430,16 @@ std::vector<std::vector<std::uint8_t>> PlannerNode::historyMasks(const std::vect
   srv.request.width = static_cast<uint16_t>(w);
   srv.request.height = static_cast<uint16_t>(h);
   for (const auto& p : positions) srv.request.positions.push_back(toPoint(p));
-  if (!masks_client_.waitForExistence(ros::Duration(service_timeout_s_)) || !masks_client_.call(srv) ||
-      srv.response.masks.size() != positions.size()) {
-    drops_.drop("no_history", "depth_history/get_masks unavailable or failed; planning without the history");
+  std::string why;
+  if (callService("depth_history/get_masks", srv, why) != CallResult::kOk) {
+    addServiceNote(why + ": planned without the history");
+    return {};
+  }
+  if (srv.response.masks.size() != positions.size()) {
+    drops_.drop("no_history", "depth_history/get_masks returned " + std::to_string(srv.response.masks.size()) +
+                                  " masks for " + std::to_string(positions.size()) +
+                                  " positions; planning without the history");
+    addServiceNote("depth_history/get_masks answered with the wrong number of masks");
     return {};
   }
   std::vector<std::vector<std::uint8_t>> out(positions.size());
@@ -392,6 +514,8 @@ bool PlannerNode::iterate(std::string& message) {
     start_time_ = now;
   }
   ++iteration_;
+  timed_out_now_.clear();
+  service_notes_.clear();
   state_ = ExplorationStatus::STATE_PLANNING;
   publishStatus(state_, "planning");
 
@@ -421,6 +545,8 @@ bool PlannerNode::iterate(std::string& message) {
     r.provider_error = true;
     r.message = std::string("planning failed: ") + e.what();
   }
+  // Failures of optional services do not stop the iteration; say so.
+  for (const auto& note : service_notes_) r.message += "; " + note;
   bool published = false;
   std::string unsafe;
   if (r.winner >= 0 &&
@@ -461,8 +587,10 @@ bool PlannerNode::iterate(std::string& message) {
   s.path_planning_time_s = static_cast<float>(r.path_planning_s);
   s.gains_time_s = static_cast<float>(r.gains_s);
   s.yaw_time_s = static_cast<float>(r.yaw_s);
+  s.service_timeouts = static_cast<uint32_t>(drops_.count("service_timeout"));
   status_pub_.publish(s);
   message = r.message;
+  last_attempt_ = ros::WallTime::now();  // the retry period is the pause after an attempt, however long it took
   return published;
 }
 

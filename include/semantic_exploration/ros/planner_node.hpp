@@ -20,9 +20,19 @@
 /// map has arrived. Object gains and history masks are optional: if their
 /// services are missing the iteration goes on without them (logged);
 /// background gains are required. Node parameters besides the core's
-/// PlannerConfig: `planner/service_timeout_s` (wait for a service to appear),
-/// `planner/retry_period_s`, `planner/goal_timeout_factor` (replan if the
-/// goal is not reached within factor * estimated path time + 10 s).
+/// PlannerConfig: `planner/service_timeout_s` (the longest a service call may
+/// take, finding the service included), `planner/retry_period_s`,
+/// `planner/goal_timeout_factor` (replan if the goal is not reached within
+/// factor * estimated path time + 10 s).
+///
+/// Every service call runs on its own worker thread with its own
+/// non-persistent client and is given up after service_timeout_s: the
+/// iteration reports "service X timed out after N s" in its status (and
+/// counts it in ExplorationStatus::service_timeouts), goes on without an
+/// optional service or ends without a path if background gains are missing,
+/// and the next iteration calls again. An abandoned call keeps its own copy
+/// of request and response, so its late answer is dropped with it; at most
+/// kMaxPendingCalls abandoned calls per service are kept waiting.
 
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
@@ -33,7 +43,9 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <memory>
+#include <map>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "semantic_exploration/MapBlocks.h"
@@ -49,8 +61,34 @@ namespace semexp_ros {
 class PlannerNode {
  public:
   PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
+  /// Joins abandoned service calls (they end once roscpp has shut down and dropped their connections).
+  ~PlannerNode();
+
+  /// Abandoned calls per service still waited for; beyond it the service is not called again until one ends.
+  static constexpr int kMaxPendingCalls = 4;
 
  private:
+  /// How a bounded service call ended.
+  enum class CallResult { kOk, kUnavailable, kFailed, kTimedOut, kBusy };
+  struct CallState;
+  /// A call given up after service_timeout_s whose worker has not ended yet.
+  struct PendingCall {
+    std::string service;
+    std::shared_ptr<CallState> state;
+    std::thread worker;
+  };
+
+  /// Calls `service` (relative to the node namespace) with at most
+  /// service_timeout_s for finding it and its answer. On kOk srv.response
+  /// holds the answer; otherwise `why` says what happened (also logged and
+  /// counted).
+  template <class Srv>
+  CallResult callService(const std::string& service, Srv& srv, std::string& why);
+  /// Joins the workers of abandoned calls that have ended.
+  void reapCalls();
+  /// Records a failure of an optional service for this iteration's status message (once).
+  void addServiceNote(const std::string& note);
+
   void mapUpdateCallback(const semantic_exploration::MapBlocksConstPtr& msg);
   void frontiersCallback(const sensor_msgs::PointCloud2ConstPtr& msg);
   void objectsCallback(const semantic_exploration::ObjectArrayConstPtr& msg);
@@ -102,7 +140,11 @@ class PlannerNode {
   ros::Publisher path_pub_, candidates_pub_, markers_pub_, status_pub_;
   ros::Publisher gain_pubs_[4];
   ros::ServiceServer plan_srv_;
-  ros::ServiceClient bg_gains_client_, obj_gains_client_, masks_client_, get_map_client_;
+  ros::NodeHandle nh_;
+  std::vector<PendingCall> pending_calls_;
+  /// Services that timed out in the current iteration (-> why): not called again in it.
+  std::map<std::string, std::string> timed_out_now_;
+  std::vector<std::string> service_notes_;  ///< failures of optional services in the current iteration, for the status
   ros::Timer timer_;
   uint32_t iteration_ = 0;
   DropCounter drops_;

@@ -1,0 +1,187 @@
+#!/usr/bin/env python3
+"""rostest: the planner with gain and history services that hang.
+
+Same scripted room as test_planner_node.py (wall at x in [2.0, 2.2] for
+y < 3 m, frontiers behind it, MAV at (1, 1, 1)); planner/service_timeout_s is
+1 s. background_map/compute_gains sleeps 3 s on its first HANG_CALLS calls
+and then answers late with its best yaw at -pi/2; later calls answer at once
+with the best yaw at +pi/2. depth_history/get_masks sleeps 3 s on its first
+call. object_map/compute_gains does not exist.
+
+Expected: while background gains time out the planner reports "service
+background_map/compute_gains timed out after 1.0 s" in its status, counts it
+in service_timeouts, publishes no path and keeps iterating on its own; once
+the service answers it publishes a collision-free path whose end yaw is
++pi/2 (a late answer is never used), saying that the history timed out.
+Then the gain service goes away (a path request reports it and publishes
+nothing) and comes back (the next request publishes a path again).
+"""
+import math
+import sys
+import threading
+import time
+import unittest
+
+import numpy as np
+import rospy
+import tf2_ros
+from geometry_msgs.msg import TransformStamped
+from nav_msgs.msg import Path
+from sensor_msgs.msg import PointCloud2
+from std_srvs.srv import Trigger
+
+from semantic_exploration.msg import ExplorationStatus, MapBlocks
+from semantic_exploration.srv import (ComputeGains, ComputeGainsResponse, GetHistoryMasks,
+                                      GetHistoryMasksResponse, GetMap, GetMapResponse)
+from sensor_msgs.msg import Image
+from test_planner_node import R, START, blocks_msg, cloud, gain_image, occupied, room
+
+PKG = "semantic_exploration"
+HANG_CALLS = 3  # compute_gains calls that hang
+HANG_S = 3.0    # > planner/service_timeout_s (1 s, see the .test)
+TIMEOUT_TEXT = "service background_map/compute_gains timed out after 1.0 s"
+
+
+def yaw_peak(w, h, yaw):
+    img = np.zeros((h, w), dtype=np.float32)
+    centre = int(round((yaw + math.pi) / (2 * math.pi) * w)) % w
+    for d in range(-3, 3):
+        img[:, (centre + d) % w] = 0.5
+    return img
+
+
+class PlannerServiceTimeoutTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.grid = room()
+        cls.lock = threading.Lock()
+        cls.gains_calls = 0
+        cls.masks_calls = 0
+        cls.normal_answers = []  # rospy time of each prompt compute_gains answer
+        cls.paths, cls.status = [], []
+        rospy.Subscriber("/planner/path", Path, lambda m: cls.paths.append((time.time(), m)))
+        rospy.Subscriber("/planner/status", ExplorationStatus, lambda m: cls.status.append(m))
+        cls.gains_srv = rospy.Service("/background_map/compute_gains", ComputeGains, cls.compute_gains)
+        rospy.Service("/depth_history/get_masks", GetHistoryMasks, cls.get_masks)
+        rospy.Service("/background_map/get_map", GetMap,
+                      lambda _req: GetMapResponse(map=blocks_msg(cls.grid, 7, True)))
+        cls.map_pub = rospy.Publisher("/background_map/map_update", MapBlocks, queue_size=5, latch=True)
+        cls.frontier_pub = rospy.Publisher("/background_map/frontiers", PointCloud2, queue_size=1, latch=True)
+        cls.tf = tf2_ros.StaticTransformBroadcaster()
+        t = TransformStamped()
+        t.header.frame_id = "world"
+        t.child_frame_id = "body"
+        t.header.stamp = rospy.Time.now()
+        t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = START
+        t.transform.rotation.w = 1.0
+        cls.tf.sendTransform([t])
+        cls.map_pub.publish(blocks_msg(cls.grid, 1, True))
+        cls.frontier_pub.publish(cloud([(3.95, y, 1.0) for y in (0.55, 1.05, 1.55, 2.05)]))
+        rospy.wait_for_service("/planner/plan_once", timeout=30.0)
+
+    @classmethod
+    def compute_gains(cls, req):
+        with cls.lock:
+            cls.gains_calls += 1
+            hang = cls.gains_calls <= HANG_CALLS
+        w, h = req.width, req.height
+        if hang:
+            time.sleep(HANG_S)
+        res = ComputeGainsResponse()
+        img = yaw_peak(w, h, -math.pi / 2 if hang else math.pi / 2)
+        for _ in req.positions:
+            res.entropy_gain.append(gain_image(img))
+            res.distance_gain.append(gain_image(np.zeros((h, w), dtype=np.float32)))
+            res.hit_depth.append(gain_image(np.full((h, w), 10.0, dtype=np.float32)))
+        if not hang:
+            with cls.lock:
+                cls.normal_answers.append(time.time())
+        return res
+
+    @classmethod
+    def get_masks(cls, req):
+        with cls.lock:
+            cls.masks_calls += 1
+            hang = cls.masks_calls == 1
+        if hang:
+            time.sleep(HANG_S)
+        res = GetHistoryMasksResponse()
+        for _ in req.positions:
+            m = Image()
+            m.width, m.height, m.step, m.encoding = req.width, req.height, req.width, "mono8"
+            m.data = bytes([1]) * (req.width * req.height)
+            res.masks.append(m)
+        return res
+
+    def wait_for(self, cond, timeout):
+        deadline = time.time() + timeout
+        while time.time() < deadline and not cond():
+            time.sleep(0.05)
+        return cond()
+
+    def assert_safe(self, path):
+        p0 = path.poses[0].pose.position
+        self.assertAlmostEqual(p0.x, START[0], places=3)
+        self.assertAlmostEqual(p0.y, START[1], places=3)
+        self.assertAlmostEqual(p0.z, START[2], places=3)
+        pts = [(q.pose.position.x, q.pose.position.y, q.pose.position.z) for q in path.poses]
+        dirs = [(math.cos(a) * math.cos(e), math.sin(a) * math.cos(e), math.sin(e))
+                for a in np.linspace(0, 2 * math.pi, 24, endpoint=False) for e in (-1.2, -0.6, 0.0, 0.6, 1.2)]
+        dirs += [(0, 0, 1), (0, 0, -1), (0, 0, 0)]
+        for a, b in zip(pts[:-1], pts[1:]):
+            n = max(1, int(math.ceil(math.dist(a, b) / 0.01)))
+            for k in range(n + 1):
+                c = [a[i] + (b[i] - a[i]) * k / n for i in range(3)]
+                for d in dirs:
+                    q = [c[i] + R * 0.999 * d[i] for i in range(3)]
+                    self.assertFalse(occupied(self.grid, q), "path point %s within R of an occupied voxel" % c)
+        o = path.poses[-1].pose.orientation
+        self.assertAlmostEqual(2 * math.atan2(o.z, o.w), math.pi / 2, places=3,
+                               msg="the end yaw is not the prompt answer's (a late answer was used?)")
+
+    def test_1_timeouts_are_reported_and_retried_until_the_service_answers(self):
+        # The planner iterates on its own (retry_period_s 0.5 s); no path while gains hang.
+        self.assertTrue(self.wait_for(lambda: len(self.paths) > 0, 90.0), "no path once the service answered")
+        t_path, path = self.paths[0]
+        with self.lock:
+            first_answer = self.normal_answers[0] if self.normal_answers else None
+        self.assertIsNotNone(first_answer, "a path was published before compute_gains ever answered promptly")
+        self.assertGreaterEqual(t_path, first_answer)
+        timed_out = [s for s in self.status if TIMEOUT_TEXT in s.message]
+        self.assertGreaterEqual(len(timed_out), HANG_CALLS, [s.message for s in self.status])
+        iterations = [s.iteration for s in timed_out]
+        self.assertEqual(iterations, sorted(set(iterations)), "one timeout report per iteration, iterations grow")
+        for s in timed_out:
+            self.assertEqual(s.state, ExplorationStatus.STATE_WAITING, s.message)
+            self.assertEqual(s.termination_reason, "")
+        self.assertGreaterEqual(timed_out[-1].service_timeouts, HANG_CALLS)
+        self.assertGreaterEqual(self.gains_calls, HANG_CALLS + 1)
+        self.assert_safe(path)
+        # The iteration that published the path went on without the hung history.
+        done = [s for s in self.status if s.state == ExplorationStatus.STATE_EXECUTING]
+        self.assertTrue(done, [s.message for s in self.status])
+        self.assertGreater(done[0].iteration, iterations[-1])
+        self.assertIn("service depth_history/get_masks timed out after 1.0 s", done[0].message)
+        self.assertIn("planned without the history", done[0].message)
+        self.assertGreaterEqual(done[0].service_timeouts, HANG_CALLS + 1)
+
+    def test_2_a_service_that_goes_away_and_returns(self):
+        plan_once = rospy.ServiceProxy("/planner/plan_once", Trigger)
+        self.gains_srv.shutdown()
+        n_paths = len(self.paths)
+        res = plan_once()
+        self.assertFalse(res.success)
+        self.assertIn("background_map/compute_gains timed out after 1.0 s", res.message)
+        time.sleep(0.5)
+        self.assertEqual(len(self.paths), n_paths, "a path was published without gains")
+        type(self).gains_srv = rospy.Service("/background_map/compute_gains", ComputeGains, self.compute_gains)
+        res = plan_once()
+        self.assertTrue(res.success, res.message)
+        self.assertTrue(self.wait_for(lambda: len(self.paths) > n_paths, 10.0), "no path once the service returned")
+        self.assert_safe(self.paths[-1][1])
+
+
+if __name__ == "__main__":
+    import rostest
+    rospy.init_node("test_planner_service_timeout")
+    rostest.rosrun(PKG, "planner_service_timeout", PlannerServiceTimeoutTest, sys.argv)
