@@ -210,6 +210,85 @@ TEST_F(ExplorationTest, TerminationNoReachableCandidate) {
   }
 }
 
+// Empty map (everything unknown): the start is not free and no escape can
+// reach free space, so nothing is reachable, no gain is asked for, no path is
+// returned; after max_failed_iterations the exploration stops.
+TEST_F(ExplorationTest, EmptyMapReportsNoPathAndStops) {
+  config.max_failed_iterations = 2;
+  grid = TestGrid(room_bounds(), 0.05, TestGrid::kUnknown);
+  providers.not_occupied = [this](const Eigen::Vector3d& p, double r) { return grid.sphere_not_occupied(p, r); };
+  int gain_calls = 0;
+  providers.gains = [&gain_calls](const std::vector<Eigen::Vector3d>& ps) {
+    ++gain_calls;
+    return std::vector<GainSet>(ps.size());
+  };
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  for (int it = 1; it <= 2; ++it) {
+    const IterationResult r = planner.plan(inputs(), providers);
+    EXPECT_EQ(r.winner, -1);
+    EXPECT_TRUE(r.path_W.empty());
+    EXPECT_EQ(r.candidates_reachable, 0);
+    EXPECT_FALSE(r.provider_error);
+    EXPECT_EQ(r.message.rfind("the current position is not in free space and no escape was found (", 0), 0u)
+        << r.message;
+    EXPECT_EQ(r.finished, it == 2);
+    EXPECT_EQ(r.termination_reason, it == 2 ? "no_reachable_candidate" : "");
+  }
+  EXPECT_EQ(gain_calls, 0);
+}
+
+// Start in unknown space next to known free space: the iteration escapes.
+// Free for x >= 1.5 only; the MAV at x = 1.4 (its sphere reaches into the
+// unknown). The escape ends where the clearance sphere is free (x >= 1.5 +
+// R + margin = 1.665 m, within 2 cm on the escape search shells), then the path
+// goes on to a candidate; it never enters occupied space.
+TEST_F(ExplorationTest, StartInUnknownSpaceEscapes) {
+  grid = TestGrid(room_bounds(), 0.05, TestGrid::kUnknown);
+  grid.fill_box({1.5, 0.0, 0.0}, {6.0, 4.0, 2.0}, TestGrid::kFree);
+  providers.not_occupied = [this](const Eigen::Vector3d& p, double r) { return grid.sphere_not_occupied(p, r); };
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  ExplorationInputs in = inputs();
+  in.position_W = {1.4, 1.0, 1.0};
+  in.frontiers_W = {{5, 1, 1}};
+  const IterationResult r = planner.plan(in, providers);
+  ASSERT_GE(r.winner, 0) << r.message;
+  const auto& w = r.candidates[static_cast<std::size_t>(r.winner)];
+  EXPECT_TRUE(w.plan.escaped);
+  ASSERT_GE(r.path_W.size(), 2u);
+  EXPECT_TRUE(r.path_W.front() == in.position_W);
+  EXPECT_GE(r.path_W[1].x(), 1.5 + config.clearance_radius_m() - 1e-9);
+  EXPECT_LT((r.path_W[1] - in.position_W).norm(), 0.35);
+  for (std::size_t i = 1; i < r.path_W.size(); ++i) {
+    const Eigen::Vector3d a = r.path_W[i - 1], b = r.path_W[i];
+    const double radius = i == 1 ? 0.5 * config.mav_radius_m : config.clearance_radius_m();
+    for (int k = 0; k <= 100; ++k) {
+      const Eigen::Vector3d q = a + (b - a) * (k / 100.0);
+      if (i == 1) {
+        ASSERT_TRUE(grid.sphere_not_occupied(q, radius)) << q.transpose();
+      } else {
+        ASSERT_TRUE(grid.sphere_free(q, radius)) << q.transpose();
+      }
+    }
+  }
+}
+
+// Every candidate reachable but nothing to see anywhere: no winner, a failed
+// iteration (counts towards "no_reachable_candidate"), no path.
+TEST_F(ExplorationTest, NoCandidateWithPositiveGain) {
+  providers.gains = [](const std::vector<Eigen::Vector3d>& ps) {
+    std::vector<GainSet> out(ps.size());
+    for (auto& g : out) g.entropy = GainImage(36, 10, 0.0f);
+    return out;
+  };
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  const IterationResult r = planner.plan(inputs(), providers);
+  EXPECT_EQ(r.candidates_reachable, 2);
+  EXPECT_EQ(r.winner, -1);
+  EXPECT_TRUE(r.path_W.empty());
+  EXPECT_EQ(planner.failed_iterations(), 1);
+  EXPECT_EQ(r.message.rfind("2 candidates reachable, none with a positive gain (1 of ", 0), 0u) << r.message;
+}
+
 TEST_F(ExplorationTest, ProviderFailureIsReportedNotCounted) {
   providers.gains = [](const std::vector<Eigen::Vector3d>&) -> std::vector<GainSet> {
     throw std::runtime_error("service background_map/compute_gains timed out");

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""rostest: the planner with gain and history services that hang.
+"""rostest: the planner on bad input: services that hang, a start pose in
+unknown or occupied space.
 
 Same scripted room as test_planner_node.py (wall at x in [2.0, 2.2] for
 y < 3 m, frontiers behind it, MAV at (1, 1, 1)); planner/service_timeout_s is
@@ -15,6 +16,16 @@ the service answers it publishes a collision-free path whose end yaw is
 +pi/2 (a late answer is never used), saying that the history timed out.
 Then the gain service goes away (a path request reports it and publishes
 nothing) and comes back (the next request publishes a path again).
+
+Start in unknown space (x = 4.1 m; beyond x = 4 m is unknown): the path
+escapes, i.e. starts at the MAV, first moves into known free space where
+the sphere of R + clearance margin (0.165 m) is free (x <= 3.835 m), keeping
+R/2 from occupied voxels, and is collision-free at R from there on.
+
+Start inside the wall: every iteration reports "the current position is not
+in free space and no escape was found", publishes no path, and the fifth in a
+row (planner/max_failed_iterations) ends the exploration with
+"no_reachable_candidate".
 """
 import math
 import sys
@@ -39,6 +50,8 @@ from test_planner_node import R, START, blocks_msg, cloud, gain_image, occupied,
 PKG = "semantic_exploration"
 HANG_CALLS = 3  # compute_gains calls that hang
 HANG_S = 3.0    # > planner/service_timeout_s (1 s, see the .test)
+CLEARANCE = R + 0.04  # planner/clearance_margin_m
+MAX_FAILED = 5  # planner/max_failed_iterations
 TIMEOUT_TEXT = "service background_map/compute_gains timed out after 1.0 s"
 
 
@@ -50,7 +63,7 @@ def yaw_peak(w, h, yaw):
     return img
 
 
-class PlannerServiceTimeoutTest(unittest.TestCase):
+class PlannerBadInputTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.grid = room()
@@ -68,16 +81,20 @@ class PlannerServiceTimeoutTest(unittest.TestCase):
         cls.map_pub = rospy.Publisher("/background_map/map_update", MapBlocks, queue_size=5, latch=True)
         cls.frontier_pub = rospy.Publisher("/background_map/frontiers", PointCloud2, queue_size=1, latch=True)
         cls.tf = tf2_ros.StaticTransformBroadcaster()
+        cls.move_to(START)
+        cls.map_pub.publish(blocks_msg(cls.grid, 1, True))
+        cls.frontier_pub.publish(cloud([(3.95, y, 1.0) for y in (0.55, 1.05, 1.55, 2.05)]))
+        rospy.wait_for_service("/planner/plan_once", timeout=30.0)
+
+    @classmethod
+    def move_to(cls, p):
         t = TransformStamped()
         t.header.frame_id = "world"
         t.child_frame_id = "body"
         t.header.stamp = rospy.Time.now()
-        t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = START
+        t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = p
         t.transform.rotation.w = 1.0
         cls.tf.sendTransform([t])
-        cls.map_pub.publish(blocks_msg(cls.grid, 1, True))
-        cls.frontier_pub.publish(cloud([(3.95, y, 1.0) for y in (0.55, 1.05, 1.55, 2.05)]))
-        rospy.wait_for_service("/planner/plan_once", timeout=30.0)
 
     @classmethod
     def compute_gains(cls, req):
@@ -119,22 +136,25 @@ class PlannerServiceTimeoutTest(unittest.TestCase):
             time.sleep(0.05)
         return cond()
 
-    def assert_safe(self, path):
+    def assert_safe(self, path, start=START, escaped=False):
+        """Starts at `start`; spheres of R (R/2 on an escape's first segment) every 1 cm hold no occupied voxel."""
         p0 = path.poses[0].pose.position
-        self.assertAlmostEqual(p0.x, START[0], places=3)
-        self.assertAlmostEqual(p0.y, START[1], places=3)
-        self.assertAlmostEqual(p0.z, START[2], places=3)
+        self.assertAlmostEqual(p0.x, start[0], places=3)
+        self.assertAlmostEqual(p0.y, start[1], places=3)
+        self.assertAlmostEqual(p0.z, start[2], places=3)
         pts = [(q.pose.position.x, q.pose.position.y, q.pose.position.z) for q in path.poses]
         dirs = [(math.cos(a) * math.cos(e), math.sin(a) * math.cos(e), math.sin(e))
                 for a in np.linspace(0, 2 * math.pi, 24, endpoint=False) for e in (-1.2, -0.6, 0.0, 0.6, 1.2)]
         dirs += [(0, 0, 1), (0, 0, -1), (0, 0, 0)]
-        for a, b in zip(pts[:-1], pts[1:]):
+        for s, (a, b) in enumerate(zip(pts[:-1], pts[1:])):
+            radius = R / 2 if escaped and s == 0 else R
             n = max(1, int(math.ceil(math.dist(a, b) / 0.01)))
             for k in range(n + 1):
                 c = [a[i] + (b[i] - a[i]) * k / n for i in range(3)]
                 for d in dirs:
-                    q = [c[i] + R * 0.999 * d[i] for i in range(3)]
-                    self.assertFalse(occupied(self.grid, q), "path point %s within R of an occupied voxel" % c)
+                    q = [c[i] + radius * 0.999 * d[i] for i in range(3)]
+                    self.assertFalse(occupied(self.grid, q), "path point %s within %.3f m of an occupied voxel"
+                                     % (c, radius))
         o = path.poses[-1].pose.orientation
         self.assertAlmostEqual(2 * math.atan2(o.z, o.w), math.pi / 2, places=3,
                                msg="the end yaw is not the prompt answer's (a late answer was used?)")
@@ -181,7 +201,47 @@ class PlannerServiceTimeoutTest(unittest.TestCase):
         self.assert_safe(self.paths[-1][1])
 
 
+    def test_3_start_in_unknown_space_escapes(self):
+        start = (4.1, 1.0, 1.0)
+        self.move_to(start)
+        time.sleep(1.0)  # the new static transform reaches the planner
+        n_paths = len(self.paths)
+        res = rospy.ServiceProxy("/planner/plan_once", Trigger)()
+        self.assertTrue(res.success, res.message)
+        self.assertTrue(self.wait_for(lambda: len(self.paths) > n_paths, 10.0))
+        path = self.paths[-1][1]
+        self.assertGreaterEqual(len(path.poses), 2)
+        self.assert_safe(path, start=start, escaped=True)
+        p1 = path.poses[1].pose.position
+        self.assertLessEqual(p1.x, 4.0 - CLEARANCE + 1e-3, "the escape does not reach known free space")
+        self.assertLess(math.dist(start, (p1.x, p1.y, p1.z)), 1.0)
+
+    def test_4_start_in_occupied_space_is_reported_until_termination(self):
+        start = (2.1, 1.0, 1.0)  # inside the wall
+        self.move_to(start)
+        time.sleep(1.0)
+        n_paths = len(self.paths)
+        res = rospy.ServiceProxy("/planner/plan_once", Trigger)()
+        self.assertFalse(res.success)
+        self.assertTrue(res.message.startswith("the current position is not in free space and no escape was found"),
+                        res.message)
+        # Not executing a path any more: the planner retries on its own until it gives up.
+        self.assertTrue(self.wait_for(
+            lambda: any(s.state == ExplorationStatus.STATE_FINISHED for s in self.status), 60.0),
+            [s.message for s in self.status[-5:]])
+        fin = [s for s in self.status if s.state == ExplorationStatus.STATE_FINISHED][0]
+        self.assertEqual(fin.termination_reason, "no_reachable_candidate")
+        final = {s.iteration: s for s in self.status  # the last report of each iteration
+                 if s.state != ExplorationStatus.STATE_PLANNING and not s.message.startswith("waiting")}
+        for it in range(fin.iteration - MAX_FAILED + 1, fin.iteration + 1):
+            self.assertIn(it, final)
+            self.assertIn("not in free space", final[it].message)
+            self.assertEqual(final[it].candidates_reachable, 0)
+        time.sleep(0.5)
+        self.assertEqual(len(self.paths), n_paths, "a path was published from inside the wall")
+
+
 if __name__ == "__main__":
     import rostest
-    rospy.init_node("test_planner_service_timeout")
-    rostest.rosrun(PKG, "planner_service_timeout", PlannerServiceTimeoutTest, sys.argv)
+    rospy.init_node("test_planner_bad_input")
+    rostest.rosrun(PKG, "planner_bad_input", PlannerBadInputTest, sys.argv)
