@@ -134,6 +134,7 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
       const MappedObject& from = *objects_.at(m.first);
       into.tsdf.mergeFrom(from.tsdf);
       into.detection_count += from.detection_count;
+      into.undetected_count += from.undetected_count;
       objects_.erase(m.first);
       result.merged.emplace_back(m.first, m.second);
     }
@@ -165,6 +166,7 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
     const auto it = objects_.find(id);
     if (it == objects_.end()) continue;
     it->second->tsdf.integrate(camera, T_WC, depth_m, rgb, rendered == static_cast<int>(id), false);
+    ++it->second->undetected_count;
     result.undetected.push_back(id);
   }
   return result;
@@ -380,11 +382,12 @@ std::vector<std::string> ObjectMap::save(const std::string& directory, double d_
     }
     files.push_back(path);
     const TsdfSummary s = o.tsdf.summarize(d_obj_m);
-    char buf[256];
+    char buf[320];
     std::snprintf(buf, sizeof(buf),
                   "\"resolution_m\": %.4f, \"voxel_count\": %zu, \"observed_fraction\": %.4f, "
-                  "\"detection_count\": %u, ",
-                  o.resolution_m, s.voxel_count, s.observed_fraction, o.detection_count);
+                  "\"detection_count\": %u, \"undetected_count\": %u, \"weight_sum\": %.1f, ",
+                  o.resolution_m, s.voxel_count, s.observed_fraction, o.detection_count, o.undetected_count,
+                  s.weight_sum);
     json += std::string(first ? "" : ",") + "\n  {\"id\": " + std::to_string(o.id) +
             ", \"class_id\": " + std::to_string(o.class_id) + ", \"class_name\": \"" + jsonEscape(o.class_name) +
             "\", " + buf + "\"bbox_min\": " + vec(s.bbox_min_W) + ", \"bbox_max\": " + vec(s.bbox_max_W) +

@@ -400,6 +400,7 @@ TsdfSummary TsdfMapT<V>::summarize(double d_obj_m) const {
   std::size_t observed = 0;
   Eigen::AlignedBox3d box;
   forEachVoxel([&](const Eigen::Vector3i& index, const V& vx) {
+    s.weight_sum += vx.weight();
     if (vx.weight() <= 0.f || vx.foreground() <= 0.5f || std::abs(vx.sdf(truncation_m_)) >= res) return;
     const Eigen::Vector3d c = voxelCentre(index).template cast<double>();
     box.extend(c);

@@ -3,6 +3,7 @@
 #include <sensor_msgs/image_encodings.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <cmath>
 #include <cstring>
 
 #include "semantic_exploration/FrameIntegrated.h"
@@ -18,6 +19,44 @@ geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
   q.y = p.y();
   q.z = p.z();
   return q;
+}
+
+/// A distinct, stable colour per class (hue steps of the golden angle).
+std_msgs::ColorRGBA classColour(int class_id) {
+  const double h = std::fmod(class_id * 0.618033988749895, 1.0) * 6.0;
+  const double x = 1.0 - std::abs(std::fmod(h, 2.0) - 1.0);
+  double r = 0, g = 0, b = 0;
+  switch (static_cast<int>(h)) {
+    case 0: r = 1, g = x; break;
+    case 1: r = x, g = 1; break;
+    case 2: g = 1, b = x; break;
+    case 3: g = x, b = 1; break;
+    case 4: r = x, b = 1; break;
+    default: r = 1, b = x; break;
+  }
+  std_msgs::ColorRGBA c;
+  c.r = static_cast<float>(0.2 + 0.8 * r);
+  c.g = static_cast<float>(0.2 + 0.8 * g);
+  c.b = static_cast<float>(0.2 + 0.8 * b);
+  c.a = 1.f;
+  return c;
+}
+
+/// The 12 edges of an axis-aligned box as LINE_LIST points.
+void boxEdges(const geometry_msgs::Point& lo, const geometry_msgs::Point& hi, std::vector<geometry_msgs::Point>& out) {
+  const auto corner = [&](int i) {
+    geometry_msgs::Point p;
+    p.x = (i & 1) ? hi.x : lo.x;
+    p.y = (i & 2) ? hi.y : lo.y;
+    p.z = (i & 4) ? hi.z : lo.z;
+    return p;
+  };
+  for (int i = 0; i < 8; ++i)
+    for (int axis = 1; axis < 8; axis <<= 1)
+      if (!(i & axis)) {
+        out.push_back(corner(i));
+        out.push_back(corner(i | axis));
+      }
 }
 
 }  // namespace
@@ -138,6 +177,30 @@ void ObjectMapNode::publishObjects(const ros::Time& stamp) {
   arr.header.stamp = stamp;
   arr.header.frame_id = frames_.world;
   visualization_msgs::MarkerArray markers;
+  const bool draw = meshes_pub_.getNumSubscribers() > 0;
+  const auto marker = [&](const char* ns, std::uint32_t id, int type) {
+    visualization_msgs::Marker m;
+    m.header = arr.header;
+    m.ns = ns;
+    m.id = static_cast<int>(id);
+    m.type = type;
+    m.action = visualization_msgs::Marker::ADD;
+    m.pose.orientation.w = 1.0;
+    m.scale.x = m.scale.y = m.scale.z = 1.0;
+    return m;
+  };
+  if (draw) {
+    // Objects merged into others since the last publication: take their markers down.
+    for (const auto id : marker_ids_) {
+      if (map_->object(id)) continue;
+      for (const char* ns : {"object_meshes", "object_boxes", "object_labels"}) {
+        visualization_msgs::Marker m = marker(ns, id, visualization_msgs::Marker::TRIANGLE_LIST);
+        m.action = visualization_msgs::Marker::DELETE;
+        markers.markers.push_back(m);
+      }
+    }
+    marker_ids_.clear();
+  }
   for (const auto& kv : map_->objects()) {
     const semexp::MappedObject& o = *kv.second;
     const semexp::TsdfSummary s = o.tsdf.summarize(exploration_.d_obj_m);
@@ -152,17 +215,31 @@ void ObjectMapNode::publishObjects(const ros::Time& stamp) {
     info.voxel_count = static_cast<uint32_t>(s.voxel_count);
     info.observed_fraction = static_cast<float>(s.observed_fraction);
     info.detection_count = o.detection_count;
+    info.undetected_count = o.undetected_count;
+    info.weight_sum = static_cast<float>(s.weight_sum);
     arr.objects.push_back(info);
-    if (meshes_pub_.getNumSubscribers() == 0) continue;
+    if (!draw) continue;
+    marker_ids_.insert(o.id);
+    // Box and label of the surface (both taken down while the object has no surface voxel yet).
+    const int surface_action = s.voxel_count > 0 ? visualization_msgs::Marker::ADD : visualization_msgs::Marker::DELETE;
+    visualization_msgs::Marker box = marker("object_boxes", o.id, visualization_msgs::Marker::LINE_LIST);
+    box.action = surface_action;
+    box.scale.x = 0.01;  // line width, m
+    box.color = classColour(o.class_id);
+    if (s.voxel_count > 0) boxEdges(info.bbox_min, info.bbox_max, box.points);
+    markers.markers.push_back(box);
+    visualization_msgs::Marker label = marker("object_labels", o.id, visualization_msgs::Marker::TEXT_VIEW_FACING);
+    label.action = surface_action;
+    label.text = o.class_name + " #" + std::to_string(o.id);
+    label.pose.position.x = 0.5 * (info.bbox_min.x + info.bbox_max.x);
+    label.pose.position.y = 0.5 * (info.bbox_min.y + info.bbox_max.y);
+    label.pose.position.z = info.bbox_max.z + 0.1;  // above the box, m
+    label.scale.z = 0.12;                           // text height, m
+    label.color = classColour(o.class_id);
+    markers.markers.push_back(label);
     const semexp::Mesh mesh = o.tsdf.extractMesh();
-    visualization_msgs::Marker m;
-    m.header = arr.header;
-    m.ns = "object_meshes";
-    m.id = static_cast<int>(o.id);
-    m.type = visualization_msgs::Marker::TRIANGLE_LIST;
+    visualization_msgs::Marker m = marker("object_meshes", o.id, visualization_msgs::Marker::TRIANGLE_LIST);
     m.action = mesh.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
-    m.pose.orientation.w = 1.0;
-    m.scale.x = m.scale.y = m.scale.z = 1.0;
     m.color.r = m.color.g = m.color.b = m.color.a = 1.0;
     for (const auto& t : mesh.triangles)
       for (int k = 0; k < 3; ++k) {

@@ -137,6 +137,7 @@ TEST(ObjectMap, VisibleUndetectedObjectGainsDataWithoutForeground) {
   cv::Mat depth, labels;
   renderShapes(cam, T_WC, {&kA, &kB}, depth, labels);
   double weight_before = 0, weight_after = 0;
+  const std::uint32_t undetected_a = map.object(1)->undetected_count, undetected_b = map.object(2)->undetected_count;
   map.object(2)->tsdf.forEachVoxel([&](const Eigen::Vector3i&, const TsdfVoxel& v) { weight_before += v.weight(); });
   // Only A is detected; B is visible.
   cv::Mat only_a = labels.clone();
@@ -146,8 +147,11 @@ TEST(ObjectMap, VisibleUndetectedObjectGainsDataWithoutForeground) {
   EXPECT_EQ(r.undetected, (std::vector<std::uint32_t>{2}));
   map.object(2)->tsdf.forEachVoxel([&](const Eigen::Vector3i&, const TsdfVoxel& v) { weight_after += v.weight(); });
   EXPECT_GT(weight_after, weight_before + 100);
+  EXPECT_NEAR(map.object(2)->tsdf.summarize(1.0).weight_sum, weight_after, 1e-6 * weight_after);
   EXPECT_EQ(map.object(1)->detection_count, 11u);
   EXPECT_EQ(map.object(2)->detection_count, 10u);
+  EXPECT_EQ(map.object(1)->undetected_count, undetected_a);
+  EXPECT_EQ(map.object(2)->undetected_count, undetected_b + 1);
 }
 
 TEST(ObjectMap, DetectionSpanningTwoObjectsOnlyFeedsTheMatchedOne) {

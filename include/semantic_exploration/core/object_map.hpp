@@ -30,6 +30,8 @@ struct MappedObject {
   std::string class_name;
   double resolution_m = 0.0;         ///< voxel edge, m
   std::uint32_t detection_count = 0; ///< frames in which it was detected
+  /// frames in which it was in view (rendered) but not detected, integrated without foreground probability
+  std::uint32_t undetected_count = 0;
   TsdfMap tsdf;
 
   MappedObject(std::uint32_t id_, int class_id_, std::string name, const TsdfParams& params)

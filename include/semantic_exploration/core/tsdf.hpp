@@ -98,6 +98,9 @@ struct TsdfSummary {
   Eigen::Vector3d centroid_W = Eigen::Vector3d::Zero();  ///< m
   std::size_t voxel_count = 0;                           ///< surface voxels
   double observed_fraction = 0.0;  ///< fraction of surface voxels observed from <= d_obj, [0, 1]
+  /// Sum of the weights of all voxels, surface or not (one unit per observation at the surface, each voxel
+  /// capped at max_weight): grows with every integration that reaches the object, foreground or not.
+  double weight_sum = 0.0;
 };
 
 struct VoxelIndexHash {

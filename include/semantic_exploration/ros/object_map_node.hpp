@@ -5,7 +5,10 @@
 /// Subscribes `matched_detections`, `camera/depth/image_raw`,
 /// `camera/rgb/image_raw` (approximately time-synchronised) and
 /// `camera/camera_info`; pose from tf2. Publishes `~objects` (ObjectArray) and
-/// `~meshes` (MarkerArray), both at most every object_map/publish_period_s,
+/// `~meshes` (MarkerArray: per object its coloured mesh, ns object_meshes; its
+/// surface's bounding box as a LINE_LIST, ns object_boxes; and a
+/// "<class> #<id>" TEXT_VIEW_FACING label above it, ns object_labels; marker
+/// id = object id), both at most every object_map/publish_period_s,
 /// and `frame_integrated` after every frame; serves `~render_instances`,
 /// `~compute_gains` and `~save`. Bad input (sizes, encodings, unknown classes
 /// or objects, missing tf) is dropped with a counter and a throttled log line.
@@ -20,6 +23,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <memory>
+#include <set>
 
 #include "semantic_exploration/ComputeGains.h"
 #include "semantic_exploration/MatchedDetections.h"
@@ -64,6 +68,7 @@ class ObjectMapNode {
     cv::Mat ids;
   } cached_render_;
   ros::WallTime last_publish_;
+  std::set<std::uint32_t> marker_ids_;  ///< objects whose markers rviz holds (deleted when the object goes)
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   message_filters::Subscriber<semantic_exploration::MatchedDetections> matched_sub_;
