@@ -9,6 +9,9 @@ and then answers late with its best yaw at -pi/2; later calls answer at once
 with the best yaw at +pi/2. depth_history/get_masks sleeps 3 s on its first
 call. object_map/compute_gains does not exist.
 
+Empty map (a full MapBlocks without blocks): a path request reports
+"waiting for the map (the replica is empty)" and publishes nothing.
+
 Expected: while background gains time out the planner reports "service
 background_map/compute_gains timed out after 1.0 s" in its status, counts it
 in service_timeouts, publishes no path and keeps iterating on its own; once
@@ -82,9 +85,14 @@ class PlannerBadInputTest(unittest.TestCase):
         cls.frontier_pub = rospy.Publisher("/background_map/frontiers", PointCloud2, queue_size=1, latch=True)
         cls.tf = tf2_ros.StaticTransformBroadcaster()
         cls.move_to(START)
-        cls.map_pub.publish(blocks_msg(cls.grid, 1, True))
         cls.frontier_pub.publish(cloud([(3.95, y, 1.0) for y in (0.55, 1.05, 1.55, 2.05)]))
         rospy.wait_for_service("/planner/plan_once", timeout=30.0)
+        # First an empty map (a full update without blocks), then the room.
+        cls.map_pub.publish(blocks_msg(np.zeros((0, 0, 0), dtype=np.int8), 1, True))
+        time.sleep(1.0)
+        cls.empty_map_result = rospy.ServiceProxy("/planner/plan_once", Trigger)()
+        cls.paths_before_map = len(cls.paths)
+        cls.map_pub.publish(blocks_msg(cls.grid, 2, True))
 
     @classmethod
     def move_to(cls, p):
@@ -158,6 +166,13 @@ class PlannerBadInputTest(unittest.TestCase):
         o = path.poses[-1].pose.orientation
         self.assertAlmostEqual(2 * math.atan2(o.z, o.w), math.pi / 2, places=3,
                                msg="the end yaw is not the prompt answer's (a late answer was used?)")
+
+    def test_0_empty_map_is_reported(self):
+        self.assertFalse(self.empty_map_result.success)
+        self.assertEqual(self.empty_map_result.message, "waiting for the map (the replica is empty)")
+        self.assertEqual(self.paths_before_map, 0)
+        self.assertTrue(any(s.message == "waiting for the map (the replica is empty)" and
+                            s.state == ExplorationStatus.STATE_WAITING for s in self.status))
 
     def test_1_timeouts_are_reported_and_retried_until_the_service_answers(self):
         # The planner iterates on its own (retry_period_s 0.5 s); no path while gains hang.
