@@ -58,3 +58,29 @@ def test_outputs_are_written(tmp_path):
     report = open(str(tmp_path / "out" / "report.md")).read()
     assert "| semantic | 1 | 100% | 20.0 m3 | 20 s |" in report
     assert "| classic | 1 | 50% | 30.0 m3 | never |" in report
+
+
+def test_paper_claims_on_known_curves(tmp_path):
+    # Semantic: all 4 found at 20 s, 30 m3 at the end; classic: all at 30 s, 32 m3.
+    sem = [make_run(str(tmp_path / "s0"), [0, 10, 20, 30], [0, 10, 20, 30], [0, 2, 4, 4])]
+    cls = [make_run(str(tmp_path / "c0"), [0, 10, 20, 30], [0, 12, 24, 32], [0, 1, 3, 4])]
+    res = experiments.write_outputs(str(tmp_path / "out"), {"semantic": sem, "classic": cls}, grid_step_s=10)
+    claims = res["claims"]
+    assert [c["holds"] for c in claims] == [True, True, True]
+    assert claims[1]["measured"] == "semantic 20 s, classic 30 s"
+    assert "ratio 0.938" in claims[2]["measured"]  # 30 / 32
+    report = open(str(tmp_path / "out" / "report.md")).read()
+    assert "## The paper's claims, measured here" in report
+
+
+def test_paper_claims_that_fail_say_where(tmp_path):
+    # Semantic is behind at 10 s (1 vs 2 found), never finds all, and explores 20% less.
+    sem = [make_run(str(tmp_path / "s0"), [0, 10, 20], [0, 8, 16], [0, 1, 3])]
+    cls = [make_run(str(tmp_path / "c0"), [0, 10, 20], [0, 10, 20], [0, 2, 4])]
+    res = experiments.write_outputs(str(tmp_path / "out"), {"semantic": sem, "classic": cls}, grid_step_s=10)
+    c = res["claims"]
+    assert [x["holds"] for x in c] == [False, False, False]
+    assert c[0]["measured"] == "behind at 2 of 3 times (first at 10 s, by up to 25 points)"
+    assert c[1]["measured"] == "semantic never, classic 20 s"
+    assert "ratio 0.800" in c[2]["measured"]
+    assert experiments.write_outputs(str(tmp_path / "one"), {"semantic": sem}, grid_step_s=10)["claims"] == []
