@@ -183,11 +183,13 @@ PlannerNode::CallResult PlannerNode::callService(const std::string& service, Srv
   // The worker owns its client, request and response: a call abandoned here
   // may answer later into its own copy, which nobody reads. A fresh
   // non-persistent client per call finds a restarted service again and is
-  // never used by two threads at once. It is made here, not in the worker:
-  // a NodeHandle made after shutdown would start roscpp again.
+  // never used by two threads at once. It is built directly rather than
+  // through the NodeHandle, which would keep a record of every client made
+  // (one per call) and, used from a worker after shutdown, start roscpp again.
   auto state = std::make_shared<CallState>();
   auto call = std::make_shared<Srv>(srv);
-  ros::ServiceClient client = nh_.serviceClient<Srv>(service);
+  ros::ServiceClient client(nh_.resolveName(service), false, ros::M_string(),
+                            ros::service_traits::md5sum<Srv>());
   const double timeout_s = service_timeout_s_;
   std::thread worker([state, call, client, timeout_s]() mutable {
     const bool available = client.waitForExistence(ros::Duration(timeout_s));
