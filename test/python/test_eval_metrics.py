@@ -69,8 +69,9 @@ def test_objects_are_matched_to_the_surface_they_lie_on(tmp_path):
     json.dump({"objects": [{"id": 7, "class_name": "chair", "mesh": "7.ply"},
                            {"id": 8, "class_name": "chair", "mesh": "8.ply"},
                            {"id": 9, "class_name": "chair", "mesh": "9.ply"}]}, open(rec_dir / "objects.json", "w"))
+    # No room and no start here, so completeness counts the whole surface (test_eval_observable covers the rest).
     ev = metrics.evaluate_objects(metrics.load_ground_truth(str(gt_dir)), metrics.load_reconstruction(str(rec_dir)),
-                                  ["chair"], spacing_m=0.005)
+                                  ["chair"], spacing_m=0.005, observable_only=False)
     by_id = {m.map_id: m for m in ev.matches}
     assert by_id[7].gt_id == 1 and by_id[7].on_surface_fraction == 1.0
     assert by_id[8].gt_id is None and by_id[8].on_surface_fraction == 0.0

@@ -8,6 +8,12 @@ occupied voxel centres.
 Distances to a ground-truth surface are measured to a dense, seeded sample of
 that surface (spacing `sample_spacing_m`, default 5 mm) through a k-d tree,
 so a distance is over-estimated by at most about half the spacing.
+
+Completeness counts only the *observable* ground-truth samples (see
+`observable`): those some camera pose the MAV can take sees, so the bottom
+of a chair standing on the floor or a face pressed against a wall, which no
+exploration can reconstruct, do not count as missing. Accuracy and the
+matching of map objects to ground-truth objects use the whole surface.
 """
 import json
 import os
@@ -32,38 +38,65 @@ def read_ply_vertices(path: str) -> np.ndarray:
 def sample_surface(path: str, spacing_m: float, seed: int = 0) -> np.ndarray:
     """Seeded uniform samples of a mesh surface, about one per spacing_m^2,
     plus the mesh's vertices (so thin parts are never missed)."""
+    return sample_surface_faces(path, spacing_m, seed)[0]
+
+
+def sample_surface_faces(path: str, spacing_m: float, seed: int = 0, face_centres: bool = False):
+    """sample_surface's points and the face each lies on (a vertex: one of its
+    faces; -1 for a mesh without faces). face_centres adds every face's centroid
+    (so each face holds at least one sample)."""
     import trimesh
     mesh = trimesh.load(path, process=False, force="mesh")
+    verts = np.asarray(mesh.vertices, dtype=np.float64).reshape(-1, 3)
     if len(mesh.faces) == 0:
-        return np.asarray(mesh.vertices, dtype=np.float64).reshape(-1, 3)
+        return verts, np.full(len(verts), -1, np.int64)
+    faces = np.asarray(mesh.faces, np.int64)
     count = max(1, int(np.ceil(mesh.area / (spacing_m * spacing_m))))
-    pts, _ = trimesh.sample.sample_surface(mesh, count, seed=seed)
-    return np.vstack([np.asarray(pts, np.float64), np.asarray(mesh.vertices, np.float64)])
+    pts, fi = trimesh.sample.sample_surface(mesh, count, seed=seed)
+    vface = np.full(len(verts), -1, np.int64)
+    vface[faces.ravel()] = np.repeat(np.arange(len(faces)), 3)
+    parts = [np.asarray(pts, np.float64), verts]
+    fparts = [np.asarray(fi, np.int64), vface]
+    if face_centres:
+        parts.append(verts[faces].mean(1))
+        fparts.append(np.arange(len(faces)))
+    keep = np.concatenate(fparts) >= 0  # vertices no face uses are no surface
+    return np.vstack(parts)[keep], np.concatenate(fparts)[keep]
 
 
 @dataclass
 class SurfaceScore:
     """Accuracy (RMSE of reconstructed points to the true surface, m) and
-    completeness (fraction of true surface samples with a reconstructed point
-    within the threshold)."""
+    completeness (fraction of the counted true surface samples -- the
+    observable ones, see the module doc -- with a reconstructed point within
+    the threshold; nan if none is observable)."""
     rmse_m: float
     completeness: float
     n_reconstructed: int
-    n_ground_truth: int
+    n_ground_truth: int             # true surface samples
+    observable_fraction: float = 1.0  # fraction of them counted in completeness
 
 
 def score_surface(reconstructed: np.ndarray, truth_samples: np.ndarray,
                   threshold_m: float = COMPLETENESS_THRESHOLD_M,
-                  truth_tree: Optional[cKDTree] = None) -> SurfaceScore:
+                  truth_tree: Optional[cKDTree] = None,
+                  observable: Optional[np.ndarray] = None) -> SurfaceScore:
+    """observable: (N,) bool over truth_samples, the samples completeness counts (default all)."""
     if len(truth_samples) == 0:
         raise ValueError("empty ground-truth surface")
+    counted = truth_samples if observable is None else truth_samples[observable]
+    frac = len(counted) / len(truth_samples)
     if len(reconstructed) == 0:
-        return SurfaceScore(float("nan"), 0.0, 0, len(truth_samples))
+        return SurfaceScore(float("nan"), 0.0 if len(counted) else float("nan"), 0, len(truth_samples), frac)
     tree = truth_tree if truth_tree is not None else cKDTree(truth_samples)
     d_rec, _ = tree.query(reconstructed)
-    d_gt, _ = cKDTree(reconstructed).query(truth_samples, distance_upper_bound=threshold_m)
-    return SurfaceScore(float(np.sqrt(np.mean(d_rec ** 2))), float(np.mean(np.isfinite(d_gt))),
-                        len(reconstructed), len(truth_samples))
+    if len(counted):
+        d_gt, _ = cKDTree(reconstructed).query(counted, distance_upper_bound=threshold_m)
+        completeness = float(np.mean(np.isfinite(d_gt)))
+    else:
+        completeness = float("nan")
+    return SurfaceScore(float(np.sqrt(np.mean(d_rec ** 2))), completeness, len(reconstructed), len(truth_samples),
+                        frac)
 
 
 @dataclass
@@ -80,6 +113,7 @@ class ObjectEvaluation:
     matches: List[ObjectMatch] = field(default_factory=list)
     n_ground_truth: int = 0
     found_gt_ids: List[int] = field(default_factory=list)
+    observable_fraction: Dict[int, float] = field(default_factory=dict)  # per ground-truth id, of its samples
 
     @property
     def found_fraction(self) -> float:
@@ -100,16 +134,38 @@ def load_reconstruction(obj_dir: str) -> Dict:
     return doc
 
 
+_OBSERVABILITY_CACHE: Dict = {}
+
+
+def _observability(gt: Dict, observable_only: bool, view):
+    """One Observability per ground truth and view model (objects and background share it)."""
+    if not observable_only:
+        return None
+    from . import observable
+    key = (os.path.realpath(gt["dir"]), repr(view))
+    if key not in _OBSERVABILITY_CACHE:
+        _OBSERVABILITY_CACHE.clear()  # a grid per scene is large; keep the last one only
+        _OBSERVABILITY_CACHE[key] = observable.for_ground_truth(gt, view)
+    return _OBSERVABILITY_CACHE[key]
+
+
 def evaluate_objects(gt: Dict, rec: Dict, classes: List[str], spacing_m: float = 0.005,
-                     threshold_m: float = COMPLETENESS_THRESHOLD_M, seed: int = 0) -> ObjectEvaluation:
+                     threshold_m: float = COMPLETENESS_THRESHOLD_M, seed: int = 0,
+                     observable_only: bool = True, view=None) -> ObjectEvaluation:
     """Matches each reconstructed object to the ground-truth object of its
     class that most of its vertices lie on (within threshold_m; more than half
     of them), then scores accuracy and completeness of each match. A
-    ground-truth object counts as found once any map object matches it."""
+    ground-truth object counts as found once any map object matches it.
+    Completeness counts the observable samples only (observable.ViewModel
+    `view`, default config/sim.yaml's camera and MAV; the ground truth needs
+    its background and start), or all with observable_only=False."""
     gt_objs = [o for o in gt["objects"] if o["class"] in classes]
     samples = {o["id"]: sample_surface(os.path.join(gt["dir"], o["mesh"]), spacing_m, seed) for o in gt_objs}
     trees = {k: cKDTree(v) for k, v in samples.items()}
-    ev = ObjectEvaluation(n_ground_truth=len(gt_objs))
+    obs = _observability(gt, observable_only, view) if gt_objs else None
+    visible = {k: obs.mask(v) if obs else np.ones(len(v), bool) for k, v in samples.items()}
+    ev = ObjectEvaluation(n_ground_truth=len(gt_objs),
+                          observable_fraction={k: float(np.mean(v)) for k, v in visible.items()})
     found = set()
     for o in rec.get("objects", []):
         verts = read_ply_vertices(os.path.join(rec["dir"], o["mesh"]))
@@ -123,7 +179,7 @@ def evaluate_objects(gt: Dict, rec: Dict, classes: List[str], spacing_m: float =
                 best, best_frac = g["id"], frac
         m = ObjectMatch(o["id"], o["class_name"], best if best_frac > 0.5 else None, best_frac)
         if m.gt_id is not None:
-            m.score = score_surface(verts, samples[m.gt_id], threshold_m, trees[m.gt_id])
+            m.score = score_surface(verts, samples[m.gt_id], threshold_m, trees[m.gt_id], visible[m.gt_id])
             found.add(m.gt_id)
         ev.matches.append(m)
     ev.found_gt_ids = sorted(found)
@@ -131,11 +187,24 @@ def evaluate_objects(gt: Dict, rec: Dict, classes: List[str], spacing_m: float =
 
 
 def evaluate_background(gt: Dict, occupied_points: np.ndarray, classes: List[str], spacing_m: float = 0.01,
-                        threshold_m: float = COMPLETENESS_THRESHOLD_M, seed: int = 0) -> SurfaceScore:
+                        threshold_m: float = COMPLETENESS_THRESHOLD_M, seed: int = 0,
+                        observable_only: bool = True, view=None, probe_spacing_m: float = 0.05) -> SurfaceScore:
     """Accuracy and completeness of the background map's occupied voxel
     centres against everything in the scene but the objects of interest
     (walls, floors and the furniture of other classes, which the background
-    map holds too)."""
+    map holds too). Completeness counts the observable samples (as in
+    evaluate_objects); over these large surfaces observability is computed at
+    probes probe_spacing_m apart and carried to the samples of the same face."""
     meshes = [gt["background_mesh"]] + [o["mesh"] for o in gt["objects"] if o["class"] not in classes]
-    truth = np.vstack([sample_surface(os.path.join(gt["dir"], m), spacing_m, seed) for m in meshes])
-    return score_surface(occupied_points, truth, threshold_m)
+    obs = _observability(gt, observable_only, view)
+    truth, visible = [], []
+    for m in meshes:
+        path = os.path.join(gt["dir"], m)
+        pts, faces = sample_surface_faces(path, spacing_m, seed)
+        truth.append(pts)
+        if obs is None:
+            visible.append(np.ones(len(pts), bool))
+        else:
+            probes, probe_faces = sample_surface_faces(path, probe_spacing_m, seed, face_centres=True)
+            visible.append(obs.mask_by_probes(pts, faces, probes, probe_faces))
+    return score_surface(occupied_points, np.vstack(truth), threshold_m, observable=np.concatenate(visible))

@@ -1,0 +1,236 @@
+"""Which ground-truth surface points the MAV's camera can observe at all.
+
+Completeness counts the fraction of ground-truth surface samples with a
+reconstructed point nearby. Samples on surfaces no camera pose can see (the
+bottom of a box standing on the floor, a face pressed against a wall, the
+faces hidden inside overlapping parts of one piece of furniture) can never be
+reconstructed, so completeness is measured against the *observable* samples:
+
+A surface point p is observable if some camera pose the MAV can take sees it:
+the camera centre c lies in the explorable free space (at least the collision
+radius R from every surface and connected to the start position, on a grid of
+``grid_m``), the segment from c to p hits no surface (within a 1 mm
+tolerance at p), the depth of p lies in [d_min, d_max], and p lies within the
+camera's vertical field of view for some yaw (the MAV only yaws; the camera is
+mounted with a fixed pitch), i.e. the elevation of the direction p -> c lies in
+[pitch - atan(cy / fy), pitch + atan((H - 1 - cy) / fy)].
+
+The existence of c is tested along ``directions`` rays per point (stratified
+in azimuth and in the sine of the elevation over that band, jittered with a
+fixed seed): along each ray, the first camera position in the free-space grid
+is found by sphere tracing its distance field (a step never passes over a
+free-space cell), and the segment from p to it is tested for occlusion with
+Embree. A later position on the same ray cannot be visible if the first is
+not, so one occlusion query per ray decides it. Points seen only through a
+solid angle finer than the ray spacing may be missed (counted unobservable).
+"""
+from dataclasses import dataclass
+from typing import Optional, Sequence
+
+import numpy as np
+
+
+@dataclass
+class ViewModel:
+    """Where the camera can be and what it sees. Defaults are config/sim.yaml's
+    camera and MAV (the paper's Table I)."""
+    radius_m: float = 0.125    # camera centre at least this far from every surface (collision sphere R), m
+    d_min_m: float = 0.1       # nearest valid depth, m
+    d_max_m: float = 10.0      # farthest valid depth, m
+    fy_px: float = 262.5       # vertical focal length, px
+    cy_px: float = 119.5       # principal point row, px
+    height_px: int = 240       # image height, px
+    pitch_rad: float = 0.0     # camera mount pitch, + = down, rad
+    grid_m: float = 0.025      # cell size of the free-space grid of camera positions, m
+    directions: int = 64       # rays per surface point
+    seed: int = 0              # direction jitter seed
+
+    def validate(self) -> None:
+        if not (self.radius_m >= 0 and 0 <= self.d_min_m < self.d_max_m and self.fy_px > 0 and self.height_px > 0
+                and 0 <= self.cy_px <= self.height_px - 1 and self.grid_m > 0 and self.directions >= 1):
+            raise ValueError("invalid ViewModel %s" % (self,))
+
+    def elevation_band_rad(self):
+        """Elevation range (rad, + = up) of the direction from a seen point to the camera."""
+        up = np.arctan(self.cy_px / self.fy_px)                        # image rows above the centre see upwards
+        down = np.arctan((self.height_px - 1 - self.cy_px) / self.fy_px)
+        return self.pitch_rad - up, self.pitch_rad + down
+
+    @classmethod
+    def from_sim_config(cls, doc: dict, **overrides) -> "ViewModel":
+        """From a mav_sim parameter dict (config/sim.yaml layout: camera, mav sections)."""
+        cam, mav = doc.get("camera", {}), doc.get("mav", {})
+        d = cls()
+        kw = dict(radius_m=mav.get("radius_m", d.radius_m), d_min_m=cam.get("d_min_m", d.d_min_m),
+                  d_max_m=cam.get("d_max_m", d.d_max_m), fy_px=cam.get("fy", d.fy_px),
+                  cy_px=cam.get("cy", d.cy_px), height_px=cam.get("height", d.height_px),
+                  pitch_rad=cam.get("mount_rpy_rad", [0.0, d.pitch_rad, 0.0])[1])
+        kw.update(overrides)
+        return cls(**kw)
+
+
+def _free_cells(vertices: np.ndarray, faces: np.ndarray, res: float, margin_cells: int = 2):
+    """Cells (edge res, m) no triangle touches, over the scene's box plus a
+    margin, and the grid's lower corner. Triangles are rasterised through a
+    barycentric lattice about res / 2 apart along their two first edges."""
+    lo = vertices.min(0) - margin_cells * res
+    shape = np.maximum(np.ceil((vertices.max(0) + margin_cells * res - lo) / res).astype(int), 1)
+    occ = np.zeros(shape, bool)
+    tri = vertices[faces]
+    a, ab, ac = tri[:, 0], tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+    n = np.maximum(np.ceil(np.maximum(np.linalg.norm(ab, axis=1), np.linalg.norm(ac, axis=1)) / (0.5 * res)), 1)
+    for k in np.unique(n).astype(int):
+        sel = np.flatnonzero(n == k)
+        i, j = np.meshgrid(np.arange(k + 1), np.arange(k + 1), indexing="ij")
+        keep = i + j <= k
+        u, w = i[keep] / k, j[keep] / k
+        for c in range(0, len(sel), max(1, 2000000 // len(u))):  # bounded memory per batch
+            s = sel[c:c + max(1, 2000000 // len(u))]
+            pts = a[s, None] + u[None, :, None] * ab[s, None] + w[None, :, None] * ac[s, None]
+            idx = np.clip(np.floor((pts.reshape(-1, 3) - lo) / res).astype(np.int64), 0, shape - 1)
+            occ[idx[:, 0], idx[:, 1], idx[:, 2]] = True
+    return ~occ, lo
+
+
+class Observability:
+    """Observability test of surface points in one scene (triangle soup in the world frame)."""
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray, start_xyz: Sequence[float],
+                 view: Optional[ViewModel] = None):
+        import embreex.rtcore_scene as rtcs
+        from embreex.mesh_construction import TriangleMesh
+        from scipy import ndimage
+        from ..sim.scene import SceneError
+        self.view = view if view is not None else ViewModel()
+        self.view.validate()
+        vertices = np.asarray(vertices, np.float64).reshape(-1, 3)
+        faces = np.asarray(faces, np.int64).reshape(-1, 3)
+        self._embree = rtcs.EmbreeScene()
+        TriangleMesh(self._embree, vertices.astype(np.float32), faces.astype(np.int32))
+        res = self.view.grid_m
+        # Cells touched by a surface, then each cell centre's distance to the
+        # nearest touched cell; a surface lies within about half a cell of that one's centre.
+        free, origin = _free_cells(vertices, faces, res)
+        clear = ndimage.distance_transform_edt(free) * res - 0.5 * res >= self.view.radius_m
+        s = np.floor((np.asarray(start_xyz[:3], np.float64) - origin) / res).astype(int)
+        if np.any(s < 0) or np.any(s >= clear.shape) or not clear[tuple(s)]:
+            raise SceneError("start %s is not at least %.3f m from every surface"
+                             % (list(start_xyz[:3]), self.view.radius_m))
+        labels, _ = ndimage.label(clear)
+        self.camera_cells = labels == labels[tuple(s)]  # where the camera centre can be
+        # Distance (m) from each cell centre to the nearest camera cell centre.
+        self._to_camera = (ndimage.distance_transform_edt(~self.camera_cells) * res).astype(np.float32)
+        self._origin, self._res = origin, res
+        self.unresolved_rays = 0  # rays whose sphere tracing hit the iteration cap (counted unobservable)
+
+    def _directions(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """(n, K, 3) unit directions from the point towards the camera, stratified over the band."""
+        k = self.view.directions
+        n_el = max(1, int(round(np.sqrt(k / 4.0))))
+        n_az = int(np.ceil(k / n_el))
+        lo, hi = self.view.elevation_band_rad()
+        s_lo, s_hi = np.sin(max(lo, -np.pi / 2)), np.sin(min(hi, np.pi / 2))
+        i_el = np.repeat(np.arange(n_el), n_az)[:k]
+        i_az = np.tile(np.arange(n_az), n_el)[:k]
+        sz = s_lo + (s_hi - s_lo) * (i_el[None] + rng.random((n, k))) / n_el
+        az = 2 * np.pi * (i_az[None] + rng.random((n, k))) / n_az + rng.random((n, 1)) * 2 * np.pi
+        r = np.sqrt(np.clip(1 - sz * sz, 0, 1))
+        return np.stack([r * np.cos(az), r * np.sin(az), sz], -1)
+
+    def _first_camera_position(self, p: np.ndarray, u: np.ndarray, t0: np.ndarray, t1: np.ndarray,
+                               max_steps: int = 200) -> np.ndarray:
+        """Ray parameter (m) of the first camera cell along p + t u, t in [t0, t1]; inf if none."""
+        res, shape = self._res, np.array(self._to_camera.shape)
+        t = t0.copy()
+        out = np.full(len(p), np.inf)
+        act = np.flatnonzero(t <= t1)
+        for _ in range(max_steps):
+            if len(act) == 0:
+                break
+            x = p[act] + t[act, None] * u[act]
+            idx = np.floor((x - self._origin) / res).astype(np.int64)
+            inside = np.all((idx >= 0) & (idx < shape), axis=1)
+            act, idx = act[inside], idx[inside]  # the grid holds every camera cell: outside is a miss
+            g = self._to_camera[idx[:, 0], idx[:, 1], idx[:, 2]]
+            hit = g == 0
+            out[act[hit]] = t[act[hit]]
+            act, g = act[~hit], g[~hit]
+            # A point in this cell is at least g - half a cell diagonal from any camera cell centre.
+            t[act] += np.maximum(g - 0.87 * res, 0.5 * res)
+            act = act[t[act] <= t1[act]]
+        self.unresolved_rays += len(act)
+        return out
+
+    def _sees(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """(M,) bool: a camera position along p + t u sees p."""
+        eps = 1e-3  # rays start 1 mm off the point, so they do not hit its own face
+        # Depth is along the optical axis: the ray makes angle |elev - pitch| with it (yaw centred on p).
+        cos_axis = np.cos(np.arcsin(np.clip(u[:, 2], -1, 1)) - self.view.pitch_rad)
+        t_cam = self._first_camera_position(p, u, self.view.d_min_m / cos_axis, self.view.d_max_m / cos_axis)
+        ok = np.isfinite(t_cam)
+        if np.any(ok):
+            o = (p[ok] + eps * u[ok]).astype(np.float32)
+            free = self._embree.run(o, u[ok].astype(np.float32), dists=(t_cam[ok] - eps).astype(np.float32),
+                                    query="OCCLUDED") == -1
+            ok[np.flatnonzero(ok)[~free]] = False
+        return ok
+
+    def mask(self, points: np.ndarray, chunk: int = 16384, round_rays: int = 8) -> np.ndarray:
+        """(N,) bool: which points (N x 3, m, on the scene's surfaces) are observable."""
+        points = np.asarray(points, np.float64).reshape(-1, 3)
+        rng = np.random.default_rng(self.view.seed)
+        k = self.view.directions
+        out = np.zeros(len(points), bool)
+        # Rays go out in rounds over a fixed shuffle of the strata; a point stops once one ray sees it.
+        order = np.random.default_rng(self.view.seed + 1).permutation(k)
+        for a in range(0, len(points), chunk):
+            p = points[a:a + chunk]
+            dirs = self._directions(len(p), rng)[:, order]
+            seen = np.zeros(len(p), bool)
+            for r in range(0, k, round_rays):
+                todo = np.flatnonzero(~seen)
+                if len(todo) == 0:
+                    break
+                u = dirs[todo, r:r + round_rays].reshape(-1, 3)
+                owner = np.repeat(todo, min(round_rays, k - r))
+                seen[np.unique(owner[self._sees(p[owner], u)])] = True
+            out[a:a + chunk] = seen
+        return out
+
+
+    def mask_by_probes(self, points: np.ndarray, point_faces: np.ndarray, probes: np.ndarray,
+                       probe_faces: np.ndarray) -> np.ndarray:
+        """Cheaper mask for large surfaces: the observability of a coarser probe
+        sample, carried to each point from the nearest probe on the same face
+        (face indices of one mesh; every face needs a probe)."""
+        from scipy.spatial import cKDTree
+        seen = self.mask(probes)
+        if len(points) == 0:
+            return np.zeros(0, bool)
+        # A fourth coordinate keeps faces 1 km apart, so the nearest probe shares the face.
+        tree = cKDTree(np.hstack([probes, 1e3 * probe_faces[:, None].astype(np.float64)]))
+        _, i = tree.query(np.hstack([points, 1e3 * point_faces[:, None].astype(np.float64)]))
+        return seen[i]
+
+
+def scene_of_ground_truth(gt: dict):
+    """Vertices and faces of the whole scene from an exported ground truth
+    (background.ply plus every exported object mesh)."""
+    import os
+    import trimesh
+    verts, faces, n = [], [], 0
+    for rel in [gt["background_mesh"]] + [o["mesh"] for o in gt["objects"]]:
+        m = trimesh.load(os.path.join(gt["dir"], rel), process=False, force="mesh")
+        verts.append(np.asarray(m.vertices, np.float64))
+        faces.append(np.asarray(m.faces, np.int64) + n)
+        n += len(m.vertices)
+    return np.vstack(verts), np.vstack(faces)
+
+
+def for_ground_truth(gt: dict, view: Optional[ViewModel] = None) -> Observability:
+    """Observability in an exported ground truth (objects.json with its start)."""
+    if not gt.get("start"):
+        raise ValueError("ground truth in %s has no start position, so its observable surface is undefined"
+                         % gt.get("dir"))
+    v, f = scene_of_ground_truth(gt)
+    return Observability(v, f, gt["start"], view)
