@@ -14,7 +14,6 @@ Example:
 import argparse
 import csv
 import json
-import math
 import os
 import signal
 import socket
@@ -65,78 +64,11 @@ def write_overrides(path, gt, classes, margin_m=0.5):
         f.write("classes:\n  of_interest: [%s]\n" % ", ".join(classes))
 
 
-class Monitor:
-    """Collects what the nodes publish during the mission."""
-
-    def __init__(self):
-        import rospy
-        from geometry_msgs.msg import PoseStamped
-        from std_msgs.msg import UInt32
-        from semantic_exploration.msg import ExplorationStatus, MapStats, ObjectArray
-        self.status = None
-        self.stats = None
-        self.objects = None
-        self.collisions = 0
-        self.path_length_m = 0.0
-        self._last_pos = None
-        rospy.Subscriber("/planner/status", ExplorationStatus, self._set("status"), queue_size=10)
-        rospy.Subscriber("/background_map/stats", MapStats, self._set("stats"), queue_size=10)
-        rospy.Subscriber("/object_map/objects", ObjectArray, self._set("objects"), queue_size=2)
-        rospy.Subscriber("/mav/collisions", UInt32, self._on_collisions, queue_size=2)
-        rospy.Subscriber("/mav/pose", PoseStamped, self._on_pose, queue_size=50)
-
-    def _set(self, name):
-        def cb(msg):
-            setattr(self, name, msg)
-        return cb
-
-    def _on_collisions(self, msg):
-        self.collisions = msg.data
-
-    def _on_pose(self, msg):
-        p = msg.pose.position
-        if self._last_pos is not None:
-            self.path_length_m += math.dist(self._last_pos, (p.x, p.y, p.z))
-        self._last_pos = (p.x, p.y, p.z)
-
-    def found_ground_truth(self, gt_objs, margin_m=0.1):
-        """Ground-truth ids whose box (grown by margin_m) holds a map object's
-        centroid of the same class: a cheap per-tick estimate; the final
-        figures come from the meshes (semantic_exploration.eval.metrics)."""
-        found = set()
-        for o in (self.objects.objects if self.objects else []):
-            c = (o.centroid.x, o.centroid.y, o.centroid.z)
-            for g in gt_objs:
-                if g["class"] == o.class_name and all(
-                        g["bbox_min"][i] - margin_m <= c[i] <= g["bbox_max"][i] + margin_m for i in range(3)):
-                    found.add(g["id"])
-        return found
-
-    def row(self, sim_s, wall_s, gt_objs):
-        st = self.stats
-        return {"wall_s": round(wall_s, 2), "sim_s": round(sim_s, 2),
-                "iteration": self.status.iteration if self.status else 0,
-                "explored_volume_m3": round(st.explored_volume_m3, 3) if st else 0.0,
-                "frontier_count": st.frontier_count if st else 0,
-                "objects_in_map": len(self.objects.objects) if self.objects else 0,
-                "ground_truth_found": len(self.found_ground_truth(gt_objs)),
-                "path_length_m": round(self.path_length_m, 3), "collisions": self.collisions,
-                "planning_time_s": round(self.status.planning_time_s, 4) if self.status else 0.0,
-                "integration_time_ms": round(st.integration_time_ms, 3) if st else 0.0}
-
-    def finished(self):
-        from semantic_exploration.msg import ExplorationStatus
-        return self.status is not None and self.status.state == ExplorationStatus.STATE_FINISHED
-
-    def line(self, sim_s, wall_s, n_gt):
-        explored = self.stats.explored_volume_m3 if self.stats else 0.0
-        frontiers = self.stats.frontier_count if self.stats else 0
-        found = len(self.objects.objects) if self.objects else 0
-        it = self.status.iteration if self.status else 0
-        msg = self.status.message if self.status else "waiting for the planner"
-        return ("[mission] wall %5.0f s  sim %6.1f s  iteration %3d  explored %7.1f m3  frontiers %6d  "
-                "objects %d (ground truth %d)  collisions %d  | %s" %
-                (wall_s, sim_s, it, explored, frontiers, found, n_gt, self.collisions, msg))
+def Monitor():
+    """The run's log (semantic_exploration.eval.runlog.RunLog), subscribed live."""
+    _import_package()
+    from semantic_exploration.eval.runlog import RunLog
+    return RunLog().subscribe()
 
 
 def call_save(service, directory):
@@ -182,19 +114,22 @@ def evaluate(out, gt, classes, saved):
             res["objects"] = [{"map_id": m.map_id, "class": m.map_class, "gt_id": m.gt_id,
                                "on_surface_fraction": m.on_surface_fraction,
                                "rmse_m": m.score.rmse_m if m.score else None,
-                               "completeness": m.score.completeness if m.score else None} for m in ev.matches]
+                               "completeness": m.score.completeness if m.score else None,
+                               "observable_fraction": ev.observable_fraction.get(m.gt_id)} for m in ev.matches]
         occ = [f for f in saved.get("background_map", {}).get("files", []) if f.endswith("occupied.ply")]
         if occ:
             b = metrics.evaluate_background(metrics.load_ground_truth(gt["gt_dir"]), metrics.read_ply_vertices(occ[0]),
                                             classes)
             res["background"] = {"rmse_m": b.rmse_m, "completeness": b.completeness,
-                                 "n_reconstructed": b.n_reconstructed}
+                                 "n_reconstructed": b.n_reconstructed, "observable_fraction": b.observable_fraction}
     except Exception as e:  # a failed evaluation must not lose the rest of the report
         res["error"] = "%s: %s" % (type(e).__name__, e)
     return res
 
 
 def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
+    """report.md and summary.json of a run; args needs mode, seed and classes,
+    mon is a RunLog (live or read from a bag), wall_s may be None (a bag)."""
     objects = mon.objects.objects if mon.objects else []
     classes = set(args.classes)
     gt_objs = [o for o in gt["objects"] if o["class"] in classes]
@@ -207,16 +142,16 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
         "frontier_count": stats.frontier_count if stats else None,
         "objects_found": len(objects), "ground_truth_objects": len(gt_objs),
         "path_length_m": mon.path_length_m, "collisions": mon.collisions,
-        "dropped_input": {k: getattr(stats, k) for k in (
-            "dropped_bad_encoding", "dropped_size_mismatch", "dropped_no_tf", "dropped_out_of_bounds",
-            "dropped_no_camera_info", "invalid_depth_pixels")} if stats else {},
+        "dropped_input": mon.drop_summary(),
+        "invalid_depth_pixels": stats.invalid_depth_pixels if stats else 0,
         "saved": saved,
     }
     free = os.path.join(gt["gt_dir"], "free_space.json")
     if os.path.exists(free):
         with open(free) as f:
             summary["explorable_free_volume_m3"] = json.load(f)["explorable_free_volume_m3"]
-    summary["evaluation"] = evaluate(out, gt, args.classes, saved)
+    summary["evaluation"] = (evaluate(out, gt, args.classes, saved) if not getattr(args, "no_eval", False)
+                             else {"skipped": "--no-eval"})
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     lines = [
@@ -226,7 +161,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
         "| scene | %s |" % summary["scene"],
         "| termination | %s |" % reason,
         "| sim time | %.1f s |" % sim_s,
-        "| wall time | %.1f s |" % wall_s,
+        "| wall time | %s |" % ("%.1f s" % wall_s if wall_s is not None else "- (from a bag)"),
         "| planning iterations | %d |" % summary["iterations"],
         "| explored volume | %.1f m3 |" % summary["explored_volume_m3"],
     ]
@@ -247,23 +182,28 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
     if ev.get("objects"):
         lines += ["", "## Object reconstruction (against ground truth, 5 cm)", "",
                   "found %d of %d ground-truth objects" % (ev["found"], ev["ground_truth"]), "",
-                  "| map id | class | ground-truth id | on its surface | accuracy RMSE | completeness |",
-                  "|---|---|---|---|---|---|"]
+                  "A map object is matched to the ground-truth object most of its surface lies on (within 5 cm). "
+                  "Completeness is the share of the *observable* ground-truth surface with a reconstructed point "
+                  "within 5 cm: surface some camera pose the MAV can take sees (camera centre at least R from every "
+                  "surface and connected to the start, unoccluded, within the depth range and the vertical field "
+                  "of view; see eval/observable.py). The last column gives that share of each object's surface.", "",
+                  "| map id | class | ground-truth id | on its surface | accuracy RMSE | completeness | observable |",
+                  "|---|---|---|---|---|---|---|"]
         for m in ev["objects"]:
-            lines.append("| %d | %s | %s | %.0f%% | %s | %s |" % (
+            lines.append("| %d | %s | %s | %.0f%% | %s | %s | %s |" % (
                 m["map_id"], m["class"], m["gt_id"] if m["gt_id"] is not None else "-",
                 100 * m["on_surface_fraction"],
                 "%.1f cm" % (100 * m["rmse_m"]) if m.get("rmse_m") is not None else "-",
-                "%.0f%%" % (100 * m["completeness"]) if m.get("completeness") is not None else "-"))
+                "%.0f%%" % (100 * m["completeness"]) if m.get("completeness") is not None else "-",
+                "%.0f%%" % (100 * m["observable_fraction"]) if m.get("observable_fraction") is not None else "-"))
     if ev.get("background"):
         b = ev["background"]
-        lines += ["", "background: accuracy RMSE %.1f cm, completeness %.0f%% (%d occupied voxels)" % (
-            100 * b["rmse_m"], 100 * b["completeness"], b["n_reconstructed"])]
+        lines += ["", "background: accuracy RMSE %.1f cm, completeness %.0f%% of the observable surface (%.0f%% of "
+                  "it; %d occupied voxels)" % (100 * b["rmse_m"], 100 * b["completeness"],
+                                               100 * b.get("observable_fraction", 1.0), b["n_reconstructed"])]
     if ev.get("error"):
         lines += ["", "evaluation: %s" % ev["error"]]
-    lines += ["", "## Dropped input", ""]
-    for k, v in summary["dropped_input"].items():
-        lines.append("- %s: %d" % (k, v))
+    lines += ["", "## Dropped input", ""] + mon.drop_report_lines()
     lines += ["", "## Files", ""]
     for name, s in saved.items():
         lines.append("- %s: %s" % (name, s["message"]))
@@ -292,6 +232,10 @@ def main(argv=None):
                     "(scripts/rviz_screenshot.py)")
     ap.add_argument("--progress-period-s", type=float, default=10.0)
     ap.add_argument("--extra-overrides", default="", help="YAML for the C++ nodes loaded after the scene's")
+    ap.add_argument("--no-eval", action="store_true",
+                    help="skip scoring the saved meshes and map against ground truth (minutes on a loaded machine)")
+    ap.add_argument("--sim-overrides", default="", help="YAML for the simulator loaded after config/sim.yaml "
+                    "(e.g. faults: tf_gap_s, detector_scale, frame_drop_fraction)")
     args = ap.parse_args(argv)
 
     out = os.path.abspath(args.out)
@@ -316,6 +260,7 @@ def main(argv=None):
            "classes_of_interest:=[%s]" % ", ".join(args.classes),
            "lockstep:=" + ("false" if args.no_lockstep else "true"),
            "real_time_factor:=%g" % args.real_time_factor, "rviz:=" + ("true" if args.rviz else "false"),
+           "sim_overrides:=" + (os.path.abspath(args.sim_overrides) if args.sim_overrides else ""),
            "output:=log"]
     log_path = os.path.join(out, "roslaunch.log")
     print("[mission] %s  (log: %s)" % (" ".join(cmd), log_path), flush=True)
@@ -372,6 +317,7 @@ def main(argv=None):
                 break
             time.sleep(0.5)
         print(mon.line(rospy.get_time(), time.time() - t0, n_gt), flush=True)
+        mon.freeze_drops()  # the simulator runs on while the maps are saved: count up to the stop
         if writer is not None:
             writer.writerow(mon.row(rospy.get_time(), time.time() - t0, gt_objs))
         series.close()
@@ -396,6 +342,7 @@ def main(argv=None):
     print("[mission] %s: %d of %d objects found, explored %.1f m3, %d collisions, %.0f s wall" % (
         summary["termination_reason"], summary["objects_found"], summary["ground_truth_objects"],
         summary["explored_volume_m3"], summary["collisions"], summary["wall_time_s"]))
+    print("[mission] " + mon.drop_report_lines()[0])
     return 0
 
 

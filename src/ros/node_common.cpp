@@ -2,6 +2,9 @@
 
 #include <sensor_msgs/image_encodings.h>
 
+#include "semantic_exploration/DropCounts.h"
+
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -113,9 +116,17 @@ std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, 
 
 std::string lookupPose(const tf2_ros::Buffer& tf, const std::string& target, const std::string& source,
                        const ros::Time& stamp, double timeout_s, Eigen::Isometry3d& T) {
+  // Waits in wall time: under /use_sim_time a lockstep simulator holds the
+  // clock until this frame is reported, so a wait in sim time (tf2's timeout)
+  // would never end while the pose is missing.
   std::string err;
-  if (!tf.canTransform(target, source, stamp, ros::Duration(timeout_s), &err))
-    return err.empty() ? "no transform " + target + " <- " + source : err;
+  const auto deadline = ros::WallTime::now() + ros::WallDuration(std::max(0.0, timeout_s));
+  while (!tf.canTransform(target, source, stamp, &err)) {
+    if (ros::WallTime::now() >= deadline || !ros::ok())
+      return err.empty() ? "no transform " + target + " <- " + source : err;
+    err.clear();
+    ros::WallDuration(0.002).sleep();
+  }
   try {
     const auto t = tf.lookupTransform(target, source, stamp);
     const auto& q = t.transform.rotation;
@@ -130,8 +141,29 @@ std::string lookupPose(const tf2_ros::Buffer& tf, const std::string& target, con
   }
 }
 
-void DropCounter::drop(const std::string& reason, const std::string& detail) {
-  ++counts_[reason];
+DropCounter::DropCounter(double period_s) : period_s_(period_s) {
+  if (!ros::isInitialized()) return;  // e.g. a unit test without a node: count only
+  ros::NodeHandle nh;
+  pub_ = nh.advertise<semantic_exploration::DropCounts>("/dropped_input", 1, true);
+  publish();
+}
+
+void DropCounter::publish() const {
+  if (!pub_) return;
+  semantic_exploration::DropCounts m;
+  m.header.stamp = ros::Time::isValid() ? ros::Time::now() : ros::Time();
+  m.node = ros::this_node::getName();
+  for (const auto& kv : counts_) {
+    m.reasons.push_back(kv.first);
+    m.counts.push_back(kv.second);
+  }
+  pub_.publish(m);
+}
+
+void DropCounter::drop(const std::string& reason, const std::string& detail, uint64_t n) {
+  if (n == 0) return;
+  counts_[reason] += n;
+  publish();
   const auto now = ros::WallTime::now();
   auto it = last_log_.find(reason);
   if (it == last_log_.end() || (now - it->second).toSec() >= period_s_) {
@@ -139,6 +171,19 @@ void DropCounter::drop(const std::string& reason, const std::string& detail) {
              detail.c_str());
     last_log_[reason] = now;
   }
+}
+
+uint64_t FrameGapCounter::add(const ros::Time& stamp) {
+  if (last_.isZero()) {
+    last_ = stamp;
+    return 0;
+  }
+  const double dt_s = (stamp - last_).toSec();
+  if (dt_s <= 0.0) return 0;
+  last_ = stamp;
+  if (period_s_ <= 0.0 || dt_s < period_s_) period_s_ = dt_s;
+  const long k = std::lround(dt_s / period_s_);
+  return k > 1 ? static_cast<uint64_t>(k - 1) : 0;
 }
 
 uint64_t DropCounter::count(const std::string& reason) const {

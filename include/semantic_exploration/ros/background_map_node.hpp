@@ -13,7 +13,9 @@
 /// Bad input (unsupported encodings, sizes that disagree with camera_info,
 /// depth before any camera_info, no tf at the stamp, a camera outside the
 /// bounds) drops the frame with a throttled log line and a MapStats counter;
-/// invalid depth pixels are counted and carve nothing.
+/// invalid depth pixels are counted and carve nothing. Depth frames missing
+/// from the stream (stamp gaps of the camera period) are counted as
+/// "frame_gap"; every count also goes to /dropped_input (DropCounter).
 
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -70,6 +72,7 @@ class BackgroundMapNode {
   ros::ServiceServer gains_srv_, get_map_srv_, save_srv_;
   ros::WallTimer flush_timer_;
   DropCounter drops_;
+  FrameGapCounter depth_gaps_;  ///< depth frames missing from the stream ("frame_gap")
   bool have_info_ = false;
 
   std::deque<sensor_msgs::ImageConstPtr> rgb_buffer_;  ///< recent colour images, oldest first

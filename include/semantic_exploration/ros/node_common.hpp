@@ -41,27 +41,51 @@ sensor_msgs::Image floatImageMsg(const std_msgs::Header& header, const std::vect
 std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, double d_max_m,
                            semexp::PinholeCamera& camera);
 
-/// T_target_source at `stamp` through tf2, waiting up to `timeout_s`.
+/// T_target_source at `stamp` through tf2, waiting up to `timeout_s` wall
+/// seconds (not sim time, which a lockstep simulator holds meanwhile).
 /// Returns "" on success, else tf2's reason.
 std::string lookupPose(const tf2_ros::Buffer& tf, const std::string& target, const std::string& source,
                        const ros::Time& stamp, double timeout_s, Eigen::Isometry3d& T_target_source);
 
 /// Counts dropped input per reason and logs each reason at most every
-/// `period_s` seconds, so a bad stream never floods the log.
+/// `period_s` seconds, so a bad stream never floods the log. Constructed in a
+/// node (after ros::init), it also publishes its counts latched on
+/// /dropped_input (semantic_exploration/DropCounts) at start and after each
+/// drop, so that a run's report can collect them.
 class DropCounter {
  public:
-  explicit DropCounter(double period_s = 5.0) : period_s_(period_s) {}
+  explicit DropCounter(double period_s = 5.0);
   /// Counts one drop for `reason` and logs `detail` (throttled per reason).
-  void drop(const std::string& reason, const std::string& detail);
+  void drop(const std::string& reason, const std::string& detail) { drop(reason, detail, 1); }
+  /// Counts `n` drops for `reason` at once (e.g. frames missing from a stream).
+  void drop(const std::string& reason, const std::string& detail, uint64_t n);
   /// Number of drops counted for `reason`.
   uint64_t count(const std::string& reason) const;
   uint64_t total() const;
   const std::map<std::string, uint64_t>& counts() const { return counts_; }
 
  private:
+  void publish() const;
   double period_s_;
   std::map<std::string, uint64_t> counts_;
   std::map<std::string, ros::WallTime> last_log_;
+  ros::Publisher pub_;
+};
+
+/// Counts frames missing from a constant-rate camera stream from the stamps
+/// that do arrive: the frame period is the shortest stamp interval seen so
+/// far (a drop only lengthens intervals), and an interval of k periods means
+/// k - 1 frames were lost. Repeated or older stamps count nothing.
+class FrameGapCounter {
+ public:
+  /// Frames missing between the previous stamp and `stamp` (0 for the first).
+  uint64_t add(const ros::Time& stamp);
+  /// Estimated frame period, s (0 until two frames arrived).
+  double period_s() const { return period_s_; }
+
+ private:
+  ros::Time last_;
+  double period_s_ = 0.0;
 };
 
 /// Runs a node class: constructs it (it loads and validates parameters) and

@@ -169,6 +169,26 @@ class FramesConfig:
 
 
 @dataclass
+class FaultsConfig:
+    """Bad input on purpose, to test that the nodes drop and count it (all off by default)."""
+    tf_gap_s: Optional[List[float]] = None  # [start, end] sim s (ROS time): no world->body tf, no mav/pose
+    detector_scale: float = 1.0      # detections' instance image size / depth size; 1 = same resolution
+    frame_drop_fraction: float = 0.0  # probability that a camera frame (images, camera_info, detections) is not sent
+    seed: int = 3                    # frame-drop random seed
+
+    def validate(self, ns="faults/"):
+        if self.tf_gap_s is not None:
+            _req(isinstance(self.tf_gap_s, list) and len(self.tf_gap_s) == 2 and all(map(_finite, self.tf_gap_s))
+                 and 0 <= self.tf_gap_s[0] < self.tf_gap_s[1], ns + "tf_gap_s",
+                 "must be [start, end] sim s with 0 <= start < end, or empty")
+        _req(_finite(self.detector_scale) and 0.05 <= self.detector_scale <= 4.0, ns + "detector_scale",
+             "must be in [0.05, 4]")
+        _req(_finite(self.frame_drop_fraction) and 0 <= self.frame_drop_fraction < 1, ns + "frame_drop_fraction",
+             "must be in [0, 1)")
+        _req(isinstance(self.seed, int) and self.seed >= 0, ns + "seed", "must be an integer >= 0")
+
+
+@dataclass
 class SimConfig:
     camera: CameraConfig = field(default_factory=CameraConfig)
     noise: NoiseConfig = field(default_factory=NoiseConfig)
@@ -177,6 +197,7 @@ class SimConfig:
     scene: SceneConfig = field(default_factory=SceneConfig)
     classes: ClassesConfig = field(default_factory=ClassesConfig)
     frames: FramesConfig = field(default_factory=FramesConfig)
+    faults: FaultsConfig = field(default_factory=FaultsConfig)
     real_time_factor: float = 1.0    # sim seconds per wall second; 0 = as fast as possible
     lockstep: bool = False
     lockstep_nodes: List[str] = field(default_factory=list)
@@ -196,6 +217,7 @@ class SimConfig:
         self.scene.validate()
         self.classes.validate()
         self.frames.validate()
+        self.faults.validate()
         _req(_finite(self.real_time_factor) and self.real_time_factor >= 0, "real_time_factor", "must be >= 0")
         _req(isinstance(self.lockstep_nodes, list) and all(isinstance(n, str) and n for n in self.lockstep_nodes),
              "lockstep_nodes", "must be a list of node names")

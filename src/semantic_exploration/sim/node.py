@@ -10,7 +10,8 @@ Topics (relative names, resolved in the node's namespace):
        camera/depth/camera_info and camera/rgb/camera_info),
        camera/instance_gt (16UC1 object id), camera/class_gt (16UC1 class id), detections,
        mav/pose, mav/goal_reached (PoseStamped), mav/collisions (UInt32, latched),
-       mav/path_rejected (String: why a path was refused), /clock, tf
+       mav/path_rejected (String: why a path was refused), /clock (latched), tf,
+       ~faults (DropCounts, latched: what the fault injection withheld, see faults.py)
 
 Time: the node advances sim time in physics steps and publishes /clock; it
 never reads ROS time itself (stamps come from its own counter), so it works
@@ -20,6 +21,18 @@ the images) and at tf_rate_hz. In lockstep mode, sim time stops before each
 new frame until every node named in lockstep_nodes has reported the previous
 frame's stamp on frame_integrated (or lockstep_timeout_s wall seconds pass,
 which is logged).
+
+Start-up: before the first frame the node waits (up to lockstep_startup_timeout_s
+in lockstep mode) until every subscriber the master lists for its camera, tf and
+/clock topics is connected, publishes /clock at the frame's time, and only then
+the frame, so that neither a mapping node nor rosbag record misses frame 0.
+A lockstep node that was still not connected when frame 0 went out cannot
+report it and is not waited for on that frame (logged).
+
+Faults (FaultsConfig, off by default): a sim-time window without world->body
+tf and mav/pose, detection instance images at another resolution, and camera
+frames that are not sent (no images, camera_info or detections; lockstep does
+not wait for a frame that was not sent).
 """
 
 import queue
@@ -29,6 +42,7 @@ from typing import Dict, Optional
 
 import numpy as np
 
+import rosgraph
 import rospy
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, TransformStamped
@@ -37,9 +51,10 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image
 from std_msgs.msg import Header, String, UInt32, UInt32MultiArray
 
-from semantic_exploration.msg import Detection, Detections, FrameIntegrated
+from semantic_exploration.msg import Detection, Detections, DropCounts, FrameIntegrated
 
 from .config import ConfigError, SimConfig, from_dict
+from .faults import FaultInjector
 from .scene import SceneError, export_ground_truth
 from .simulator import PathError, Simulator, load_simulator, quaternion_from_matrix, waypoints_from_poses
 
@@ -99,7 +114,11 @@ class MavSimNode:
         self.pub_goal = rospy.Publisher("mav/goal_reached", PoseStamped, queue_size=10)
         self.pub_coll = rospy.Publisher("mav/collisions", UInt32, queue_size=1, latch=True)
         self.pub_rejected = rospy.Publisher("mav/path_rejected", String, queue_size=5)
-        self.pub_clock = rospy.Publisher("/clock", Clock, queue_size=10)
+        # Latched: a node or recorder that connects late gets the current sim time at once.
+        self.pub_clock = rospy.Publisher("/clock", Clock, queue_size=10, latch=True)
+        self.pub_faults = rospy.Publisher("~faults", DropCounts, queue_size=1, latch=True)
+        self.faults = FaultInjector(c.faults)
+        self._fault_counts_sent = None
         self.tf = tf2_ros.TransformBroadcaster()
         self.tf_static = tf2_ros.StaticTransformBroadcaster()
 
@@ -114,7 +133,10 @@ class MavSimNode:
         rospy.Subscriber("~hide_detections", UInt32MultiArray, self._on_hide, queue_size=5)
         self._lockstep_nodes = [_short_name(n) for n in c.lockstep_nodes]
         self._timeouts = 0
+        self._first_frame_ns: Optional[int] = None
+        self._first_frame_absent = set()  # lockstep nodes not connected when the first frame went out
         self.pub_coll.publish(UInt32(0))
+        self._publish_fault_counts(0)
 
     # ------------------------------------------------------------- callbacks
     def _on_path(self, msg: Path) -> None:
@@ -194,7 +216,17 @@ class MavSimNode:
         m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z, m.pose.orientation.w = q
         return m
 
+    def _publish_fault_counts(self, t_ns: int) -> None:
+        counts = dict(self.faults.counts)
+        if counts == self._fault_counts_sent:
+            return
+        self._fault_counts_sent = counts
+        self.pub_faults.publish(DropCounts(header=Header(stamp=_stamp(t_ns)), node=rospy.get_name(),
+                                           reasons=list(counts), counts=list(counts.values())))
+
     def _publish_body(self, t_ns: int) -> None:
+        if self.faults.withhold_pose(t_ns):
+            return
         f = self.cfg.frames
         self.tf.sendTransform(self._transform(self.sim.T_WB(), f.world, f.body, t_ns))
         self.pub_pose.publish(self._pose_msg(t_ns))
@@ -211,7 +243,8 @@ class MavSimNode:
         self.pub_rgb.publish(_image(out["rgb"], "rgb8", hdr))
         self.pub_inst.publish(_image(out["instance"], "16UC1", hdr))
         self.pub_cls.publish(_image(out["class"], "16UC1", hdr))
-        dets = Detections(header=hdr, instance_image=_image(out["detection_mask"], "16UC1", hdr))
+        dets = Detections(header=hdr, instance_image=_image(self.faults.detection_image(out["detection_mask"]),
+                                                            "16UC1", hdr))
         dets.detections = [Detection(instance_id=d["instance_id"], class_id=d["class_id"],
                                      class_name=d["class_name"], confidence=d["confidence"])
                            for d in out["detections"]]
@@ -222,7 +255,8 @@ class MavSimNode:
         deadline = time.monotonic() + self.cfg.lockstep_timeout_s
         with self._lock:
             while not rospy.is_shutdown():
-                missing = [n for n in self._lockstep_nodes if self._reported.get(n, -1) < frame_ns]
+                missing = [n for n in self._lockstep_nodes if self._reported.get(n, -1) < frame_ns
+                           and not (frame_ns == self._first_frame_ns and n in self._first_frame_absent)]
                 if not missing:
                     return
                 left = deadline - time.monotonic()
@@ -235,15 +269,61 @@ class MavSimNode:
                     return
                 self._lock.wait(min(left, 0.1))
 
+    def _frame_publishers(self):
+        return [self.pub_depth, self.pub_rgb, self.pub_info, self.pub_info_depth, self.pub_info_rgb, self.pub_inst,
+                self.pub_cls, self.pub_det, self.pub_clock, self.tf.pub_tf, self.tf_static.pub_tf]
+
+    def _unconnected_subscribers(self):
+        """(topic, subscriber node) pairs the master lists for the frame topics that
+        have no connection to this node yet (a subscriber still connecting)."""
+        try:
+            _, subs, _ = rosgraph.Master(rospy.get_name()).getSystemState()
+        except Exception:  # master busy: judge by the connections alone
+            return []
+        subs = dict(subs)
+        me = rospy.get_name()
+        out = []
+        for pub in self._frame_publishers():
+            for node in subs.get(pub.resolved_name, []):
+                if node != me and not pub.impl.has_connection(node):
+                    out.append((pub.resolved_name, node))
+        return out
+
     def _wait_for_subscribers(self) -> None:
+        """Before the first frame: waits (wall time) until the depth topic has a
+        subscriber, every lockstep node that exists subscribes to it, and every
+        subscriber of the frame topics is connected; at most lockstep_startup_timeout_s."""
         deadline = time.monotonic() + self.cfg.lockstep_startup_timeout_s
-        while not rospy.is_shutdown() and self.pub_depth.get_num_connections() == 0:
-            if time.monotonic() > deadline:
-                rospy.logwarn("mav_sim: lockstep: nobody subscribes to %s after %.0f s; starting anyway",
-                              self.pub_depth.resolved_name, self.cfg.lockstep_startup_timeout_s)
+        stable_since = None
+        while not rospy.is_shutdown():
+            waiting = []
+            if self.pub_depth.get_num_connections() == 0:
+                waiting.append("a subscriber of %s" % self.pub_depth.resolved_name)
+            waiting += ["%s on %s" % (n, t) for t, n in self._unconnected_subscribers()]
+            waiting += ["lockstep node %s" % n for n in self._lockstep_nodes if self._node_exists(n)
+                        and not self._depth_connected(n)]
+            now = time.monotonic()
+            if not waiting:
+                stable_since = stable_since or now
+                if now - stable_since >= 0.3:  # nodes that start together register within a moment
+                    return
+            else:
+                stable_since = None
+            if now > deadline:
+                rospy.logwarn("mav_sim: lockstep: still waiting for %s after %.0f s; starting anyway",
+                              ", ".join(waiting), self.cfg.lockstep_startup_timeout_s)
                 return
             time.sleep(0.05)
-        time.sleep(0.2)  # let the other subscribers of the suite connect too
+
+    def _node_exists(self, short: str) -> bool:
+        try:
+            pubs, subs, srvs = rosgraph.Master(rospy.get_name()).getSystemState()
+        except Exception:
+            return False
+        return any(_short_name(n) == short for g in (pubs, subs, srvs) for _, nodes in g for n in nodes)
+
+    def _depth_connected(self, short: str) -> bool:
+        return any(_short_name(c.endpoint_id) == short for c in list(self.pub_depth.impl.connections))
 
     def _handle_requests(self) -> bool:
         """Applies queued scene switches; returns True if the scene changed."""
@@ -297,15 +377,28 @@ class MavSimNode:
                     else:
                         rospy.loginfo("mav_sim: empty path: stopping")
             if t_ns >= next_frame:
+                first = last_frame is None
                 if c.lockstep:
-                    if last_frame is None:
+                    if first:
                         self._wait_for_subscribers()
                     else:
                         self._wait_lockstep(last_frame)
                     anchor_wall, anchor_ns = time.monotonic(), t_ns
+                if first:
+                    # The frame's time first, so that its stamp is not "before the first /clock" anywhere.
+                    self.pub_clock.publish(Clock(clock=_stamp(t_ns)))
+                    time.sleep(0.1)
                 self._publish_body(t_ns)
-                self._publish_frame(t_ns)
-                last_frame = t_ns
+                if not self.faults.drop_frame(t_ns):
+                    if first:
+                        self._first_frame_ns = t_ns
+                        self._first_frame_absent = {n for n in self._lockstep_nodes if not self._depth_connected(n)}
+                        if c.lockstep and self._first_frame_absent:
+                            rospy.logwarn("mav_sim: lockstep: %s not connected for the first frame; not waiting "
+                                          "for it on that frame", ", ".join(sorted(self._first_frame_absent)))
+                    self._publish_frame(t_ns)
+                    last_frame = t_ns
+                self._publish_fault_counts(t_ns)
                 next_frame += frame_ns
                 next_tf = t_ns + tf_ns
             elif t_ns >= next_tf:

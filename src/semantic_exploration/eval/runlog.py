@@ -1,0 +1,179 @@
+"""What a run's nodes published, collected from live subscriptions (run_mission.py)
+or from a recorded bag (bag.py), so that both write the same report and time series.
+
+Messages are read by field name only; the module imports no ROS package unless
+`subscribe` is called.
+"""
+import math
+from typing import Dict, List
+
+#: topic -> handler name; record.launch records these for evaluation.
+TOPICS = {
+    "/planner/status": "_on_status",
+    "/background_map/stats": "_on_stats",
+    "/object_map/objects": "_on_objects",
+    "/mav/collisions": "_on_collisions",
+    "/mav/pose": "_on_pose",
+    "/dropped_input": "_on_drops",
+    "/mav_sim/faults": "_on_faults",
+}
+
+#: (node, reason) -> how the report names one such drop; the headline line of the report.
+DROP_HEADLINES = [
+    ("background_map", "no_tf", "depth frames without tf"),
+    ("background_map", "frame_gap", "camera frames missing from the depth stream"),
+    ("instance_matching", "size_mismatch", "detection frames with mismatched size"),
+    ("background_map", "size_mismatch", "depth frames with mismatched size"),
+    ("background_map", "no_camera_info", "depth frames before camera_info"),
+    ("background_map", "bad_encoding", "depth frames with a bad encoding"),
+    ("background_map", "out_of_bounds", "depth frames outside the map bounds"),
+    ("object_map", "no_tf", "detection frames without tf (object map)"),
+]
+
+#: fault-injection counters of mav_sim (faults.py) -> report wording
+FAULT_NAMES = {
+    "frames_without_tf": "camera frames sent without tf",
+    "poses_withheld": "tf / mav/pose messages withheld",
+    "frames_dropped": "camera frames not sent",
+    "detections_rescaled": "detection images at another resolution",
+}
+
+
+def short_node(name: str) -> str:
+    return name.rstrip("/").rsplit("/", 1)[-1]
+
+
+class RunLog:
+    """Latest status, map stats, objects, collisions, path length and drop counts of a run."""
+
+    def __init__(self):
+        self.status = None
+        self.stats = None
+        self.objects = None
+        self.collisions = 0
+        self.path_length_m = 0.0
+        self.drops: Dict[str, Dict[str, int]] = {}   # node (short name) -> reason -> count
+        self.faults: Dict[str, int] = {}             # injected by mav_sim
+        self.last_pose = None                        # (x, y, z) of the last mav/pose
+        self._last_pos = None
+        self._drops_frozen = False
+
+    def freeze_drops(self):
+        """Keeps the drop and fault counts as they are now (the run stopped; a
+        simulator that goes on while the maps are saved does not add to them)."""
+        self._drops_frozen = True
+
+    # ------------------------------------------------------------- input
+    def subscribe(self):
+        """Live: subscribes every topic of TOPICS (needs rospy.init_node)."""
+        import rospy
+        from geometry_msgs.msg import PoseStamped
+        from std_msgs.msg import UInt32
+        from semantic_exploration.msg import DropCounts, ExplorationStatus, MapStats, ObjectArray
+        types = {"/planner/status": ExplorationStatus, "/background_map/stats": MapStats,
+                 "/object_map/objects": ObjectArray, "/mav/collisions": UInt32, "/mav/pose": PoseStamped,
+                 "/dropped_input": DropCounts, "/mav_sim/faults": DropCounts}
+        for topic, handler in TOPICS.items():
+            rospy.Subscriber(topic, types[topic], getattr(self, handler), queue_size=50)
+        return self
+
+    def handle(self, topic: str, msg) -> None:
+        """Feeds one message of `topic` (e.g. read from a bag); other topics are ignored."""
+        h = TOPICS.get(topic)
+        if h is not None:
+            getattr(self, h)(msg)
+
+    def _on_status(self, msg):
+        self.status = msg
+
+    def _on_stats(self, msg):
+        self.stats = msg
+
+    def _on_objects(self, msg):
+        self.objects = msg
+
+    def _on_collisions(self, msg):
+        self.collisions = msg.data
+
+    def _on_pose(self, msg):
+        p = msg.pose.position
+        if self._last_pos is not None:
+            self.path_length_m += math.dist(self._last_pos, (p.x, p.y, p.z))
+        self._last_pos = self.last_pose = (p.x, p.y, p.z)
+
+    def _on_drops(self, msg):
+        if self._drops_frozen:
+            return
+        self.drops[short_node(msg.node)] = dict(zip(msg.reasons, (int(c) for c in msg.counts)))
+
+    def _on_faults(self, msg):
+        if self._drops_frozen:
+            return
+        self.faults = dict(zip(msg.reasons, (int(c) for c in msg.counts)))
+
+    # ------------------------------------------------------------ output
+    def found_ground_truth(self, gt_objs, margin_m=0.1):
+        """Ground-truth ids whose box (grown by margin_m) holds a map object's
+        centroid of the same class: a cheap per-tick estimate; the final
+        figures come from the meshes (semantic_exploration.eval.metrics)."""
+        found = set()
+        for o in (self.objects.objects if self.objects else []):
+            c = (o.centroid.x, o.centroid.y, o.centroid.z)
+            for g in gt_objs:
+                if g["class"] == o.class_name and all(
+                        g["bbox_min"][i] - margin_m <= c[i] <= g["bbox_max"][i] + margin_m for i in range(3)):
+                    found.add(g["id"])
+        return found
+
+    def row(self, sim_s, wall_s, gt_objs):
+        """One line of timeseries.csv; wall_s is None for a bag (written empty)."""
+        st = self.stats
+        return {"wall_s": round(wall_s, 2) if wall_s is not None else "", "sim_s": round(sim_s, 2),
+                "iteration": self.status.iteration if self.status else 0,
+                "explored_volume_m3": round(st.explored_volume_m3, 3) if st else 0.0,
+                "frontier_count": st.frontier_count if st else 0,
+                "objects_in_map": len(self.objects.objects) if self.objects else 0,
+                "ground_truth_found": len(self.found_ground_truth(gt_objs)),
+                "path_length_m": round(self.path_length_m, 3), "collisions": self.collisions,
+                "planning_time_s": round(self.status.planning_time_s, 4) if self.status else 0.0,
+                "integration_time_ms": round(st.integration_time_ms, 3) if st else 0.0,
+                "dropped_frames": self.drops.get("background_map", {}).get("frame_gap", 0),
+                "dropped_no_tf": self.drops.get("background_map", {}).get("no_tf", 0)}
+
+    def finished(self):
+        return self.status is not None and self.status.state == 3  # ExplorationStatus.STATE_FINISHED
+
+    def line(self, sim_s, wall_s, n_gt):
+        explored = self.stats.explored_volume_m3 if self.stats else 0.0
+        frontiers = self.stats.frontier_count if self.stats else 0
+        found = len(self.objects.objects) if self.objects else 0
+        it = self.status.iteration if self.status else 0
+        msg = self.status.message if self.status else "waiting for the planner"
+        return ("[mission] wall %5.0f s  sim %6.1f s  iteration %3d  explored %7.1f m3  frontiers %6d  "
+                "objects %d (ground truth %d)  collisions %d  | %s" %
+                (wall_s, sim_s, it, explored, frontiers, found, n_gt, self.collisions, msg))
+
+    def drop_summary(self) -> Dict:
+        """{"by_node": {node: {reason: n}}, "headline": [(what, n)], "injected": {fault: n}}."""
+        headline = [(what, self.drops[node][reason]) for node, reason, what in DROP_HEADLINES
+                    if self.drops.get(node, {}).get(reason, 0) > 0]
+        return {"by_node": {n: dict(sorted(r.items())) for n, r in sorted(self.drops.items())},
+                "headline": headline, "injected": dict(self.faults)}
+
+    def drop_report_lines(self) -> List[str]:
+        """Markdown lines of the report's "Dropped input" section."""
+        d = self.drop_summary()
+        lines = ["dropped: " + (", ".join("%d %s" % (n, what) for what, n in d["headline"]) or "nothing"), ""]
+        if any(d["by_node"].values()):
+            lines += ["| node | reason | count |", "|---|---|---|"]
+            for node, reasons in d["by_node"].items():
+                lines += ["| %s | %s | %d |" % (node, r, n) for r, n in reasons.items()]
+            lines.append("")
+        if any(d["injected"].values()):
+            lines += ["injected by the simulator (faults): " + ", ".join(
+                "%d %s" % (n, FAULT_NAMES.get(k, k)) for k, n in d["injected"].items() if n), ""]
+        st = self.stats
+        if st is not None:
+            lines.append("background map: %d frames integrated, %d invalid depth pixels" % (
+                st.frames_integrated, st.invalid_depth_pixels))
+        return lines
