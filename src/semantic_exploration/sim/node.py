@@ -26,8 +26,9 @@ Start-up: before the first frame the node waits (up to lockstep_startup_timeout_
 in lockstep mode) until every subscriber the master lists for its camera, tf and
 /clock topics is connected, publishes /clock at the frame's time, and only then
 the frame, so that neither a mapping node nor rosbag record misses frame 0.
-A lockstep node that was still not connected when frame 0 went out cannot
-report it and is not waited for on that frame (logged).
+A lockstep node that exists on the master but had no connection to the depth
+topic when a frame went out cannot report that frame and is not waited for on
+it (logged), so a node that connects late never stalls the simulator.
 
 Faults (FaultsConfig, off by default): a sim-time window without world->body
 tf and mav/pose, detection instance images at another resolution, and camera
@@ -133,8 +134,10 @@ class MavSimNode:
         rospy.Subscriber("~hide_detections", UInt32MultiArray, self._on_hide, queue_size=5)
         self._lockstep_nodes = [_short_name(n) for n in c.lockstep_nodes]
         self._timeouts = 0
-        self._first_frame_ns: Optional[int] = None
-        self._first_frame_absent = set()  # lockstep nodes not connected when the first frame went out
+        # lockstep nodes that exist but had no depth connection when the last frame went out: they
+        # cannot report that frame (e.g. still connecting at start-up), so it does not wait for them
+        self._absent = (None, set())  # (frame stamp ns, names)
+        self._node_names = (0.0, set())  # (wall time of the query, short names of the master's nodes)
         self.pub_coll.publish(UInt32(0))
         self._publish_fault_counts(0)
 
@@ -256,7 +259,7 @@ class MavSimNode:
         with self._lock:
             while not rospy.is_shutdown():
                 missing = [n for n in self._lockstep_nodes if self._reported.get(n, -1) < frame_ns
-                           and not (frame_ns == self._first_frame_ns and n in self._first_frame_absent)]
+                           and not (frame_ns == self._absent[0] and n in self._absent[1])]
                 if not missing:
                     return
                 left = deadline - time.monotonic()
@@ -315,12 +318,28 @@ class MavSimNode:
                 return
             time.sleep(0.05)
 
-    def _node_exists(self, short: str) -> bool:
-        try:
-            pubs, subs, srvs = rosgraph.Master(rospy.get_name()).getSystemState()
-        except Exception:
-            return False
-        return any(_short_name(n) == short for g in (pubs, subs, srvs) for _, nodes in g for n in nodes)
+    def _node_exists(self, short: str, max_age_s: float = 0.0) -> bool:
+        """Whether the master knows a node of this short name (asks it again after max_age_s wall s)."""
+        when, names = self._node_names
+        if time.monotonic() - when > max_age_s:
+            try:
+                pubs, subs, srvs = rosgraph.Master(rospy.get_name()).getSystemState()
+                names = {_short_name(n) for g in (pubs, subs, srvs) for _, nodes in g for n in nodes}
+                self._node_names = (time.monotonic(), names)
+            except Exception:
+                pass
+        return short in names
+
+    def _note_absent(self, t_ns: int) -> None:
+        """Records the lockstep nodes that exist but cannot receive the frame at t_ns."""
+        absent = {n for n in self._lockstep_nodes if not self._depth_connected(n) and self._node_exists(n, 1.0)}
+        if absent != self._absent[1]:
+            if absent:
+                rospy.logwarn("mav_sim: lockstep: %s not connected to %s at frame %.3f s; not waiting for it "
+                              "until it is", ", ".join(sorted(absent)), self.pub_depth.resolved_name, t_ns / NS)
+            else:
+                rospy.loginfo("mav_sim: lockstep: every lockstep node is connected (frame %.3f s)", t_ns / NS)
+        self._absent = (t_ns, absent)
 
     def _depth_connected(self, short: str) -> bool:
         return any(_short_name(c.endpoint_id) == short for c in list(self.pub_depth.impl.connections))
@@ -390,12 +409,8 @@ class MavSimNode:
                     time.sleep(0.1)
                 self._publish_body(t_ns)
                 if not self.faults.drop_frame(t_ns):
-                    if first:
-                        self._first_frame_ns = t_ns
-                        self._first_frame_absent = {n for n in self._lockstep_nodes if not self._depth_connected(n)}
-                        if c.lockstep and self._first_frame_absent:
-                            rospy.logwarn("mav_sim: lockstep: %s not connected for the first frame; not waiting "
-                                          "for it on that frame", ", ".join(sorted(self._first_frame_absent)))
+                    if c.lockstep:
+                        self._note_absent(t_ns)
                     self._publish_frame(t_ns)
                     last_frame = t_ns
                 self._publish_fault_counts(t_ns)

@@ -1,0 +1,124 @@
+"""mav_sim start-up in lockstep (issue 7): /clock at the first frame's time
+arrives before the first frame, and a lockstep node that connects to the depth
+topic only after the first frames went out does not stall the simulator (it
+cannot report frames it never got); once connected it paces the simulator.
+
+The lockstep node is this test's child process ("late_node"): it subscribes
+/clock and the colour image at once, the depth image only after the first
+colour frame arrived, and reports each depth frame it gets on frame_integrated,
+like a mapping node. lockstep_timeout_s is 600 s, so one frame waited for in
+vain would end the test by its deadline. Skipped where ROS is not sourced."""
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+ROS_SOURCED = shutil.which("roslaunch") is not None and (
+    "ROS_PACKAGE_PATH" in os.environ or "CMAKE_PREFIX_PATH" in os.environ)
+EXAMPLE = os.path.join(ROOT, "test", "data", "example_semantic.ply")
+NODE = "late_node"
+FRAMES = 30  # depth frames the child reports before it stops
+START_S = 1.0  # sim.yaml start_time_s
+
+
+def child(work):
+    """The late lockstep node; writes events.json."""
+    import rospy
+    from rosgraph_msgs.msg import Clock
+    from sensor_msgs.msg import Image
+    from std_msgs.msg import Header
+    from semantic_exploration.msg import FrameIntegrated
+    rospy.init_node(NODE, disable_signals=True)
+    ev = {"clock_before_first_frame": None, "first_rgb": None, "depth": [], "rgb_after_stop": []}
+    state = {"clock": None, "stopped": False}
+
+    def on_clock(m):
+        state["clock"] = m.clock.to_sec()
+
+    def on_rgb(m):
+        t = m.header.stamp.to_sec()
+        if ev["first_rgb"] is None:
+            ev["first_rgb"], ev["clock_before_first_frame"] = t, state["clock"]
+        if state["stopped"]:
+            ev["rgb_after_stop"].append(t)
+
+    report = rospy.Publisher("/frame_integrated", FrameIntegrated, queue_size=50)
+
+    def on_depth(m):
+        if state["stopped"]:
+            return
+        ev["depth"].append(m.header.stamp.to_sec())
+        report.publish(FrameIntegrated(header=Header(stamp=m.header.stamp), node=NODE, integrated=True))
+        if len(ev["depth"]) >= FRAMES:
+            state["stopped"] = True
+
+    rospy.Subscriber("/clock", Clock, on_clock, queue_size=10)
+    rospy.Subscriber("/camera/rgb/image_raw", Image, on_rgb, queue_size=50)
+    deadline = time.time() + 90.0
+    while ev["first_rgb"] is None and time.time() < deadline:
+        time.sleep(0.05)
+    rospy.Subscriber("/camera/depth/image_raw", Image, on_depth, queue_size=50)
+    while not state["stopped"] and time.time() < deadline:
+        time.sleep(0.05)
+    time.sleep(3.0)  # the simulator must now wait for this node's report of the last frame
+    with open(os.path.join(work, "events.json"), "w") as f:
+        json.dump(ev, f)
+
+
+@pytest.mark.skipif(not ROS_SOURCED, reason="ROS environment (roslaunch) not sourced")
+def test_clock_first_and_a_late_lockstep_node_does_not_stall(tmp_path):
+    import rviz_screenshot as rs
+    import run_mission as mission
+    work = str(tmp_path)
+    port = mission._free_port()
+    env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOSTNAME="127.0.0.1",
+               ROS_HOME=os.path.join(work, "ros_home"))
+    over = os.path.join(work, "sim_overrides.yaml")
+    with open(over, "w") as f:
+        f.write("lockstep_timeout_s: 600.0\nlockstep_startup_timeout_s: 2.0\n")
+    procs = []
+    try:
+        procs.append(subprocess.Popen(["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL,
+                                      stderr=subprocess.STDOUT, start_new_session=True))
+        time.sleep(3.0)
+        kid = subprocess.Popen([sys.executable, __file__, work], env=env, stdout=open(os.path.join(work, "child.log"), "w"),
+                               stderr=subprocess.STDOUT, start_new_session=True)
+        procs.append(kid)
+        time.sleep(2.0)  # the child is registered (not subscribed to depth) before the simulator starts
+        procs.append(subprocess.Popen(
+            ["roslaunch", "semantic_exploration", "sim_only.launch", "scene:=" + EXAMPLE, "overrides:=" + over,
+             "lockstep:=true", "real_time_factor:=0", "lockstep_nodes:=[%s]" % NODE, "output:=log"], env=env,
+            stdout=open(os.path.join(work, "sim.log"), "w"), stderr=subprocess.STDOUT, start_new_session=True))
+        try:
+            kid.wait(timeout=150)
+        except subprocess.TimeoutExpired:
+            pass
+        with open(os.path.join(work, "child.log")) as f:
+            print(f.read())
+        assert kid.returncode == 0, "the child did not finish: the simulator stalled?"
+        with open(os.path.join(work, "events.json")) as f:
+            ev = json.load(f)
+    finally:
+        for p in reversed(procs):
+            rs._stop(p, grace_s=20.0)
+    print({k: v if not isinstance(v, list) else v[:5] + ["..."] for k, v in ev.items()})
+    # frame 0 is the first frame, and the clock had reached it before it arrived
+    assert ev["first_rgb"] == pytest.approx(START_S)
+    assert ev["clock_before_first_frame"] is not None and ev["clock_before_first_frame"] >= START_S - 1e-9
+    # the late node missed the first frame(s) but got FRAMES consecutive ones afterwards
+    d = ev["depth"]
+    assert len(d) == FRAMES, len(d)
+    assert d[0] > START_S
+    assert all(b - a == pytest.approx(0.1) for a, b in zip(d, d[1:])), d
+    # and it paces the simulator: after its last report at most the next frame goes out
+    assert all(t <= d[-1] + 0.1 + 1e-6 for t in ev["rgb_after_stop"]), (d[-1], ev["rgb_after_stop"])
+
+
+if __name__ == "__main__":
+    child(sys.argv[1])
