@@ -105,7 +105,7 @@ def evaluate(out, gt, classes, saved):
     from semantic_exploration.eval import metrics
     res = {}
     try:
-        rec_dir = os.path.join(out, "objects")
+        rec_dir = saved.get("object_map", {}).get("dir") or os.path.join(out, "objects")
         if saved.get("object_map", {}).get("success") and os.path.exists(os.path.join(rec_dir, "objects.json")):
             ev = metrics.evaluate_objects(metrics.load_ground_truth(gt["gt_dir"]),
                                           metrics.load_reconstruction(rec_dir), classes)
@@ -232,6 +232,8 @@ def main(argv=None):
                     "(scripts/rviz_screenshot.py)")
     ap.add_argument("--progress-period-s", type=float, default=10.0)
     ap.add_argument("--extra-overrides", default="", help="YAML for the C++ nodes loaded after the scene's")
+    ap.add_argument("--record-bag", default="", help="also record the run into this bag (launch/record.launch); "
+                    "scripts/evaluate_run.py --bag evaluates it")
     ap.add_argument("--no-eval", action="store_true",
                     help="skip scoring the saved meshes and map against ground truth (minutes on a loaded machine)")
     ap.add_argument("--sim-overrides", default="", help="YAML for the simulator loaded after config/sim.yaml "
@@ -261,6 +263,7 @@ def main(argv=None):
            "lockstep:=" + ("false" if args.no_lockstep else "true"),
            "real_time_factor:=%g" % args.real_time_factor, "rviz:=" + ("true" if args.rviz else "false"),
            "sim_overrides:=" + (os.path.abspath(args.sim_overrides) if args.sim_overrides else ""),
+           "bag:=" + (os.path.abspath(args.record_bag) if args.record_bag else ""),
            "output:=log"]
     log_path = os.path.join(out, "roslaunch.log")
     print("[mission] %s  (log: %s)" % (" ".join(cmd), log_path), flush=True)

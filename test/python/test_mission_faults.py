@@ -25,16 +25,20 @@ DETECTOR_SCALE = 0.5
 FRAME_DROP = 0.1
 
 
-@pytest.mark.skipif(not ROS_SOURCED, reason="ROS environment (roslaunch) not sourced")
-def test_mission_with_faults_completes_and_counts_drops(tmp_path):
+@pytest.fixture(scope="module")
+def mission(tmp_path_factory):
+    """One faulty mission, recorded into a bag: (output dir, its stdout, bag path)."""
+    tmp_path = tmp_path_factory.mktemp("mission_faults")
     faults = tmp_path / "faults.yaml"
     faults.write_text("faults:\n  tf_gap_s: [%g, %g]\n  detector_scale: %g\n  frame_drop_fraction: %g\n  seed: 3\n"
                       % (TF_GAP_S + (DETECTOR_SCALE, FRAME_DROP)))
     out = tmp_path / "run"
+    bag = tmp_path / "run.bag"
     env = dict(os.environ, ROS_HOME=str(tmp_path / "ros_home"))
     proc = subprocess.Popen([sys.executable, os.path.join(ROOT, "scripts", "run_mission.py"), "--size", "6", "5", "3",
                              "--sim-limit-s", str(SIM_LIMIT_S), "--wall-limit-s", "150", "--out", str(out),
-                             "--sim-overrides", str(faults), "--progress-period-s", "5", "--no-eval"],
+                             "--sim-overrides", str(faults), "--progress-period-s", "5", "--no-eval",
+                             "--record-bag", str(bag)],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
                             start_new_session=True)
     try:
@@ -42,8 +46,14 @@ def test_mission_with_faults_completes_and_counts_drops(tmp_path):
     except subprocess.TimeoutExpired:  # SIGINT: run_mission stops the nodes it started
         os.killpg(proc.pid, signal.SIGINT)
         output, _ = proc.communicate(timeout=60)
-    print(output)
     assert proc.returncode == 0, output
+    return out, output, bag
+
+
+@pytest.mark.skipif(not ROS_SOURCED, reason="ROS environment (roslaunch) not sourced")
+def test_mission_with_faults_completes_and_counts_drops(mission):
+    out, output, _ = mission
+    print(output)
     with open(out / "summary.json") as f:
         summary = json.load(f)
     assert summary["termination_reason"] == "sim_time_limit", summary["termination_reason"]
@@ -86,3 +96,51 @@ def test_mission_with_faults_completes_and_counts_drops(tmp_path):
                     ("detection frames with mismatched size", im)):
         assert "%d %s" % (n, what) in headline, headline
     assert "| instance_matching | size_mismatch | %d |" % im in report
+
+
+@pytest.mark.skipif(not ROS_SOURCED or shutil.which("rosbag") is None, reason="ROS (roslaunch, rosbag) not sourced")
+def test_evaluation_from_the_recorded_bag_matches_the_live_report(mission, tmp_path):
+    """evaluate_run.py --bag writes the same report, summary and time series
+    from the mission's bag. The recorder runs on while the live maps are saved
+    (the simulator too), so the bag ends later than the live report's figures:
+    they may only have grown, and what stopped growing at the stop (the tf gap
+    lies before it) is equal."""
+    out, _, bag = mission
+    assert bag.exists()
+    ev_out = tmp_path / "from_bag"
+    proc = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "evaluate_run.py"), "--bag", str(bag),
+                           "--gt-dir", str(out / "ground_truth"), "--out", str(ev_out), "--no-eval"],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=120)
+    print(proc.stdout)
+    assert proc.returncode == 0, proc.stdout
+    with open(out / "summary.json") as f:
+        live = json.load(f)
+    with open(ev_out / "summary.json") as f:
+        offline = json.load(f)
+    assert offline["bag"]["missing_topics"] == [], offline["bag"]
+    # time series: one row per second of sim time, over the whole run
+    import csv
+    with open(ev_out / "timeseries.csv") as f:
+        rows = list(csv.DictReader(f))
+    with open(out / "timeseries.csv") as f:
+        assert list(csv.DictReader(f))[0].keys() == rows[0].keys()  # the same columns as a live run
+    t = [float(r["sim_s"]) for r in rows]
+    assert t[0] <= 1.5 and t[-1] >= SIM_LIMIT_S and all(0 < b - a <= 1.0 + 1e-6 for a, b in zip(t, t[1:])), t
+    vol = [float(r["explored_volume_m3"]) for r in rows]
+    assert vol[-1] > 1.0 and vol[-1] >= 0.99 * live["explored_volume_m3"], (vol[-1], live["explored_volume_m3"])
+    assert offline["iterations"] >= live["iterations"] >= 1
+    assert offline["path_length_m"] >= 0.95 * live["path_length_m"]
+    assert offline["collisions"] == live["collisions"] == 0
+    # drop counts: the same reasons; no_tf and the faults of the gap are final by the stop
+    lb, ob = live["dropped_input"]["by_node"], offline["dropped_input"]["by_node"]
+    for node, reasons in lb.items():
+        for reason, n in reasons.items():
+            assert ob[node][reason] >= n, (node, reason, ob[node], n)
+    for node in ("background_map", "object_map", "depth_history"):
+        assert ob[node]["no_tf"] == lb[node]["no_tf"]
+    li, oi = live["dropped_input"]["injected"], offline["dropped_input"]["injected"]
+    assert oi["frames_without_tf"] == li["frames_without_tf"] and oi["poses_withheld"] == li["poses_withheld"]
+    assert oi["detections_rescaled"] >= li["detections_rescaled"]
+    report = (ev_out / "report.md").read_text()
+    assert "## Dropped input" in report and "%d depth frames without tf" % ob["background_map"]["no_tf"] in report
+    assert "from a bag" in report
