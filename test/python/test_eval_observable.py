@@ -14,6 +14,7 @@ from semantic_exploration.sim.scene import Scene, export_ground_truth  # noqa: E
 ROOM = (4.0, 4.0, 3.0)
 BOX_FLOOR = ((1.5, 1.5, 0.0), (2.0, 2.0, 0.5))   # 0.5 m cube on the floor, mid-room
 BOX_WALL = ((3.6, 1.8, 0.0), (4.0, 2.2, 0.8))    # 0.4 x 0.4 x 0.8 m, its +x face on the wall x = 4
+BOX_SLOT = ((0.8, 3.45, 0.0), (1.2, 3.85, 0.8))  # the same, its +y face 0.15 m from the wall y = 4
 START = (1.0, 3.0, 1.2, 0.0)
 
 
@@ -30,7 +31,7 @@ def _room_scene():
     parts = [((-t, -t, -0.05), (x + t, y + t, 0.0), 1), ((-t, -t, h), (x + t, y + t, h + 0.05), 2),
              ((-t, -t, 0.0), (0.0, y + t, h), 3), ((x, -t, 0.0), (x + t, y + t, h), 3),
              ((0.0, -t, 0.0), (x, 0.0, h), 3), ((0.0, y, 0.0), (x, y + t, h), 3),
-             (BOX_FLOOR[0], BOX_FLOOR[1], 4), (BOX_WALL[0], BOX_WALL[1], 5)]
+             (BOX_FLOOR[0], BOX_FLOOR[1], 4), (BOX_WALL[0], BOX_WALL[1], 5), (BOX_SLOT[0], BOX_SLOT[1], 6)]
     verts, faces, ids, n = [], [], [], 0
     for lo, hi, oid in parts:
         v, f = _box(lo, hi)
@@ -39,7 +40,7 @@ def _room_scene():
         ids.append(np.full(len(f), oid))
         n += len(v)
     return Scene(np.vstack(verts), np.vstack(faces), np.concatenate(ids),
-                 objects={1: "floor", 2: "ceiling", 3: "wall", 4: "chair", 5: "chair"}, start=START, name="room")
+                 objects={1: "floor", 2: "ceiling", 3: "wall", 4: "chair", 5: "chair", 6: "chair"}, start=START, name="room")
 
 
 def _face_grid(lo, hi, axis, side, step=0.02, inset=0.005):
@@ -84,6 +85,19 @@ def test_face_against_a_wall_is_hidden(obs):
     behind = (wall[:, 1] > 1.8) & (wall[:, 1] < 2.2) & (wall[:, 2] < 0.8)
     seen = obs.mask(wall)
     assert not seen[behind].any() and seen[~behind].all()
+
+
+def test_a_face_seen_only_at_grazing_incidence_is_hidden(obs):
+    # A camera centre R = 0.125 m from the wall is at most 2.5 cm behind the
+    # plane of the face 0.15 m in front of it, and at least R beside the box:
+    # it could only see the face within atan(0.025 / 0.125) = 11 deg of
+    # grazing, beyond the 75 deg incidence limit. The other faces are seen.
+    lo, hi = BOX_SLOT
+    normal = {0: [1.0, 0, 0], 1: [0, 1.0, 0], 2: [0, 0, 1.0]}
+    for axis, side, seen in ((1, 1, False), (2, 1, True), (0, 0, True), (0, 1, True), (1, 0, True)):
+        p = _face_grid(lo, hi, axis, side)
+        m = obs.mask(p, np.tile(normal[axis], (len(p), 1)))
+        assert (m.all() if seen else not m.any()), (axis, side)
 
 
 def test_the_outside_of_the_room_is_hidden(obs):

@@ -64,6 +64,15 @@ def sample_surface_faces(path: str, spacing_m: float, seed: int = 0, face_centre
     return np.vstack(parts)[keep], np.concatenate(fparts)[keep]
 
 
+def face_normals(path: str, faces: np.ndarray) -> np.ndarray:
+    """Unit normals (N x 3) of the given faces of a mesh (zero for a degenerate face)."""
+    import trimesh
+    mesh = trimesh.load(path, process=False, force="mesh")
+    tri = np.asarray(mesh.vertices, np.float64)[np.asarray(mesh.faces, np.int64)[faces]]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+
+
 @dataclass
 class SurfaceScore:
     """Accuracy (RMSE of reconstructed points to the true surface, m) and
@@ -160,10 +169,15 @@ def evaluate_objects(gt: Dict, rec: Dict, classes: List[str], spacing_m: float =
     `view`, default config/sim.yaml's camera and MAV; the ground truth needs
     its background and start), or all with observable_only=False."""
     gt_objs = [o for o in gt["objects"] if o["class"] in classes]
-    samples = {o["id"]: sample_surface(os.path.join(gt["dir"], o["mesh"]), spacing_m, seed) for o in gt_objs}
+    sampled = {o["id"]: sample_surface_faces(os.path.join(gt["dir"], o["mesh"]), spacing_m, seed) for o in gt_objs}
+    samples = {k: v[0] for k, v in sampled.items()}
     trees = {k: cKDTree(v) for k, v in samples.items()}
     obs = _observability(gt, observable_only, view) if gt_objs else None
-    visible = {k: obs.mask(v) if obs else np.ones(len(v), bool) for k, v in samples.items()}
+    visible = {}
+    for o in gt_objs:
+        pts, faces = sampled[o["id"]]
+        visible[o["id"]] = (obs.mask(pts, face_normals(os.path.join(gt["dir"], o["mesh"]), faces)) if obs
+                            else np.ones(len(pts), bool))
     ev = ObjectEvaluation(n_ground_truth=len(gt_objs),
                           observable_fraction={k: float(np.mean(v)) for k, v in visible.items()})
     found = set()
@@ -206,5 +220,5 @@ def evaluate_background(gt: Dict, occupied_points: np.ndarray, classes: List[str
             visible.append(np.ones(len(pts), bool))
         else:
             probes, probe_faces = sample_surface_faces(path, probe_spacing_m, seed, face_centres=True)
-            visible.append(obs.mask_by_probes(pts, faces, probes, probe_faces))
+            visible.append(obs.mask_by_probes(pts, faces, probes, probe_faces, face_normals(path, probe_faces)))
     return score_surface(occupied_points, np.vstack(truth), threshold_m, observable=np.concatenate(visible))

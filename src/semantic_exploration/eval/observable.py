@@ -13,7 +13,12 @@ radius R from every surface and connected to the start position, on a grid of
 tolerance at p), the depth of p lies in [d_min, d_max], and p lies within the
 camera's vertical field of view for some yaw (the MAV only yaws; the camera is
 mounted with a fixed pitch), i.e. the elevation of the direction p -> c lies in
-[pitch - atan(cy / fy), pitch + atan((H - 1 - cy) / fy)].
+[pitch - atan(cy / fy), pitch + atan((H - 1 - cy) / fy)], and, where the
+surface normal at p is given, the view is at most ``max_incidence_rad``
+(75 deg) off the normal (either side). Without that last rule, the back of an
+armchair standing 15 cm from a wall counted as observable: a camera centre R
+from the wall fits 2.5 cm behind the back's plane and sees it at 10 deg
+grazing, where a depth camera returns next to nothing.
 
 The existence of c is tested along ``directions`` rays per point (stratified
 in azimuth and in the sine of the elevation over that band, jittered with a
@@ -42,12 +47,14 @@ class ViewModel:
     height_px: int = 240       # image height, px
     pitch_rad: float = 0.0     # camera mount pitch, + = down, rad
     grid_m: float = 0.025      # cell size of the free-space grid of camera positions, m
-    directions: int = 64       # rays per surface point
+    max_incidence_rad: float = 1.309  # views farther than this from the surface normal do not count (75 deg), rad
+    directions: int = 96       # rays per surface point
     seed: int = 0              # direction jitter seed
 
     def validate(self) -> None:
         if not (self.radius_m >= 0 and 0 <= self.d_min_m < self.d_max_m and self.fy_px > 0 and self.height_px > 0
-                and 0 <= self.cy_px <= self.height_px - 1 and self.grid_m > 0 and self.directions >= 1):
+                and 0 <= self.cy_px <= self.height_px - 1 and self.grid_m > 0 and self.directions >= 1
+                and 0 < self.max_incidence_rad <= np.pi / 2):
             raise ValueError("invalid ViewModel %s" % (self,))
 
     def elevation_band_rad(self):
@@ -126,7 +133,7 @@ class Observability:
     def _directions(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """(n, K, 3) unit directions from the point towards the camera, stratified over the band."""
         k = self.view.directions
-        n_el = max(1, int(round(np.sqrt(k / 4.0))))
+        n_el = max(1, int(round(np.sqrt(k / 6.0))))
         n_az = int(np.ceil(k / n_el))
         lo, hi = self.view.elevation_band_rad()
         s_lo, s_hi = np.sin(max(lo, -np.pi / 2)), np.sin(min(hi, np.pi / 2))
@@ -161,9 +168,15 @@ class Observability:
         self.unresolved_rays += len(act)
         return out
 
-    def _sees(self, p: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """(M,) bool: a camera position along p + t u sees p."""
+    def _sees(self, p: np.ndarray, u: np.ndarray, n: Optional[np.ndarray] = None) -> np.ndarray:
+        """(M,) bool: a camera position along p + t u sees p (n: unit normals at p, or None)."""
         eps = 1e-3  # rays start 1 mm off the point, so they do not hit its own face
+        if n is not None:
+            steep = np.abs(np.einsum("ij,ij->i", n, u)) >= np.cos(self.view.max_incidence_rad) - 1e-9
+            out = np.zeros(len(p), bool)
+            if np.any(steep):
+                out[steep] = self._sees(p[steep], u[steep])
+            return out
         # Depth is along the optical axis: the ray makes angle |elev - pitch| with it (yaw centred on p).
         cos_axis = np.cos(np.arcsin(np.clip(u[:, 2], -1, 1)) - self.view.pitch_rad)
         t_cam = self._first_camera_position(p, u, self.view.d_min_m / cos_axis, self.view.d_max_m / cos_axis)
@@ -175,9 +188,14 @@ class Observability:
             ok[np.flatnonzero(ok)[~free]] = False
         return ok
 
-    def mask(self, points: np.ndarray, chunk: int = 16384, round_rays: int = 8) -> np.ndarray:
-        """(N,) bool: which points (N x 3, m, on the scene's surfaces) are observable."""
+    def mask(self, points: np.ndarray, normals: Optional[np.ndarray] = None, chunk: int = 16384,
+             round_rays: int = 8) -> np.ndarray:
+        """(N,) bool: which points (N x 3, m, on the scene's surfaces) are
+        observable; normals (N x 3, either orientation) enable the incidence rule."""
         points = np.asarray(points, np.float64).reshape(-1, 3)
+        if normals is not None:
+            normals = np.asarray(normals, np.float64).reshape(-1, 3)
+            normals = normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
         rng = np.random.default_rng(self.view.seed)
         k = self.view.directions
         out = np.zeros(len(points), bool)
@@ -193,18 +211,19 @@ class Observability:
                     break
                 u = dirs[todo, r:r + round_rays].reshape(-1, 3)
                 owner = np.repeat(todo, min(round_rays, k - r))
-                seen[np.unique(owner[self._sees(p[owner], u)])] = True
+                nn = None if normals is None else normals[a:a + chunk][owner]
+                seen[np.unique(owner[self._sees(p[owner], u, nn)])] = True
             out[a:a + chunk] = seen
         return out
 
 
     def mask_by_probes(self, points: np.ndarray, point_faces: np.ndarray, probes: np.ndarray,
-                       probe_faces: np.ndarray) -> np.ndarray:
+                       probe_faces: np.ndarray, probe_normals: Optional[np.ndarray] = None) -> np.ndarray:
         """Cheaper mask for large surfaces: the observability of a coarser probe
         sample, carried to each point from the nearest probe on the same face
         (face indices of one mesh; every face needs a probe)."""
         from scipy.spatial import cKDTree
-        seen = self.mask(probes)
+        seen = self.mask(probes, probe_normals)
         if len(points) == 0:
             return np.zeros(0, bool)
         # A fourth coordinate keeps faces 1 km apart, so the nearest probe shares the face.
