@@ -140,7 +140,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
         "iterations": mon.status.iteration if mon.status else 0,
         "explored_volume_m3": stats.explored_volume_m3 if stats else 0.0,
         "frontier_count": stats.frontier_count if stats else None,
-        "objects_found": len(objects), "ground_truth_objects": len(gt_objs),
+        "map_objects": len(objects), "ground_truth_objects": len(gt_objs),
         "path_length_m": mon.path_length_m, "collisions": mon.collisions,
         "dropped_input": mon.drop_summary(),
         "invalid_depth_pixels": stats.invalid_depth_pixels if stats else 0,
@@ -152,6 +152,8 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
             summary["explorable_free_volume_m3"] = json.load(f)["explorable_free_volume_m3"]
     summary["evaluation"] = (evaluate(out, gt, args.classes, saved) if not getattr(args, "no_eval", False)
                              else {"skipped": "--no-eval"})
+    # Ground-truth objects some map object lies on (None without an evaluation).
+    summary["ground_truth_found"] = summary["evaluation"].get("found")
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     lines = [
@@ -168,7 +170,10 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
     if "explorable_free_volume_m3" in summary:
         lines.append("| explorable free volume (ground truth) | %.1f m3 |" % summary["explorable_free_volume_m3"])
     lines += [
-        "| objects found / ground truth (%s) | %d / %d |" % (", ".join(args.classes), len(objects), len(gt_objs)),
+        "| ground-truth objects found (%s) | %s / %d |" % (
+            ", ".join(args.classes), "-" if summary["ground_truth_found"] is None else summary["ground_truth_found"],
+            len(gt_objs)),
+        "| map objects | %d |" % len(objects),
         "| path length | %.1f m |" % mon.path_length_m,
         "| collisions | %d |" % mon.collisions,
         "", "## Objects found", "",
@@ -342,9 +347,11 @@ def main(argv=None):
         log.close()
     print("[mission] report: %s" % os.path.join(out, "report.md"))
     print("[mission] summary: %s" % os.path.join(out, "summary.json"))
-    print("[mission] %s: %d of %d objects found, explored %.1f m3, %d collisions, %.0f s wall" % (
-        summary["termination_reason"], summary["objects_found"], summary["ground_truth_objects"],
-        summary["explored_volume_m3"], summary["collisions"], summary["wall_time_s"]))
+    found = summary["ground_truth_found"]
+    print("[mission] %s: %s of %d ground-truth objects found (%d map objects), explored %.1f m3, %d collisions, "
+          "%.0f s wall" % (summary["termination_reason"], "?" if found is None else found,
+                           summary["ground_truth_objects"], summary["map_objects"], summary["explored_volume_m3"],
+                           summary["collisions"], summary["wall_time_s"]))
     print("[mission] " + mon.drop_report_lines()[0])
     return 0
 
