@@ -155,3 +155,24 @@ def test_completeness_counts_the_observable_surface_only(gt, tmp_path):
     whole = metrics.evaluate_objects(gt, rec, ["chair"], observable_only=False)
     # The bottom's rim within 5 cm of the side samples (0.5 cm up) counts too.
     assert whole.matches[0].score.completeness == pytest.approx(5.0 / 6.0 + (0.25 - 0.4 ** 2) / 1.5, abs=0.01)
+
+
+def test_background_completeness_counts_the_inside_of_the_room(gt):
+    # Occupied points on every inner surface of the room: complete against the
+    # observable background (floor top, ceiling underside, the walls' inner
+    # faces, less what the boxes cover), which is that share of the whole
+    # background surface (the walls' outer faces and the slabs' far sides hidden).
+    x, y, h = ROOM
+    inner = [_face_grid((0, 0, 0), (x, y, 0), 2, 0, step=0.02, inset=0.0),
+             _face_grid((0, 0, h), (x, y, h), 2, 0, step=0.02, inset=0.0),
+             _face_grid((0, 0, 0), (0, y, h), 0, 0, step=0.02, inset=0.0),
+             _face_grid((x, 0, 0), (x, y, h), 0, 0, step=0.02, inset=0.0),
+             _face_grid((0, 0, 0), (x, 0, h), 1, 0, step=0.02, inset=0.0),
+             _face_grid((0, y, 0), (x, y, h), 1, 0, step=0.02, inset=0.0)]
+    s = metrics.evaluate_background(gt, np.vstack(inner), ["chair"])
+    assert s.completeness == pytest.approx(1.0, abs=0.005)
+    total = trimesh.load(os.path.join(gt["dir"], gt["background_mesh"]), force="mesh").area
+    boxes = 0.5 * 0.5 + 2 * 0.4 * 0.4 + 0.4 * 0.8  # footprints on the floor, BOX_WALL's face on the wall
+    assert s.observable_fraction == pytest.approx((2 * x * y + 2 * (x + y) * h - boxes) / total, abs=0.01)
+    whole = metrics.evaluate_background(gt, np.vstack(inner), ["chair"], observable_only=False)
+    assert whole.completeness < 0.5 and whole.completeness == pytest.approx(s.observable_fraction, abs=0.03)

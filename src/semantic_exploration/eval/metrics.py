@@ -202,7 +202,7 @@ def evaluate_objects(gt: Dict, rec: Dict, classes: List[str], spacing_m: float =
 
 def evaluate_background(gt: Dict, occupied_points: np.ndarray, classes: List[str], spacing_m: float = 0.01,
                         threshold_m: float = COMPLETENESS_THRESHOLD_M, seed: int = 0,
-                        observable_only: bool = True, view=None, probe_spacing_m: float = 0.05) -> SurfaceScore:
+                        observable_only: bool = True, view=None, probe_spacing_m: float = 0.1) -> SurfaceScore:
     """Accuracy and completeness of the background map's occupied voxel
     centres against everything in the scene but the objects of interest
     (walls, floors and the furniture of other classes, which the background
