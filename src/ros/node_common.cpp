@@ -181,7 +181,12 @@ uint64_t FrameGapCounter::add(const ros::Time& stamp) {
   const double dt_s = (stamp - last_).toSec();
   if (dt_s <= 0.0) return 0;
   last_ = stamp;
-  if (period_s_ <= 0.0 || dt_s < period_s_) period_s_ = dt_s;
+  intervals_s_.push_back(dt_s);
+  if (intervals_s_.size() > kWindow) intervals_s_.pop_front();
+  std::vector<double> v(intervals_s_.begin(), intervals_s_.end());
+  const size_t q = (v.size() - 1) / 4;  // lower quartile
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(q), v.end());
+  period_s_ = v[q];
   const long k = std::lround(dt_s / period_s_);
   return k > 1 ? static_cast<uint64_t>(k - 1) : 0;
 }

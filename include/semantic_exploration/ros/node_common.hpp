@@ -10,6 +10,7 @@
 #include <tf2_ros/buffer.h>
 
 #include <Eigen/Geometry>
+#include <deque>
 #include <map>
 #include <opencv2/core.hpp>
 #include <string>
@@ -73,18 +74,21 @@ class DropCounter {
 };
 
 /// Counts frames missing from a constant-rate camera stream from the stamps
-/// that do arrive: the frame period is the shortest stamp interval seen so
-/// far (a drop only lengthens intervals), and an interval of k periods means
-/// k - 1 frames were lost. Repeated or older stamps count nothing.
+/// that do arrive: the frame period is the lower quartile of the last stamp
+/// intervals (robust to jitter, and to gaps in up to three quarters of the
+/// intervals), and an interval of k periods means k - 1 frames were lost. Repeated or
+/// older stamps count nothing.
 class FrameGapCounter {
  public:
-  /// Frames missing between the previous stamp and `stamp` (0 for the first).
+  /// Frames missing between the newest earlier stamp and `stamp` (0 for the first).
   uint64_t add(const ros::Time& stamp);
   /// Estimated frame period, s (0 until two frames arrived).
   double period_s() const { return period_s_; }
 
  private:
+  static constexpr size_t kWindow = 15;  ///< intervals in the quartile
   ros::Time last_;
+  std::deque<double> intervals_s_;
   double period_s_ = 0.0;
 };
 
