@@ -261,10 +261,6 @@ def _run_phase(args, log, timeout_s=240.0):
 
 
 @pytest.mark.skipif(not ROS_SOURCED, reason="ROS environment (roslaunch, rosbag) not sourced")
-@pytest.mark.skipif(os.environ.get("SEMEXP_REPLAY_TEST") != "1",
-                    reason="opt-in (SEMEXP_REPLAY_TEST=1): mav_sim can lose its first frames at startup "
-                           "(depth before camera_info/tf/clock), more of them on a loaded machine, which makes "
-                           "the frame bookkeeping below flaky until that start-up is fixed")
 def test_replay_matches_live(tmp_path):
     work = str(tmp_path)
     t0 = time.time()
