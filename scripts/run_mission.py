@@ -191,7 +191,8 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
                   "Completeness is the share of the *observable* ground-truth surface with a reconstructed point "
                   "within 5 cm: surface some camera pose the MAV can take sees (camera centre at least R from every "
                   "surface and connected to the start, unoccluded, within the depth range and the vertical field "
-                  "of view; see eval/observable.py). The last column gives that share of each object's surface.", "",
+                  "of view, at most 75 deg off the surface normal; see eval/observable.py). The last column gives "
+                  "that share of each object's surface.", "",
                   "| map id | class | ground-truth id | on its surface | accuracy RMSE | completeness | observable |",
                   "|---|---|---|---|---|---|---|"]
         for m in ev["objects"]:
