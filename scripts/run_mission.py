@@ -281,10 +281,12 @@ def main(argv=None):
     try:
         import rospy
         deadline = time.time() + 60.0
-        while True:  # wait for the master that roslaunch starts
+        while True:  # wait for the master that roslaunch starts and for its parameters:
+            # rospy reads /use_sim_time once, in init_node; without it this node
+            # would take wall time for sim time and stop at once on --sim-limit-s
             try:
                 import rosgraph
-                if rosgraph.is_master_online():
+                if rosgraph.is_master_online() and rosgraph.Master("/mission").hasParam("/use_sim_time"):
                     break
             except Exception:
                 pass
