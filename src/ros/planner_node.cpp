@@ -396,7 +396,8 @@ std::vector<semexp::GainSet> PlannerNode::computeGains(const std::vector<Eigen::
   }
   if (config_.a_obj <= 0) return out;  // classic mode: no object raycast needed
 
-  // Object gains, occluded by the background: rays stop at its hit depth.
+  // Object gains, occluded by the background: rays stop just behind its first
+  // occupied voxel (which holds the object itself where the ray hits one).
   semantic_exploration::ComputeGains obj;
   obj.request = bg.request;
   if (r.hit_depth.size() == positions.size()) {
@@ -407,7 +408,8 @@ std::vector<semexp::GainSet> PlannerNode::computeGains(const std::vector<Eigen::
         obj.request.max_depth_m.clear();
         break;
       }
-      obj.request.max_depth_m.insert(obj.request.max_depth_m.end(), d.values.begin(), d.values.end());
+      const std::vector<float> limits = semexp::object_occlusion_depths_m(d.values, replica_.resolution_m());
+      obj.request.max_depth_m.insert(obj.request.max_depth_m.end(), limits.begin(), limits.end());
     }
   }
   if (callService("object_map/compute_gains", obj, why) != CallResult::kOk) {

@@ -46,6 +46,17 @@ GainImage combine_gains(const GainWeights& wgt, const GainSet& g, const std::vec
   return out;
 }
 
+std::vector<float> object_occlusion_depths_m(const std::vector<float>& background_hit_depth_m,
+                                             double background_resolution_m) {
+  if (!(std::isfinite(background_resolution_m) && background_resolution_m > 0))
+    throw std::invalid_argument("object_occlusion_depths_m: background_resolution_m must be > 0");
+  const float margin_m = static_cast<float>(2.0 * background_resolution_m);
+  std::vector<float> out(background_hit_depth_m);
+  for (float& d : out)
+    if (std::isfinite(d)) d += margin_m;
+  return out;
+}
+
 int window_columns(double hfov_rad, int width) {
   const int k = static_cast<int>(std::lround(hfov_rad / (2.0 * M_PI) * width));
   return std::clamp(k, 1, std::max(1, width));

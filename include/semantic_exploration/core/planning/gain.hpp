@@ -48,6 +48,18 @@ struct GainWeights {
 GainImage combine_gains(const GainWeights& weights, const GainSet& gains, const std::vector<std::uint8_t>& mask,
                         int width, int height);
 
+/// Per-ray depth limits (m) for the object raycast from the background map's
+/// per-ray hit depths (m, the distance at which each ray enters its first
+/// occupied voxel). Objects are in the background map too, and the surface in
+/// the hit voxel can lie up to the voxel's diagonal sqrt(3) r behind the entry
+/// point: cut at the entry itself, the object ray stops just short of the very
+/// object that the background ray hit and every object gain is 0. Each limit is
+/// therefore the hit depth plus 2 r (the diagonal plus slack for the object
+/// TSDF's interpolated zero crossing); non-finite depths stay as they are.
+/// Throws std::invalid_argument if background_resolution_m is not > 0.
+std::vector<float> object_occlusion_depths_m(const std::vector<float>& background_hit_depth_m,
+                                             double background_resolution_m);
+
 /// Result of the sliding window over a 360-degree image.
 struct YawWindow {
   double yaw_rad = 0.0;  ///< azimuth of the window centre, world frame, (-pi, pi]
