@@ -149,10 +149,20 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
     cv::dilate(other, other, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
     kv.second.setTo(0, other);
     MappedObject& obj = *objects_.at(kv.first);
-    obj.tsdf.integrate(camera, T_WC, depth_m, rgb, kv.second, true);
     const bool is_new = std::find(result.created.begin(), result.created.end(), kv.first) != result.created.end();
-    if (is_new && obj.tsdf.blockCount() == 0) {
-      // Nothing of the detection was left (all on other objects or without depth): no object.
+    int new_pixels = 0;
+    if (is_new)
+      for (int v = 0; v < depth_m.rows; ++v) {
+        const float* d = depth_m.ptr<float>(v);
+        const std::uint8_t* m = kv.second.ptr<std::uint8_t>(v);
+        for (int u = 0; u < depth_m.cols; ++u)
+          new_pixels += m[u] && d[u] > 0.f && d[u] >= camera.d_min_m && d[u] <= camera.d_max_m;
+      }
+    if (!is_new || new_pixels >= config_.min_new_object_pixels)
+      obj.tsdf.integrate(camera, T_WC, depth_m, rgb, kv.second, true);
+    if (is_new && (new_pixels < config_.min_new_object_pixels || !obj.tsdf.hasSurface())) {
+      // Too little of the detection was left (a rim round known objects, or no depth), or not enough to hold
+      // one surface voxel: no object (such a piece would never be rendered, updated or merged again).
       objects_.erase(kv.first);
       result.created.erase(std::find(result.created.begin(), result.created.end(), kv.first));
       ++result.dropped_empty;

@@ -418,6 +418,15 @@ TsdfSummary TsdfMapT<V>::summarize(double d_obj_m) const {
   return s;
 }
 
+template <class V>
+bool TsdfMapT<V>::hasSurface() const {
+  const float res = static_cast<float>(params_.resolution_m);
+  for (const auto& kv : blocks_)
+    for (const V& vx : kv.second.voxels)
+      if (vx.weight() > 0.f && vx.foreground() > 0.5f && std::abs(vx.sdf(truncation_m_)) < res) return true;
+  return false;
+}
+
 template class TsdfMapT<TsdfVoxel>;
 template class TsdfMapT<TsdfVoxelFloat>;
 

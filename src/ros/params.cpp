@@ -211,6 +211,7 @@ semexp::ObjectMapConfig loadObjectMap(const ParamReader& p) {
   p.get(n + "render_depth_tolerance_m", c.render_depth_tolerance_m);
   p.get(n + "render_depth_tolerance_rel", c.render_depth_tolerance_rel);
   p.get(n + "merge_fraction", c.merge_fraction);
+  p.get(n + "min_new_object_pixels", c.min_new_object_pixels);
   c.validate(n);
   return c;
 }

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgproc.hpp>
 #include <unistd.h>
 
 #include "semantic_exploration/core/object_map.hpp"
@@ -194,6 +195,38 @@ TEST(ObjectMap, PieceOfAnObjectIsMergedIntoIt) {
   ASSERT_EQ(map.objects().size(), 1u);
   EXPECT_EQ(map.objects().begin()->first, 2u);
   for (const auto& v : map.object(2)->tsdf.extractMesh().vertices_W) ASSERT_LT(std::abs(kA.sdf(v.cast<double>())), 0.02);
+}
+
+TEST(ObjectMap, NewDetectionWithFewPixelsBesideKnownObjectsMakesNoObject) {
+  PinholeCamera cam;
+  ObjectMap map = twoObjects(cam);
+  // A in front of a wall; the detection covers A plus a blob of wall beside it.
+  const Box wall(Eigen::Vector3d(0.8, 0.0, 1.0), Eigen::Vector3d(0.05, 3.0, 3.0));
+  const auto T_WC = lookAt(Eigen::Vector3d(-1.0, 0.0, 1.2), kA.centre);
+  cv::Mat depth, labels, ids;
+  renderShapes(cam, T_WC, {&kA, &wall}, depth, labels);
+  map.render(cam, T_WC, depth, ids);
+  const cv::Rect a_box = cv::boundingRect(ids == 1);
+  const auto detection = [&](int blob_px) {
+    cv::Mat mask = cv::Mat::zeros(labels.size(), CV_16UC1);
+    mask.setTo(1, ids == 1);
+    // A blob_px x blob_px patch of wall 4 px right of A's render (beyond the 2 px that renders are grown by).
+    mask(cv::Rect(a_box.x + a_box.width + 4, a_box.y + a_box.height / 2, blob_px, blob_px)).setTo(1);
+    return mask;
+  };
+  // Taken for a new object (as matching does when the IoU with A's render is low): 8 x 8 = 64 px of wall
+  // outside A's render are too few for an object.
+  FrameIntegration r = map.integrateFrame(cam, T_WC, depth, cv::Mat(), detection(8), {{1, 0, kChair}});
+  EXPECT_TRUE(r.created.empty());
+  EXPECT_EQ(r.dropped_empty, 1u);
+  EXPECT_EQ(map.objects().size(), 2u);
+  // 12 x 12 = 144 px are a detection of their own: a new object on the wall patch.
+  r = map.integrateFrame(cam, T_WC, depth, cv::Mat(), detection(12), {{1, 0, kChair}});
+  ASSERT_EQ(r.created.size(), 1u);
+  EXPECT_EQ(r.dropped_empty, 0u);
+  const TsdfSummary s = map.object(r.created[0])->tsdf.summarize(1.0);
+  EXPECT_GT(s.voxel_count, 10u);
+  EXPECT_NEAR(s.centroid_W.x(), 0.75, 0.03);  // on the wall's front face
 }
 
 TEST(ObjectMap, GainImagesFollowEquationOne) {

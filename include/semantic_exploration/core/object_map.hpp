@@ -56,7 +56,9 @@ struct FrameIntegration {
   std::uint32_t dropped_not_of_interest = 0; ///< detections of classes without object maps
   std::uint32_t dropped_unknown_object = 0;  ///< detections matched to an object id the map does not have
   std::uint32_t dropped_full = 0;            ///< new objects refused: all 65535 ids used
-  std::uint32_t dropped_empty = 0;  ///< new objects not kept: no mask pixel with depth outside other objects
+  /// new objects not kept: under min_new_object_pixels mask pixels with depth outside other objects, or no
+  /// surface voxel after integration
+  std::uint32_t dropped_empty = 0;
 };
 
 /// Paper Eq. (1): gain of a surface seen from d_exp_m that was observed from

@@ -27,6 +27,11 @@ struct ObjectMapConfig {
   /// of the same class and whose surface box lies this much inside that
   /// object's box, is the same object: it is merged into that one.
   double merge_fraction = 0.8;
+  /// A new object is made only from a detection that keeps at least this many
+  /// mask pixels with valid depth outside the (grown) renders of known objects,
+  /// px; fewer (a rim round a known object) would make a spurious object of a
+  /// few voxels that later views never render, update or merge.
+  int min_new_object_pixels = 100;
 
   void validate(const std::string& ns = "object_map/") const {
     require(std::isfinite(truncation_voxels) && truncation_voxels >= 1, ns + "truncation_voxels", "must be >= 1");
@@ -44,6 +49,7 @@ struct ObjectMapConfig {
             "must be in (0.5, 1]");
     require(std::isfinite(render_depth_tolerance_rel) && render_depth_tolerance_rel >= 0 && render_depth_tolerance_rel < 1,
             ns + "render_depth_tolerance_rel", "must be in [0, 1)");
+    require(min_new_object_pixels >= 1, ns + "min_new_object_pixels", "must be >= 1 px");
   }
 };
 

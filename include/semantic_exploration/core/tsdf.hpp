@@ -173,6 +173,8 @@ class TsdfMapT {
 
   /// Surface summary; observed_fraction counts voxels seen from <= d_obj_m.
   TsdfSummary summarize(double d_obj_m) const;
+  /// True if some voxel is a surface voxel as counted by summarize() (stops at the first one).
+  bool hasSurface() const;
 
   /// Axis-aligned box of the allocated blocks in world, m; false if empty.
   bool allocatedBox(Eigen::AlignedBox3f& box_W) const;
