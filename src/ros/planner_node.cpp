@@ -397,9 +397,14 @@ std::vector<semexp::GainSet> PlannerNode::computeGains(const std::vector<Eigen::
   if (config_.a_obj <= 0) return out;  // classic mode: no object raycast needed
 
   // Object gains, occluded by the background: rays stop just behind its first
-  // occupied voxel (which holds the object itself where the ray hits one).
+  // occupied voxel, or where they leave an object's box if that voxel is the
+  // object's own.
   semantic_exploration::ComputeGains obj;
   obj.request = bg.request;
+  semexp::SphericalGrid grid;
+  grid.width = w;
+  grid.height = h;
+  grid.vfov_rad = camera_.vfov_rad();  // as the map servers lay out their images
   if (r.hit_depth.size() == positions.size()) {
     obj.request.max_depth_m.reserve(positions.size() * static_cast<std::size_t>(w) * h);
     for (std::size_t i = 0; i < positions.size(); ++i) {
@@ -408,7 +413,8 @@ std::vector<semexp::GainSet> PlannerNode::computeGains(const std::vector<Eigen::
         obj.request.max_depth_m.clear();
         break;
       }
-      const std::vector<float> limits = semexp::object_occlusion_depths_m(d.values, replica_.resolution_m());
+      const std::vector<float> limits =
+          semexp::object_ray_limits_m(positions[i], grid, d.values, replica_.resolution_m(), objects_);
       obj.request.max_depth_m.insert(obj.request.max_depth_m.end(), limits.begin(), limits.end());
     }
   }

@@ -10,6 +10,7 @@
 #include "semantic_exploration/core/object_map.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 #include "semantic_exploration/core/planning/gain.hpp"
+#include "semantic_exploration/core/planning/interfaces.hpp"
 #include "tsdf_test_scenes.hpp"
 
 using namespace semexp;
@@ -141,4 +142,34 @@ TEST(ObjectOcclusionDepths, AWallBetweenViewAndObjectStillHidesIt) {
   const ObjectGains g = objectGains(m, p, grid, true, cfg);
   EXPECT_FLOAT_EQ(g.gains[0].at<float>(v, u), 0.f);
   EXPECT_FLOAT_EQ(g.hits[0].at<float>(v, u), static_cast<float>(kDMax));  // no object hit before the wall
+}
+
+TEST(ObjectRayLimits, PassThroughAnObjectsBoxButStopAtOtherOccluders) {
+  SphericalGrid grid;  // 36 x 10, camera vfov
+  const int n = grid.width * grid.height;
+  const int u = 18, v = 5;  // azimuth +5 deg, elevation -2.5 deg: through the box below
+  const Eigen::Vector3d dir = grid.direction(u, v);
+  ObjectSummary chair;
+  chair.id = 1;
+  chair.bbox_min_W = {1.0, -0.3, -0.3};
+  chair.bbox_max_W = {1.5, 0.3, 0.3};
+  chair.centroid_W = {1.25, 0.0, 0.0};
+  const double r = 0.04;
+  // The background's first occupied voxel is the chair's front at ~1.0 m: the
+  // ray goes on to where it leaves the box grown by 2 r, plus 2 r.
+  std::vector<float> hits(n, 1.0f / static_cast<float>(dir.x()));
+  std::vector<float> lim = object_ray_limits_m(Eigen::Vector3d::Zero(), grid, hits, r, {chair});
+  EXPECT_NEAR(lim[v * grid.width + u], 1.58 / dir.x() + 0.08, 1e-5);
+  // dir.x = cos(2.457 deg) cos(5 deg) = 0.999081 * 0.996195 = 0.995280: 1.58 / 0.995280 + 0.08 = 1.6675
+  EXPECT_NEAR(lim[v * grid.width + u], 1.6675, 1e-3);
+  // A ray whose hit is outside every box (azimuth -175 deg) only gets the voxel margin.
+  EXPECT_NEAR(lim[v * grid.width + 0], hits[0] + 0.08, 1e-5);
+  // A wall 0.3 m in front of the chair hides it: the limit stays at the wall.
+  hits.assign(n, 0.7f);
+  lim = object_ray_limits_m(Eigen::Vector3d::Zero(), grid, hits, r, {chair});
+  EXPECT_NEAR(lim[v * grid.width + u], 0.78, 1e-5);
+  // No objects: the plain margin; a wrong image size throws.
+  EXPECT_EQ(object_ray_limits_m(Eigen::Vector3d::Zero(), grid, hits, r, {}), object_occlusion_depths_m(hits, r));
+  EXPECT_THROW(object_ray_limits_m(Eigen::Vector3d::Zero(), grid, std::vector<float>(3, 1.f), r, {chair}),
+               std::invalid_argument);
 }

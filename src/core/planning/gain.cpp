@@ -1,7 +1,10 @@
 #include "semantic_exploration/core/planning/gain.hpp"
 
+#include "semantic_exploration/core/planning/interfaces.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -54,6 +57,36 @@ std::vector<float> object_occlusion_depths_m(const std::vector<float>& backgroun
   std::vector<float> out(background_hit_depth_m);
   for (float& d : out)
     if (std::isfinite(d)) d += margin_m;
+  return out;
+}
+
+std::vector<float> object_ray_limits_m(const Eigen::Vector3d& position_W, const SphericalGrid& grid,
+                                       const std::vector<float>& background_hit_depth_m,
+                                       double background_resolution_m, const std::vector<ObjectSummary>& objects) {
+  const std::size_t n = static_cast<std::size_t>(grid.width) * grid.height;
+  if (background_hit_depth_m.size() != n)
+    throw std::invalid_argument("object_ray_limits_m: need width * height hit depths");
+  std::vector<float> out = object_occlusion_depths_m(background_hit_depth_m, background_resolution_m);
+  const double margin_m = 2.0 * background_resolution_m;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(out[i])) continue;
+    const Eigen::Vector3d dir = grid.direction(static_cast<int>(i) % grid.width, static_cast<int>(i) / grid.width);
+    // A limit may pass into another object's box after leaving one: repeat (bounded by the object count).
+    for (std::size_t pass = 0; pass <= objects.size(); ++pass) {
+      const Eigen::Vector3d q = position_W + static_cast<double>(out[i]) * dir;
+      double exit_t = -1.0;
+      for (const ObjectSummary& o : objects) {
+        const Eigen::Vector3d lo = o.bbox_min_W.array() - margin_m, hi = o.bbox_max_W.array() + margin_m;
+        if ((q.array() < lo.array()).any() || (q.array() > hi.array()).any()) continue;
+        double t_exit = std::numeric_limits<double>::infinity();
+        for (int k = 0; k < 3; ++k)
+          if (std::abs(dir[k]) > 1e-12) t_exit = std::min(t_exit, ((dir[k] > 0 ? hi[k] : lo[k]) - position_W[k]) / dir[k]);
+        exit_t = std::max(exit_t, t_exit);
+      }
+      if (!(exit_t > out[i])) break;
+      out[i] = static_cast<float>(exit_t + margin_m);
+    }
+  }
   return out;
 }
 

@@ -10,7 +10,11 @@
 #include <cstdint>
 #include <vector>
 
+#include "semantic_exploration/core/spherical_grid.hpp"
+
 namespace semexp {
+
+struct ObjectSummary;  // planning/interfaces.hpp (which includes this header)
 
 /// A 360-degree image of floats (gains in [0, 1]). Empty (no values) means
 /// "no such gain" and counts as all zeros.
@@ -59,6 +63,20 @@ GainImage combine_gains(const GainWeights& weights, const GainSet& gains, const 
 /// Throws std::invalid_argument if background_resolution_m is not > 0.
 std::vector<float> object_occlusion_depths_m(const std::vector<float>& background_hit_depth_m,
                                              double background_resolution_m);
+
+/// object_occlusion_depths_m for the rays of one position, also letting a ray
+/// through an object's own voxels in the background map: where the limit falls
+/// inside an object's bounding box (grown by 2 background voxels), it moves on
+/// to where the ray leaves that box, plus the same margin. The object map's
+/// first surface on a ray can lie behind the background's (a thin chair part
+/// that its TSDF does not hold as foreground: ~14 cm median behind in a
+/// generated house), so the first-voxel margin alone hid most of a chair seen
+/// from close by. Occluders outside every object box still hide objects.
+/// `background_hit_depth_m`: grid.width * grid.height values, row-major.
+/// Throws std::invalid_argument on a size mismatch or resolution <= 0.
+std::vector<float> object_ray_limits_m(const Eigen::Vector3d& position_W, const SphericalGrid& grid,
+                                       const std::vector<float>& background_hit_depth_m,
+                                       double background_resolution_m, const std::vector<ObjectSummary>& objects);
 
 /// Result of the sliding window over a 360-degree image.
 struct YawWindow {
