@@ -510,6 +510,15 @@ def _split(rng, length, min_w=3.0, max_w=5.5):
     return [0.0] + list(cuts) + [length]
 
 
+def _floor_and_ceiling(b: "MeshBuilder", rng, X: float, Y: float, H: float):
+    """Floor and ceiling slabs over an X x Y footprint of height H; returns the wall object id and wall colour."""
+    wall_col = _vary(rng, (225, 220, 205), 10)
+    floor_id, ceil_id, wall_id = b.new_object("floor"), b.new_object("ceiling"), b.new_object("wall")
+    b.box_minmax(floor_id, _vary(rng, (150, 120, 90), 15), (-WALL_T, -WALL_T, -0.05), (X + WALL_T, Y + WALL_T, 0.0))
+    b.box_minmax(ceil_id, (240, 240, 240), (-WALL_T, -WALL_T, H), (X + WALL_T, Y + WALL_T, H + 0.05))
+    return wall_id, wall_col
+
+
 def generate(seed: int = 0, size_m=(15.0, 12.0, 3.0), name: Optional[str] = None) -> Scene:
     """Generates a furnished house of ``size_m`` = (X, Y, H) m, deterministic in ``seed``."""
     X, Y, H = (float(s) for s in size_m)
@@ -517,10 +526,7 @@ def generate(seed: int = 0, size_m=(15.0, 12.0, 3.0), name: Optional[str] = None
         raise ValueError("house must be at least 3 x 3 x 2.2 m (got %s)" % (size_m,))
     rng = np.random.default_rng(seed)
     b = MeshBuilder(rng)
-    wall_col = _vary(rng, (225, 220, 205), 10)
-    floor_id, ceil_id, wall_id = b.new_object("floor"), b.new_object("ceiling"), b.new_object("wall")
-    b.box_minmax(floor_id, _vary(rng, (150, 120, 90), 15), (-WALL_T, -WALL_T, -0.05), (X + WALL_T, Y + WALL_T, 0.0))
-    b.box_minmax(ceil_id, (240, 240, 240), (-WALL_T, -WALL_T, H), (X + WALL_T, Y + WALL_T, H + 0.05))
+    wall_id, wall_col = _floor_and_ceiling(b, rng, X, Y, H)
     rooms: List[Room] = []
     windows: List[Tuple[str, float, float, float]] = []  # (axis, fixed coord, lo, hi) on exterior walls
     if X < 6.0 or Y < 5.0:
@@ -617,10 +623,7 @@ def three_chairs_room(seed: int = 0, name: str = "three_chairs") -> Scene:
     X, Y, H = 6.0, 4.5, 2.5
     rng = np.random.default_rng(seed)
     b = MeshBuilder(rng)
-    wall_col = _vary(rng, (225, 220, 205), 10)
-    floor_id, ceil_id, wall_id = b.new_object("floor"), b.new_object("ceiling"), b.new_object("wall")
-    b.box_minmax(floor_id, _vary(rng, (150, 120, 90), 15), (-WALL_T, -WALL_T, -0.05), (X + WALL_T, Y + WALL_T, 0.0))
-    b.box_minmax(ceil_id, (240, 240, 240), (-WALL_T, -WALL_T, H), (X + WALL_T, Y + WALL_T, H + 0.05))
+    wall_id, wall_col = _floor_and_ceiling(b, rng, X, Y, H)
     _wall_x(b, wall_id, wall_col, -WALL_T / 2, -WALL_T, X + WALL_T, H)
     _wall_x(b, wall_id, wall_col, Y + WALL_T / 2, -WALL_T, X + WALL_T, H)
     _wall_y(b, wall_id, wall_col, -WALL_T / 2, 0, Y, H)
