@@ -4,7 +4,8 @@ writes median / 10th-90th percentile curves (PNG), curves.csv and report.md
 (the paper's Section V-B evaluation).
 
 Example (what `make experiments` runs):
-  run_experiments.py --scenes 0 1 2 --runs 3 --size 10 8 3 --out results/experiments
+  run_experiments.py --scenes 0 1 2 --runs 3 --size 8 6 3 --sim-limit-s 200 --out results/experiments
+(18 runs of about 5 min each on a 2-core machine)
 """
 import argparse
 import os
@@ -19,10 +20,10 @@ def main(argv=None):
     ap.add_argument("--scenes", type=int, nargs="+", default=[0, 1, 2], help="generator seeds of the scenes")
     ap.add_argument("--runs", type=int, default=3, help="runs per scene and mode (planner seeds)")
     ap.add_argument("--modes", nargs="+", default=["classic", "semantic"])
-    ap.add_argument("--size", type=float, nargs=3, default=[10.0, 8.0, 3.0], metavar=("X", "Y", "H"))
+    ap.add_argument("--size", type=float, nargs=3, default=[8.0, 6.0, 3.0], metavar=("X", "Y", "H"))
     ap.add_argument("--classes", nargs="+", default=["chair"])
-    ap.add_argument("--sim-limit-s", type=float, default=600.0)
-    ap.add_argument("--wall-limit-s", type=float, default=1200.0)
+    ap.add_argument("--sim-limit-s", type=float, default=200.0)
+    ap.add_argument("--wall-limit-s", type=float, default=900.0)
     ap.add_argument("--out", default=os.path.join("results", "experiments"))
     args = ap.parse_args(argv)
     sys.path.insert(0, os.path.join(here, "..", "src"))
@@ -52,7 +53,12 @@ def main(argv=None):
                 if rc != 0 or not os.path.exists(os.path.join(run_dir, "timeseries.csv")):
                     print("[experiments] run %s failed (exit %d); left out of the curves" % (run_dir, rc))
                     continue
-                by_mode[mode].append(experiments.read_run(run_dir))
+                run_data = experiments.read_run(run_dir)
+                why = experiments.implausible(run_data, args.sim_limit_s)
+                if why:
+                    print("[experiments] run %s: %s; left out of the curves" % (run_dir, why))
+                    continue
+                by_mode[mode].append(run_data)
     by_mode = {m: r for m, r in by_mode.items() if r}
     if not by_mode:
         print("[experiments] no run succeeded")

@@ -84,3 +84,11 @@ def test_paper_claims_that_fail_say_where(tmp_path):
     assert c[1]["measured"] == "semantic never, classic 20 s"
     assert "ratio 0.800" in c[2]["measured"]
     assert experiments.write_outputs(str(tmp_path / "one"), {"semantic": sem}, grid_step_s=10)["claims"] == []
+
+
+def test_implausible_runs_are_named(tmp_path):
+    ok = make_run(str(tmp_path / "ok"), [0, 10, 200], [0, 1, 2], [0, 1, 2])
+    assert experiments.implausible(ok, sim_limit_s=200) == ""
+    # A mission that took wall time (seconds since 1970) for sim time.
+    bad = make_run(str(tmp_path / "bad"), [1795335807.5], [0], [0])
+    assert experiments.implausible(bad, sim_limit_s=200) == "sim time 1795335808 s is beyond the 200 s limit"

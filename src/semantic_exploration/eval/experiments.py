@@ -36,6 +36,17 @@ def read_run(run_dir: str) -> Dict:
     return {"dir": run_dir, "t": t[order], "series": {k: v[order] for k, v in series.items()}, "summary": summary}
 
 
+def implausible(run: Dict, sim_limit_s: float, slack_s: float = 60.0) -> str:
+    """Why a run cannot be aggregated ('' if it can): no samples, or sim time
+    far beyond the limit the mission was given (a mission that read wall
+    time as sim time), which would also blow up the common time grid."""
+    if len(run["t"]) == 0:
+        return "no time series"
+    if run["t"][-1] > sim_limit_s + slack_s:
+        return "sim time %.0f s is beyond the %.0f s limit" % (run["t"][-1], sim_limit_s)
+    return ""
+
+
 def resample(t: np.ndarray, y: np.ndarray, grid: np.ndarray) -> np.ndarray:
     """Step-wise value of y at each grid time (last sample at or before it; 0 before the first)."""
     if len(t) == 0:
