@@ -127,6 +127,18 @@ def evaluate(out, gt, classes, saved):
     return res
 
 
+def stop_launch(launch):
+    """SIGINT to roslaunch's process group (SIGKILL after 20 s); no-op once it has ended."""
+    if launch.poll() is not None:
+        return
+    os.killpg(launch.pid, signal.SIGINT)
+    try:
+        launch.wait(timeout=20)
+    except subprocess.TimeoutExpired:
+        os.killpg(launch.pid, signal.SIGKILL)
+        launch.wait()
+
+
 def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
     """report.md and summary.json of a run; args needs mode, seed and classes,
     mon is a RunLog (live or read from a bag), wall_s may be None (a bag)."""
@@ -225,7 +237,8 @@ def main(argv=None):
     ap.add_argument("--mode", choices=["semantic", "classic"], default="semantic")
     ap.add_argument("--scene", default="", help="scene file; default: generate a house")
     ap.add_argument("--seed", type=int, default=0, help="generator seed")
-    ap.add_argument("--size", type=float, nargs=3, default=[15.0, 12.0, 3.0], metavar=("X", "Y", "H"))
+    ap.add_argument("--size", type=float, nargs=3, default=[10.0, 8.0, 3.0], metavar=("X", "Y", "H"),
+                    help="generated house size, m (default 10 8 3)")
     ap.add_argument("--classes", nargs="+", default=["chair"], help="classes of interest")
     ap.add_argument("--out", default=os.path.join("results", "run-" + time.strftime("%Y%m%d-%H%M%S")))
     ap.add_argument("--wall-limit-s", type=float, default=600.0, help="stop after this wall time, s")
@@ -339,14 +352,13 @@ def main(argv=None):
         print("[mission] stopping: %s; saving maps" % reason, flush=True)
         saved["background_map"] = call_save("/background_map/save", os.path.join(out, "map"))
         saved["object_map"] = call_save("/object_map/save", os.path.join(out, "objects"))
-        summary = write_report(out, args, gt, mon, saved, rospy.get_time(), time.time() - t0, reason)
+        sim_end, wall_end = rospy.get_time(), time.time() - t0
+        # The evaluation reads only the saved files: stop the simulator and
+        # the nodes first instead of letting them run on beside it.
+        stop_launch(launch)
+        summary = write_report(out, args, gt, mon, saved, sim_end, wall_end, reason)
     finally:
-        if launch.poll() is None:
-            os.killpg(launch.pid, signal.SIGINT)
-            try:
-                launch.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                os.killpg(launch.pid, signal.SIGKILL)
+        stop_launch(launch)
         log.close()
     print("[mission] report: %s" % os.path.join(out, "report.md"))
     print("[mission] summary: %s" % os.path.join(out, "summary.json"))
