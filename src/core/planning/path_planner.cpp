@@ -72,8 +72,8 @@ PathPlanner::PathPlanner(const PlannerConfig& config, const Bounds& bounds, doub
   if (!(std::isfinite(resolution_m_) && resolution_m_ > 0))
     throw std::invalid_argument("PathPlanner: resolution_m must be > 0");
   if (!is_free_) throw std::invalid_argument("PathPlanner: is_free query missing");
-  check_radius_m_ = std::max(config_.clearance_radius_m(),
-                             std::sqrt(config_.mav_radius_m * config_.mav_radius_m + 0.25 * resolution_m_ * resolution_m_));
+  const double clearance_m = config_.clearance_radius_m();
+  check_radius_m_ = std::sqrt(clearance_m * clearance_m + 0.25 * resolution_m_ * resolution_m_);
   state_bounds_ = bounds_;
   const Eigen::Vector3d r = Eigen::Vector3d::Constant(config_.mav_radius_m);
   state_bounds_.min_m = bounds_.min_m + r;

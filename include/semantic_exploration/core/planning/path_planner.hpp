@@ -37,13 +37,13 @@ struct PlannedPath {
 /// Plans collision-free paths for a sphere of radius R (config.mav_radius_m).
 ///
 /// Validity: inside the bounds shrunk by R, and `is_free(p, R_c)` with
-/// R_c = max(R + clearance_margin_m, sqrt(R^2 + (resolution / 2)^2)). The
-/// second term: motions are checked at points at most one map resolution
-/// apart, and every point within R of a checked segment lies within it of its
-/// nearest checked point, so the whole swept volume of radius R is known free,
-/// not only the sampled spheres. The margin keeps R from surfaces hiding in
-/// voxels the map holds free (glass returns no depth; grazing rays carve the
-/// voxel in front of a wall).
+/// R_c = sqrt(C^2 + (resolution / 2)^2), C = R + clearance_margin_m: motions
+/// are checked at points at most one map resolution apart, and every point
+/// within C of a checked segment lies within R_c of its nearest checked
+/// point, so the whole swept volume of radius C is known free, not only the
+/// sampled spheres (the planner node re-checks published paths at C). The
+/// margin keeps R from surfaces hiding in voxels the map holds free (glass
+/// returns no depth; grazing rays carve the voxel in front of a wall).
 ///
 /// Per goal: (1) if the straight segment is valid it is the path, no planner;
 /// (2) an invalid goal (e.g. a frontier touching unknown space) is moved to
