@@ -48,7 +48,7 @@ from semantic_exploration.msg import ExplorationStatus, MapBlocks
 from semantic_exploration.srv import (ComputeGains, ComputeGainsResponse, GetHistoryMasks,
                                       GetHistoryMasksResponse, GetMap, GetMapResponse)
 from sensor_msgs.msg import Image
-from test_planner_node import R, START, blocks_msg, cloud, gain_image, occupied, room
+from test_planner_node import R, START, assert_path_safe, blocks_msg, cloud, gain_image, room
 
 PKG = "semantic_exploration"
 HANG_CALLS = 3  # compute_gains calls that hang
@@ -145,24 +145,8 @@ class PlannerBadInputTest(unittest.TestCase):
         return cond()
 
     def assert_safe(self, path, start=START, escaped=False):
-        """Starts at `start`; spheres of R (R/2 on an escape's first segment) every 1 cm hold no occupied voxel."""
-        p0 = path.poses[0].pose.position
-        self.assertAlmostEqual(p0.x, start[0], places=3)
-        self.assertAlmostEqual(p0.y, start[1], places=3)
-        self.assertAlmostEqual(p0.z, start[2], places=3)
-        pts = [(q.pose.position.x, q.pose.position.y, q.pose.position.z) for q in path.poses]
-        dirs = [(math.cos(a) * math.cos(e), math.sin(a) * math.cos(e), math.sin(e))
-                for a in np.linspace(0, 2 * math.pi, 24, endpoint=False) for e in (-1.2, -0.6, 0.0, 0.6, 1.2)]
-        dirs += [(0, 0, 1), (0, 0, -1), (0, 0, 0)]
-        for s, (a, b) in enumerate(zip(pts[:-1], pts[1:])):
-            radius = R / 2 if escaped and s == 0 else R
-            n = max(1, int(math.ceil(math.dist(a, b) / 0.01)))
-            for k in range(n + 1):
-                c = [a[i] + (b[i] - a[i]) * k / n for i in range(3)]
-                for d in dirs:
-                    q = [c[i] + radius * 0.999 * d[i] for i in range(3)]
-                    self.assertFalse(occupied(self.grid, q), "path point %s within %.3f m of an occupied voxel"
-                                     % (c, radius))
+        """Safe (assert_path_safe) and ending at the prompt answer's yaw, +pi/2."""
+        assert_path_safe(self, self.grid, path, start, escaped)
         o = path.poses[-1].pose.orientation
         self.assertAlmostEqual(2 * math.atan2(o.z, o.w), math.pi / 2, places=3,
                                msg="the end yaw is not the prompt answer's (a late answer was used?)")

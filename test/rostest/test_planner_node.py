@@ -51,6 +51,29 @@ def occupied(g, p):
     return g[i[0], i[1], i[2]] >= 0
 
 
+def assert_path_safe(test, g, path, start=START, escaped=False):
+    """The path starts at `start`, and spheres of R (R/2 on an escape's first
+    segment) every 1 cm along it hold no occupied voxel of grid g: voxel
+    centres within R + half a voxel diagonal are tested conservatively by
+    sampling the sphere surface and centre."""
+    p0 = path.poses[0].pose.position
+    test.assertAlmostEqual(p0.x, start[0], places=3)
+    test.assertAlmostEqual(p0.y, start[1], places=3)
+    test.assertAlmostEqual(p0.z, start[2], places=3)
+    pts = [(q.pose.position.x, q.pose.position.y, q.pose.position.z) for q in path.poses]
+    dirs = [(math.cos(a) * math.cos(e), math.sin(a) * math.cos(e), math.sin(e))
+            for a in np.linspace(0, 2 * math.pi, 24, endpoint=False) for e in (-1.2, -0.6, 0.0, 0.6, 1.2)]
+    dirs += [(0, 0, 1), (0, 0, -1), (0, 0, 0)]
+    for s, (a, b) in enumerate(zip(pts[:-1], pts[1:])):
+        radius = R / 2 if escaped and s == 0 else R
+        n = max(1, int(math.ceil(math.dist(a, b) / 0.01)))
+        for k in range(n + 1):
+            c = [a[i] + (b[i] - a[i]) * k / n for i in range(3)]
+            for d in dirs:
+                q = [c[i] + radius * 0.999 * d[i] for i in range(3)]
+                test.assertFalse(occupied(g, q), "path point %s within %.3f m of an occupied voxel" % (c, radius))
+
+
 def blocks_msg(g, seq, full):
     m = MapBlocks()
     m.header.frame_id = "world"
@@ -171,24 +194,8 @@ class PlannerNodeTest(unittest.TestCase):
         path = self.paths[-1]
         self.assertEqual(path.header.frame_id, "world")
         self.assertGreaterEqual(len(path.poses), 2)
-        p0 = path.poses[0].pose.position
-        self.assertAlmostEqual(p0.x, START[0], places=3)
-        self.assertAlmostEqual(p0.y, START[1], places=3)
-        self.assertAlmostEqual(p0.z, START[2], places=3)
-        # Dense check: spheres of R every 1 cm hold no occupied voxel (voxel
-        # centres within R + half a voxel diagonal are tested conservatively
-        # by sampling the sphere surface and centre).
+        assert_path_safe(self, self.grid, path)
         pts = [(q.pose.position.x, q.pose.position.y, q.pose.position.z) for q in path.poses]
-        dirs = [(math.cos(a) * math.cos(e), math.sin(a) * math.cos(e), math.sin(e))
-                for a in np.linspace(0, 2 * math.pi, 24, endpoint=False) for e in (-1.2, -0.6, 0.0, 0.6, 1.2)]
-        dirs += [(0, 0, 1), (0, 0, -1), (0, 0, 0)]
-        for a, b in zip(pts[:-1], pts[1:]):
-            n = max(1, int(math.ceil(math.dist(a, b) / 0.01)))
-            for k in range(n + 1):
-                c = [a[i] + (b[i] - a[i]) * k / n for i in range(3)]
-                for d in dirs:
-                    q = [c[i] + R * 0.999 * d[i] for i in range(3)]
-                    self.assertFalse(occupied(self.grid, q), "path point %s within R of an occupied voxel" % c)
         # The end yaw is the best window's: +pi/2.
         o = path.poses[-1].pose.orientation
         self.assertAlmostEqual(2 * math.atan2(o.z, o.w), math.pi / 2, places=3)
