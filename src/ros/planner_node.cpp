@@ -571,6 +571,15 @@ bool PlannerNode::iterate(std::string& message) {
     const auto& w = r.candidates[static_cast<std::size_t>(r.winner)];
     expected_duration_s_ = w.path_time_s;
     executing_since_ = now;
+    // One line per iteration: what won and why, so a run's log shows where the MAV went and for which gain.
+    const char* source = w.sample.source == semexp::CandidateSource::kObject ? "object" : "frontier";
+    ROS_INFO("planner: iteration %u: %s candidate%s%s (%d of %zu reachable) at (%.2f, %.2f, %.2f) yaw %.2f: "
+             "gain %.3f (entropy %.3f, bg %.3f, obj %.3f), %s path %.1f s, utility %.4f",
+             iteration_, source, w.sample.source == semexp::CandidateSource::kObject ? " of object " : "",
+             w.sample.source == semexp::CandidateSource::kObject ? std::to_string(w.sample.object_id).c_str() : "",
+             r.candidates_reachable, r.candidates.size(), w.position_W.x(), w.position_W.y(), w.position_W.z(),
+             w.yaw_rad, w.gain, w.gain_entropy, w.gain_bg, w.gain_obj, semexp::PlannedPath::name(w.plan.status),
+             w.path_time_s, w.utility);
   }
   publishResult(r, now, in.yaw_rad);
 
