@@ -6,7 +6,6 @@
 #include <unordered_set>
 
 #include "semantic_exploration/MatchedDetections.h"
-#include "semantic_exploration/RenderInstances.h"
 #include "semantic_exploration/core/instance_matching.hpp"
 
 namespace semexp_ros {
@@ -28,7 +27,7 @@ std::string toMat16(const sensor_msgs::Image& im, cv::Mat& out) {
 
 }  // namespace
 
-InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listener_(tf_buffer_) {
+InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh), tf_listener_(tf_buffer_) {
   const auto p = ParamReader::fromNodeHandle(pnh);
   config_ = loadMatching(p);
   classes_ = loadClasses(p);
@@ -36,7 +35,6 @@ InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle&
   frames_ = loadFrames(p);
   p.getAtLeast("tf_timeout_s", tf_timeout_s_, 0.0, "s");
   matched_pub_ = nh.advertise<semantic_exploration::MatchedDetections>("matched_detections", 10);
-  render_client_ = nh.serviceClient<semantic_exploration::RenderInstances>("object_map/render_instances");
   info_sub_ = nh.subscribe("camera/camera_info", 1, &InstanceMatchingNode::infoCallback, this);
   detections_sub_.subscribe(nh, "detections", 5);
   depth_sub_.subscribe(nh, "camera/depth/image_raw", 5);
@@ -61,6 +59,19 @@ void InstanceMatchingNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& m
   camera_ = c;
   camera_info_ = *msg;
   have_info_ = true;
+}
+
+bool InstanceMatchingNode::callRender(semantic_exploration::RenderInstances& srv) {
+  // One persistent connection for all frames. A new connection per call sometimes loses the reply in roscpp
+  // (a "Buffer Overrun" while deserializing it, ros/ros_comm#1976); a broken connection is reopened and the
+  // call tried once more, so neither that nor an object_map restart costs a frame.
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    if (!render_client_.isValid())
+      render_client_ = nh_.serviceClient<semantic_exploration::RenderInstances>("object_map/render_instances", true);
+    if (render_client_.call(srv)) return true;
+    render_client_.shutdown();
+  }
+  return false;
 }
 
 void InstanceMatchingNode::publishEmpty(const std_msgs::Header& header) {
@@ -148,7 +159,7 @@ void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsC
   }
   srv.request.camera_info.header = msg->header;
   srv.request.depth = *depth_msg;
-  if (!render_client_.call(srv)) return fail("render_unavailable", "object_map/render_instances failed");
+  if (!callRender(srv)) return fail("render_unavailable", "object_map/render_instances failed");
   cv::Mat object_ids;
   err = toMat16(srv.response.object_ids, object_ids);
   if (err.empty() && object_ids.size() != instances.size()) err = "size differs from the instance image";

@@ -25,6 +25,7 @@
 #include <memory>
 
 #include "semantic_exploration/Detections.h"
+#include "semantic_exploration/RenderInstances.h"
 #include "semantic_exploration/ros/node_common.hpp"
 #include "semantic_exploration/ros/params.hpp"
 
@@ -41,7 +42,10 @@ class InstanceMatchingNode {
   void infoCallback(const sensor_msgs::CameraInfoConstPtr& msg);
   void frameCallback(const semantic_exploration::DetectionsConstPtr& msg, const sensor_msgs::ImageConstPtr& depth);
   void publishEmpty(const std_msgs::Header& header);
+  /// Calls object_map/render_instances; on a failure reconnects and tries once more.
+  bool callRender(semantic_exploration::RenderInstances& srv);
 
+  ros::NodeHandle nh_;
   semexp::MatchingConfig config_;
   semexp::ClassTable classes_;
   semexp::PinholeCamera camera_;
