@@ -11,16 +11,14 @@ namespace semexp {
 namespace {
 constexpr std::uint16_t kNoDist = 0xFFFF;
 
-// Entropy (bits) of every stored log-odds value; index = value + 32768, the
-// unknown sentinel (index 0) has entropy 1.
-const std::vector<float>& entropyTable() {
-  static const std::vector<float> table = [] {
-    std::vector<float> t(65536);
-    for (int i = 0; i < 65536; ++i) t[i] = static_cast<float>(logOddsEntropy((i - 32768) / OccupancyMap::kScale));
-    t[0] = 1.f;
-    return t;
-  }();
-  return table;
+// Reducible entropy (gains.hpp) of every stored log-odds value in
+// [l_min, l_max], indexed by value - l_min.
+std::vector<float> entropyTable(std::int16_t l_min, std::int16_t l_max) {
+  std::vector<float> t(static_cast<std::size_t>(l_max - l_min + 1));
+  for (std::size_t i = 0; i < t.size(); ++i)
+    t[i] = static_cast<float>(reducibleEntropy((l_min + static_cast<int>(i)) / OccupancyMap::kScale,
+                                               l_min / OccupancyMap::kScale, l_max / OccupancyMap::kScale));
+  return t;
 }
 
 inline VoxelState stateOf(std::int16_t l) {
@@ -278,7 +276,7 @@ RaycastHit OccupancyMap::raycast(const Eigen::Vector3d& origin_W, const Eigen::V
 std::vector<GainImages> OccupancyMap::computeGains(const std::vector<Eigen::Vector3d>& positions_W,
                                                    const SphericalGrid& grid, const GainSettings& st,
                                                    const std::vector<float>& max_depth_m) const {
-  const std::vector<float>& H = entropyTable();
+  const std::vector<float> H = entropyTable(l_min_, l_max_);
   const int W = grid.width, Hh = grid.height, n = W * Hh;
   const bool have_max = max_depth_m.size() == positions_W.size() * static_cast<std::size_t>(n) && n > 0;
   const double norm = st.d_max_m - st.d_min_m;
@@ -324,7 +322,10 @@ std::vector<GainImages> OccupancyMap::computeGains(const std::vector<Eigen::Vect
           return false;
         }
         const double s = std::max(a, st.d_min_m), e = b;
-        if (e > s) ent += H[static_cast<std::size_t>(l + 32768)] * (e - s);
+        if (e > s) {
+          const double h = l == kUnknown ? 1.0 : H[static_cast<std::size_t>(std::clamp(l, l_min_, l_max_) - l_min_)];
+          ent += h * (e - s);
+        }
         return true;
       });
       g.entropy[i] = static_cast<float>(std::clamp(ent / norm, 0.0, 1.0));

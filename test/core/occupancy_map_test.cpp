@@ -78,6 +78,21 @@ TEST(Entropy, HalfAndClamped) {
   EXPECT_NEAR(logOddsEntropy(3.5), 0.970688 * 0.0429208 + 0.0293122 * 5.0923467, 1e-4);
 }
 
+TEST(Entropy, ReducibleIsZeroAtTheClampAndOneWhenUnknown) {
+  // OctoMap's clamp [-2, 3.5]: H(-2) = 0.527066, H(3.5) = 0.190931 bits.
+  EXPECT_DOUBLE_EQ(reducibleEntropy(0.0, -2.0, 3.5), 1.0);
+  EXPECT_NEAR(reducibleEntropy(-2.0, -2.0, 3.5), 0.0, 1e-12);
+  EXPECT_NEAR(reducibleEntropy(3.5, -2.0, 3.5), 0.0, 1e-12);
+  // one free update, l = -0.4: p = 0.401312, H = 0.971713; (0.971713 - 0.527065) / (1 - 0.527065) = 0.940189
+  EXPECT_NEAR(reducibleEntropy(-0.4, -2.0, 3.5), 0.940189, 2e-6);
+  // two, l = -0.8: p = 0.310026, H = 0.893203; (0.893203 - 0.527065) / 0.472935 = 0.774182
+  EXPECT_NEAR(reducibleEntropy(-0.8, -2.0, 3.5), 0.774182, 2e-6);
+  // one occupied update, l = 0.85: p = 0.700567, H = 0.880597; (0.880597 - 0.190931) / 0.809069 = 0.852419
+  EXPECT_NEAR(reducibleEntropy(0.85, -2.0, 3.5), 0.852419, 2e-6);
+  // beyond the clamp (another map's values) still 0, never negative
+  EXPECT_DOUBLE_EQ(reducibleEntropy(-3.0, -2.0, 3.5), 0.0);
+}
+
 TEST(Gains, EntropyOfUnknownAndOfClampedFreeSpace) {
   BackgroundMapConfig cfg;
   cfg.resolution_m = 0.2;  // large voxels: a big map stays small
@@ -94,7 +109,7 @@ TEST(Gains, EntropyOfUnknownAndOfClampedFreeSpace) {
     EXPECT_FLOAT_EQ(g[0].hit_depth_m[i], 10.f);  // nothing hit
     EXPECT_FLOAT_EQ(g[0].distance[i], 0.f);
   }
-  // Everything free at the clamp (log-odds -2.0 = -20 tenths in the message encoding).
+  // Everything free at the clamp (log-odds -2.0 = -20 tenths in the message encoding): nothing left to learn.
   MapBlocksData all = map.snapshot();
   all.coords.clear();
   all.payload.clear();
@@ -107,11 +122,16 @@ TEST(Gains, EntropyOfUnknownAndOfClampedFreeSpace) {
       }
   ASSERT_TRUE(map.applyBlocks(all));
   g = map.computeGains({Eigen::Vector3d(0.1, 0.1, 0.1)}, grid, gs);
-  for (int i = 0; i < grid.width * grid.height; ++i) EXPECT_NEAR(g[0].entropy[i], 0.527066, 1e-4);
+  for (int i = 0; i < grid.width * grid.height; ++i) EXPECT_NEAR(g[0].entropy[i], 0.0, 1e-6);
+  // Free after two updates (-0.8, -8 tenths): reducible entropy 0.774182 per unit length.
+  for (auto& v : all.payload) v = -8;
+  ASSERT_TRUE(map.applyBlocks(all));
+  g = map.computeGains({Eigen::Vector3d(0.1, 0.1, 0.1)}, grid, gs);
+  for (int i = 0; i < grid.width * grid.height; ++i) EXPECT_NEAR(g[0].entropy[i], 0.774182, 1e-4);
   // A per-ray maximum depth of 5.05 m stops accumulation half way.
   std::vector<float> maxd(grid.width * grid.height, 5.05f);
   g = map.computeGains({Eigen::Vector3d(0.1, 0.1, 0.1)}, grid, gs, maxd);
-  for (int i = 0; i < grid.width * grid.height; ++i) EXPECT_NEAR(g[0].entropy[i], 0.527066 * 0.5, 1e-4);
+  for (int i = 0; i < grid.width * grid.height; ++i) EXPECT_NEAR(g[0].entropy[i], 0.774182 * 0.5, 1e-4);
 }
 
 TEST(Gains, BackgroundDistanceGainOnASingleWall) {
@@ -466,7 +486,9 @@ TEST(OccupancyMap, RaycastAndEntropyGainMatchFineSampling) {
             break;
           }
           if ((p.array() < map.extentMin().array()).any() || (p.array() >= map.extentMax().array()).any()) break;  // left the map
-          const double h = s == VoxelState::kUnknown ? 1.0 : (map.logOdds(p, l) ? logOddsEntropy(l) : 1.0);
+          const double h = s == VoxelState::kUnknown
+                               ? 1.0
+                               : (map.logOdds(p, l) ? reducibleEntropy(l, cfg.log_odds_min, cfg.log_odds_max) : 1.0);
           if (t >= gs.d_min_m) ent += h * step;
         }
         const int i = v * grid.width + u;

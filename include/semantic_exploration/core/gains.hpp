@@ -17,6 +17,19 @@ inline double binaryEntropy(double p) {
 /// Entropy of a voxel holding log-odds `l` (natural log), bits.
 inline double logOddsEntropy(double l) { return binaryEntropy(1.0 / (1.0 + std::exp(-l))); }
 
+/// Entropy a measurement can still remove from a voxel holding log-odds `l`,
+/// bits, in a map that clamps log-odds to [l_min, l_max] (l_min < 0 < l_max):
+/// the voxel's entropy minus what it keeps at the clamp on its side, scaled so
+/// that an unknown voxel (l = 0) has 1 and a voxel at the clamp 0.
+/// Plain Shannon entropy is not zero at the clamp (0.53 bit at OctoMap's
+/// l_min = -2): well-observed free space would keep looking informative, and
+/// a view of it would seem worth flying to forever.
+inline double reducibleEntropy(double l, double l_min, double l_max) {
+  const double floor = logOddsEntropy(l < 0.0 ? l_min : l_max);
+  if (!(floor < 1.0)) return 1.0;
+  return std::clamp((logOddsEntropy(l) - floor) / (1.0 - floor), 0.0, 1.0);
+}
+
 /// Distance gain of one node, paper Eq. (1).
 /// @param d_node_m   minimum distance the node has been observed from, m
 /// @param d_exp_m    distance the node would be observed from at the candidate, m

@@ -82,7 +82,7 @@ struct GainSettings {
 struct GainImages {
   int width = 0;
   int height = 0;
-  std::vector<float> entropy;      ///< normalised entropy gain in [0, 1]
+  std::vector<float> entropy;      ///< normalised entropy gain in [0, 1] (reducible entropy, gains.hpp)
   std::vector<float> distance;     ///< Eq. 1 gain of the first occupied voxel's leaf (0 if none)
   std::vector<float> hit_depth_m;  ///< distance to the first occupied voxel, m (d_max if none)
 };
