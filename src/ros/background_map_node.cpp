@@ -52,7 +52,9 @@ BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) 
   p.getAtLeast("background_map/start_free_radius_m", start_free_radius_m_, 0.0, "m");
   map_ = std::make_unique<semexp::OccupancyMap>(config_, bounds_);
 
-  occupied_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("occupied", 1, true);
+  occupied_pub_ = pnh.advertise<sensor_msgs::PointCloud2>(
+      "occupied", 1, [this](const ros::SingleSubscriberPublisher& p) { occupiedConnected(p); },
+      ros::SubscriberStatusCallback(), ros::VoidConstPtr(), true);
   frontiers_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("frontiers", 1, true);
   update_pub_ = pnh.advertise<semantic_exploration::MapBlocks>("map_update", 50);
   stats_pub_ = pnh.advertise<semantic_exploration::MapStats>("stats", 10);
@@ -251,35 +253,47 @@ void BackgroundMapNode::publishClouds(const ros::Time& stamp, bool force) {
     published_any = true;
   }
   if (force || last_occupied_pub_.isZero() || (now - last_occupied_pub_).toSec() >= config_.publish_period_s) {
-    if (occupied_pub_.getNumSubscribers() > 0 || force) {
-      std::vector<Eigen::Vector3f> pts;
-      std::vector<std::array<std::uint8_t, 3>> cols;
-      map_->forEachOccupied([&](const Eigen::Vector3d& c, double, const std::uint8_t* rgb) {
-        pts.push_back(c.cast<float>());
-        cols.push_back({rgb[0], rgb[1], rgb[2]});
-      });
-      sensor_msgs::PointCloud2 cloud;
-      cloud.header.stamp = stamp;
-      cloud.header.frame_id = frames_.world;
-      sensor_msgs::PointCloud2Modifier mod(cloud);
-      mod.setPointCloud2FieldsByString(2, "xyz", "rgb");
-      mod.resize(pts.size());
-      sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
-      sensor_msgs::PointCloud2Iterator<std::uint8_t> r(cloud, "r"), g(cloud, "g"), b(cloud, "b");
-      for (std::size_t i = 0; i < pts.size(); ++i, ++x, ++y, ++z, ++r, ++g, ++b) {
-        *x = pts[i].x();
-        *y = pts[i].y();
-        *z = pts[i].z();
-        *r = cols[i][0];
-        *g = cols[i][1];
-        *b = cols[i][2];
-      }
-      occupied_pub_.publish(cloud);
-    }
+    // Built only for a listener; a skipped cloud is sent when one connects (the topic is latched, and rviz
+    // started after the map stopped changing must still get it).
+    occupied_skipped_ = !(occupied_pub_.getNumSubscribers() > 0 || force);
+    if (!occupied_skipped_) publishOccupied(stamp);
     last_occupied_pub_ = now;
     published_any = true;
   }
   if (published_any) clouds_dirty_ = false;
+}
+
+void BackgroundMapNode::publishOccupied(const ros::Time& stamp) {
+  std::vector<Eigen::Vector3f> pts;
+  std::vector<std::array<std::uint8_t, 3>> cols;
+  map_->forEachOccupied([&](const Eigen::Vector3d& c, double, const std::uint8_t* rgb) {
+    pts.push_back(c.cast<float>());
+    cols.push_back({rgb[0], rgb[1], rgb[2]});
+  });
+  sensor_msgs::PointCloud2 cloud;
+  cloud.header.stamp = stamp;
+  cloud.header.frame_id = frames_.world;
+  sensor_msgs::PointCloud2Modifier mod(cloud);
+  mod.setPointCloud2FieldsByString(2, "xyz", "rgb");
+  mod.resize(pts.size());
+  sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
+  sensor_msgs::PointCloud2Iterator<std::uint8_t> r(cloud, "r"), g(cloud, "g"), b(cloud, "b");
+  for (std::size_t i = 0; i < pts.size(); ++i, ++x, ++y, ++z, ++r, ++g, ++b) {
+    *x = pts[i].x();
+    *y = pts[i].y();
+    *z = pts[i].z();
+    *r = cols[i][0];
+    *g = cols[i][1];
+    *b = cols[i][2];
+  }
+  occupied_pub_.publish(cloud);
+}
+
+void BackgroundMapNode::occupiedConnected(const ros::SingleSubscriberPublisher&) {
+  if (occupied_skipped_ && map_) {
+    occupied_skipped_ = false;
+    publishOccupied(last_header_.stamp);
+  }
 }
 
 // ----------------------------------------------------------------- services

@@ -72,7 +72,8 @@ class TestBackgroundMapNode(unittest.TestCase):
         rospy.Subscriber("/frame_integrated", FrameIntegrated, lambda m: cls.done.append(m), queue_size=100)
         rospy.Subscriber("/background_map/frontiers", PointCloud2, lambda m: cls.frontiers.append(m), queue_size=10)
         cls.occupied = []
-        rospy.Subscriber("/background_map/occupied", PointCloud2, lambda m: cls.occupied.append(m), queue_size=10)
+        cls.occupied_sub = rospy.Subscriber("/background_map/occupied", PointCloud2, lambda m: cls.occupied.append(m),
+                                            queue_size=10)
         cls.depth_pub = rospy.Publisher("/camera/depth/image_raw", Image, queue_size=10)
         cls.rgb_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=10)
         cls.info_pub = rospy.Publisher("/camera/camera_info", CameraInfo, queue_size=10, latch=True)
@@ -183,6 +184,28 @@ class TestBackgroundMapNode(unittest.TestCase):
         self.assertEqual(self.stats[-1].frames_integrated, before.frames_integrated + 2)
         seqs = [u.sequence for u in self.updates]
         self.assertEqual(seqs, list(range(1, len(seqs) + 1)))  # in order, no gaps
+
+        # 6. A cloud that fell due while nobody listened reaches the next listener (rviz started late), with
+        # nothing integrated after it: a nearer wall at 2.0 m is in the cloud the new subscriber gets.
+        self.occupied_sub.unregister()
+        time.sleep(1.5)  # past publish_period_s (1 s): the next frame's cloud is due, with no listener
+        near = np.full((H, W), 2.0, dtype=np.float32)
+        self.assertTrue(self.send(depth_image(rospy.Time.now(), near)).integrated)
+        late = []
+        sub = rospy.Subscriber("/background_map/occupied", PointCloud2, late.append, queue_size=10)
+        self.addCleanup(sub.unregister)
+        deadline = time.time() + 5.0
+        while not any(_has_point_near_x(c, 2.0) for c in late) and time.time() < deadline:
+            time.sleep(0.05)
+        self.assertTrue(any(_has_point_near_x(c, 2.0) for c in late),
+                        "a late subscriber got %d clouds, none with the wall at 2.0 m" % len(late))
+
+
+def _has_point_near_x(cloud, x, tol=0.05):
+    off = {f.name: f.offset for f in cloud.fields}["x"]
+    rows = np.frombuffer(cloud.data, dtype=np.uint8).reshape(-1, cloud.point_step)
+    xs = rows[:, off:off + 4].copy().view("<f4").ravel()
+    return bool(np.any(np.abs(xs - x) < tol))
 
 
 if __name__ == "__main__":

@@ -50,6 +50,9 @@ class BackgroundMapNode {
   void reportFrame(const std_msgs::Header& header, bool integrated, double time_ms);
   void publishStats(const std_msgs::Header& header);
   void publishClouds(const ros::Time& stamp, bool force);
+  void publishOccupied(const ros::Time& stamp);
+  /// A new ~occupied subscriber: sends the cloud if the last one was skipped for want of listeners.
+  void occupiedConnected(const ros::SingleSubscriberPublisher&);
   bool computeGains(semantic_exploration::ComputeGains::Request& req, semantic_exploration::ComputeGains::Response& res);
   bool getMap(semantic_exploration::GetMap::Request& req, semantic_exploration::GetMap::Response& res);
   bool save(semantic_exploration::SaveMap::Request& req, semantic_exploration::SaveMap::Response& res);
@@ -85,6 +88,7 @@ class BackgroundMapNode {
   std::uint64_t invalid_depth_pixels_ = 0;
   float last_integration_ms_ = 0.f, last_frontier_ms_ = 0.f;
   bool clouds_dirty_ = false;
+  bool occupied_skipped_ = false;  ///< an ~occupied cloud was due but nobody listened
 };
 
 }  // namespace semexp_ros
