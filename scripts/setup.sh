@@ -19,7 +19,7 @@ DEBIAN_PKGS=(
   build-essential cmake pkg-config python3-venv python3-pip
   ros-core-dev python3-rostest python3-rosbag python3-roslaunch
   python3-rosmaster python3-rosnode python3-rostopic python3-rosservice
-  python3-rosparam rosbash libtf2-ros-dev python3-tf2-ros libtf2-eigen-dev
+  python3-rosparam rosbash libtf2-ros-dev python3-tf2-ros libtf2-eigen-dev libtf2-msgs-dev
   libtf2-geometry-msgs-dev libmessage-filters-dev libcv-bridge-dev
   python3-cv-bridge libimage-transport-dev liboctomap-dev libompl-dev
   libpcl-dev libpcl-conversions-dev libopencv-dev libeigen3-dev libgtest-dev
@@ -34,7 +34,7 @@ DEBIAN_PKGS=(
 NOETIC_PKGS=(
   build-essential cmake pkg-config python3-venv python3-pip
   ros-noetic-ros-base ros-noetic-rostest ros-noetic-tf2-ros
-  ros-noetic-tf2-eigen ros-noetic-tf2-geometry-msgs ros-noetic-cv-bridge
+  ros-noetic-tf2-eigen ros-noetic-tf2-geometry-msgs ros-noetic-tf2-msgs ros-noetic-cv-bridge
   ros-noetic-image-transport ros-noetic-message-filters
   ros-noetic-pcl-conversions ros-noetic-pcl-ros ros-noetic-octomap
   ros-noetic-ompl ros-noetic-sensor-msgs ros-noetic-nav-msgs

@@ -33,7 +33,8 @@ InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle&
   classes_ = loadClasses(p);
   camera_ = loadCamera(p);
   frames_ = loadFrames(p);
-  p.getAtLeast("tf_timeout_s", tf_timeout_s_, 0.0, "s");
+  tf_ = loadTf(p);
+  tf_gap_guard_ = std::make_unique<TfGapGuard>(tf_.max_gap_s);
   matched_pub_ = nh.advertise<semantic_exploration::MatchedDetections>("matched_detections", 10);
   info_sub_ = nh.subscribe("camera/camera_info", 1, &InstanceMatchingNode::infoCallback, this);
   detections_sub_.subscribe(nh, "detections", 5);
@@ -137,7 +138,8 @@ void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsC
 
   Eigen::Isometry3d T_WC;
   const std::string frame = msg->header.frame_id.empty() ? frames_.camera : msg->header.frame_id;
-  err = lookupPose(tf_buffer_, frames_.world, frame, msg->header.stamp, tf_timeout_s_, T_WC);
+  err = lookupPose(tf_buffer_, frames_.world, frame, msg->header.stamp, tf_.timeout_s, T_WC,
+                   tf_gap_guard_.get());
   if (!err.empty()) return fail("no_tf", err);
 
   semantic_exploration::RenderInstances srv;

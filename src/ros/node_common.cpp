@@ -1,12 +1,15 @@
 #include "semantic_exploration/ros/node_common.hpp"
 
 #include <sensor_msgs/image_encodings.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include "semantic_exploration/DropCounts.h"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <iterator>
 #include <stdexcept>
 #include <opencv2/imgproc.hpp>
 
@@ -114,8 +117,74 @@ std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, 
   return "";
 }
 
+TfGapGuard::TfGapGuard(double max_gap_s, bool subscribe) : max_gap_s_(max_gap_s) {
+  if (!(max_gap_s_ > 0.0) || !subscribe || !ros::isInitialized()) return;
+  ros::NodeHandle nh;
+  nh.setCallbackQueue(&queue_);
+  sub_ = nh.subscribe<tf2_msgs::TFMessage>("/tf", 100, [this](const tf2_msgs::TFMessageConstPtr& msg) {
+    for (const auto& t : msg->transforms) add(t.child_frame_id, t.header.stamp);
+  });
+  spinner_ = std::make_unique<ros::AsyncSpinner>(1, &queue_);
+  spinner_->start();
+}
+
+TfGapGuard::~TfGapGuard() {
+  if (spinner_) spinner_->stop();
+  sub_.shutdown();
+}
+
+void TfGapGuard::add(const std::string& child_frame, const ros::Time& stamp) {
+  std::string frame = child_frame;
+  if (!frame.empty() && frame[0] == '/') frame.erase(0, 1);  // tf2 ignores a leading slash too
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto& s = stamps_[frame];
+  s.insert(stamp);
+  const ros::Time newest = *s.rbegin();
+  const ros::Time keep_from = newest.toSec() > 30.0 ? newest - ros::Duration(30.0) : ros::Time(0);
+  s.erase(s.begin(), s.lower_bound(keep_from));
+}
+
+double TfGapGuard::intervalAround(const std::string& child_frame, const ros::Time& stamp) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto it = stamps_.find(child_frame);
+  if (it == stamps_.end()) return 0.0;  // not a dynamic frame (or never seen): nothing to interpolate
+  const auto& s = it->second;
+  const auto after = s.lower_bound(stamp);
+  if (after != s.end() && *after == stamp) return 0.0;
+  if (after == s.begin()) return 0.0;
+  if (after == s.end()) return -1.0;
+  return (*after - *std::prev(after)).toSec();
+}
+
+std::string TfGapGuard::check(const tf2_ros::Buffer& tf, const std::string& target, const std::string& source,
+                              const ros::Time& stamp, double timeout_s) const {
+  if (!(max_gap_s_ > 0.0)) return "";
+  std::vector<std::string> chain;
+  try {
+    tf._chainAsVector(target, stamp, source, stamp, target, chain);
+  } catch (const std::exception&) {
+    return "";  // the lookup itself reports what is wrong with the chain
+  }
+  const auto deadline = ros::WallTime::now() + ros::WallDuration(std::max(0.0, timeout_s));
+  for (const std::string& frame : chain) {
+    double gap = intervalAround(frame, stamp);
+    while (gap < 0.0 && ros::WallTime::now() < deadline && ros::ok()) {
+      ros::WallDuration(0.002).sleep();
+      gap = intervalAround(frame, stamp);
+    }
+    if (gap > max_gap_s_) {
+      char buf[200];
+      std::snprintf(buf, sizeof(buf), "the pose of '%s' at %.3f s lies in a %.3f s gap between its tf samples "
+                    "(max_tf_gap_s %.3f): tf2 would interpolate across it", frame.c_str(), stamp.toSec(), gap,
+                    max_gap_s_);
+      return buf;
+    }
+  }
+  return "";
+}
+
 std::string lookupPose(const tf2_ros::Buffer& tf, const std::string& target, const std::string& source,
-                       const ros::Time& stamp, double timeout_s, Eigen::Isometry3d& T) {
+                       const ros::Time& stamp, double timeout_s, Eigen::Isometry3d& T, const TfGapGuard* guard) {
   // Waits in wall time: under /use_sim_time a lockstep simulator holds the
   // clock until this frame is reported, so a wait in sim time (tf2's timeout)
   // would never end while the pose is missing.
@@ -126,6 +195,12 @@ std::string lookupPose(const tf2_ros::Buffer& tf, const std::string& target, con
       return err.empty() ? "no transform " + target + " <- " + source : err;
     err.clear();
     ros::WallDuration(0.002).sleep();
+  }
+  if (guard) {
+    // At least a moment for a sample tf2's listener thread already has to reach the guard's thread.
+    const double left_s = std::max(0.02, (deadline - ros::WallTime::now()).toSec());
+    const std::string gap = guard->check(tf, target, source, stamp, left_s);
+    if (!gap.empty()) return gap;
   }
   try {
     const auto t = tf.lookupTransform(target, source, stamp);

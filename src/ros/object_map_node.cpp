@@ -68,7 +68,8 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_lis
   exploration_ = loadExploration(p);
   camera_ = loadCamera(p);
   frames_ = loadFrames(p);
-  p.getAtLeast("tf_timeout_s", tf_timeout_s_, 0.0, "s");
+  tf_ = loadTf(p);
+  tf_gap_guard_ = std::make_unique<TfGapGuard>(tf_.max_gap_s);
   map_ = std::make_unique<semexp::ObjectMap>(config_, classes_);
 
   objects_pub_ = pnh.advertise<semantic_exploration::ObjectArray>("objects", 1, true);
@@ -143,7 +144,8 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
 
   Eigen::Isometry3d T_WC;
   const std::string frame = matched->header.frame_id.empty() ? frames_.camera : matched->header.frame_id;
-  err = lookupPose(tf_buffer_, frames_.world, frame, matched->header.stamp, tf_timeout_s_, T_WC);
+  err = lookupPose(tf_buffer_, frames_.world, frame, matched->header.stamp, tf_.timeout_s, T_WC,
+                   tf_gap_guard_.get());
   if (!err.empty()) return fail("no_tf", err);
 
   std::vector<semexp::ObjectDetection> detections;

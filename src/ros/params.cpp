@@ -280,4 +280,11 @@ FrameNames loadFrames(const ParamReader& p) {
   return f;
 }
 
+TfSettings loadTf(const ParamReader& p) {
+  TfSettings t;
+  p.getAtLeast("tf_timeout_s", t.timeout_s, 0.0, "s");
+  p.getAtLeast("max_tf_gap_s", t.max_gap_s, 0.0, "s");
+  return t;
+}
+
 }  // namespace semexp_ros

@@ -91,7 +91,7 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listene
   camera_ = loadCamera(p);
   bounds_ = loadBounds(p);
   frames_ = loadFrames(p);
-  p.getAtLeast("tf_timeout_s", tf_timeout_s_, 0.0, "s");
+  tf_ = loadTf(p);
   p.get("planner/service_timeout_s", service_timeout_s_);
   if (!(service_timeout_s_ > 0)) throw semexp::ConfigError("planner/service_timeout_s", "must be > 0 s");
   p.get("planner/retry_period_s", retry_period_s_);
@@ -503,7 +503,7 @@ bool PlannerNode::iterate(std::string& message) {
     return false;
   }
   Eigen::Isometry3d T_WB;
-  const std::string err = lookupPose(tf_buffer_, frames_.world, frames_.body, ros::Time(0), tf_timeout_s_, T_WB);
+  const std::string err = lookupPose(tf_buffer_, frames_.world, frames_.body, ros::Time(0), tf_.timeout_s, T_WB);
   if (!err.empty()) {
     message = "waiting for the MAV pose: " + err;
     publishStatus(ExplorationStatus::STATE_WAITING, message);

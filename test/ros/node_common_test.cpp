@@ -1,12 +1,15 @@
 // Drop counting in the ROS shell: FrameGapCounter (frames missing from a
-// constant-rate stream, from the stamps that arrive) and DropCounter without a
-// running node (counts only, nothing published).
+// constant-rate stream, from the stamps that arrive), DropCounter without a
+// running node (counts only, nothing published), and TfGapGuard refusing a
+// pose tf2 would interpolate across a gap in the pose stream.
 #include <gtest/gtest.h>
+#include <tf2_ros/buffer.h>
 
 #include "semantic_exploration/ros/node_common.hpp"
 
 using semexp_ros::DropCounter;
 using semexp_ros::FrameGapCounter;
+using semexp_ros::TfGapGuard;
 
 namespace {
 
@@ -58,4 +61,70 @@ TEST(DropCounter, CountsPerReasonWithoutANode) {
   EXPECT_EQ(d.count("size_mismatch"), 0u);
   EXPECT_EQ(d.total(), 5u);
   EXPECT_EQ(d.counts().size(), 2u);
+}
+
+namespace {
+
+geometry_msgs::TransformStamped transform(const std::string& parent, const std::string& child, double t_s, double x) {
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = ros::Time(t_s);
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  t.transform.translation.x = x;
+  t.transform.rotation.w = 1.0;
+  return t;
+}
+
+// world -> body at 50 Hz from 1.00 to 2.00 s (x = t), then nothing until 3.00 s, then 50 Hz again to 3.20 s
+// (x = t + 10: the MAV moved 11 m while the pose source was silent); body -> camera static, 0.1 m ahead.
+void fill(tf2_ros::Buffer& tf, TfGapGuard& guard) {
+  tf.setTransform(transform("body", "camera", 0.0, 0.1), "test", true);
+  for (int k = 0; k <= 60; ++k) {
+    const double t = k <= 50 ? 1.0 + 0.02 * k : 3.0 + 0.02 * (k - 51);
+    tf.setTransform(transform("world", "body", t, k <= 50 ? t : t + 10.0), "test");
+    guard.add("body", ros::Time(t));
+  }
+}
+
+}  // namespace
+
+TEST(TfGapGuard, IntervalAroundAStamp) {
+  TfGapGuard g(0.2, false);
+  for (double t : {1.0, 1.02, 1.04, 3.0}) g.add("/body", ros::Time(t));  // a leading slash is dropped
+  EXPECT_DOUBLE_EQ(g.intervalAround("body", ros::Time(1.02)), 0.0);      // a sample at the stamp
+  EXPECT_NEAR(g.intervalAround("body", ros::Time(1.01)), 0.02, 1e-9);
+  EXPECT_NEAR(g.intervalAround("body", ros::Time(2.0)), 1.96, 1e-9);
+  EXPECT_DOUBLE_EQ(g.intervalAround("body", ros::Time(0.5)), 0.0);   // before the first: tf2 will not extrapolate
+  EXPECT_DOUBLE_EQ(g.intervalAround("body", ros::Time(3.5)), -1.0);  // none after yet
+  EXPECT_DOUBLE_EQ(g.intervalAround("camera", ros::Time(2.0)), 0.0);  // no samples: a static frame
+}
+
+TEST(TfGapGuard, RefusesAPoseInterpolatedAcrossAGap) {
+  tf2_ros::Buffer tf;
+  TfGapGuard guard(0.2, false);
+  fill(tf, guard);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  // Between two samples 20 ms apart: accepted, interpolated.
+  ASSERT_EQ(semexp_ros::lookupPose(tf, "world", "camera", ros::Time(1.51), 0.0, T, &guard), "");
+  EXPECT_NEAR(T.translation().x(), 1.51 + 0.1, 1e-9);
+  // At the samples on either side of the gap: exact, accepted.
+  ASSERT_EQ(semexp_ros::lookupPose(tf, "world", "camera", ros::Time(2.0), 0.0, T, &guard), "");
+  EXPECT_NEAR(T.translation().x(), 2.1, 1e-9);
+  ASSERT_EQ(semexp_ros::lookupPose(tf, "world", "camera", ros::Time(3.0), 0.0, T, &guard), "");
+  EXPECT_NEAR(T.translation().x(), 13.1, 1e-9);
+  // Inside the gap tf2 alone gives the straight line between 2.0 (x 2) and 3.0 (x 13) ...
+  ASSERT_EQ(semexp_ros::lookupPose(tf, "world", "camera", ros::Time(2.5), 0.0, T), "");
+  EXPECT_NEAR(T.translation().x(), 7.5 + 0.1, 1e-9);
+  // ... which the guard refuses, naming the frame and the gap, and leaves T alone.
+  T = Eigen::Isometry3d::Identity();
+  const std::string why = semexp_ros::lookupPose(tf, "world", "camera", ros::Time(2.5), 0.0, T, &guard);
+  EXPECT_NE(why.find("'body'"), std::string::npos) << why;
+  EXPECT_NE(why.find("1.000 s gap"), std::string::npos) << why;
+  EXPECT_TRUE(T.isApprox(Eigen::Isometry3d::Identity()));
+  // A limit of 1 s accepts this 1 s gap.
+  TfGapGuard loose(1.0, false);
+  fill(tf, loose);
+  EXPECT_EQ(semexp_ros::lookupPose(tf, "world", "camera", ros::Time(2.5), 0.0, T, &loose), "");
+  TfGapGuard off(0.0, false);  // 0 = no check
+  EXPECT_EQ(semexp_ros::lookupPose(tf, "world", "camera", ros::Time(2.5), 0.0, T, &off), "");
 }

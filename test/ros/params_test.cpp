@@ -100,6 +100,16 @@ TEST(Params, ClassResolutionMapAndBounds) {
   EXPECT_EQ(rejected([&] { semexp_ros::loadBounds(ParamReader(bad)); }), "bounds/min_m");
 }
 
+TEST(Params, TfSettingsDefaultsAndNames) {
+  XmlRpcValue p;
+  p["tf_timeout_s"] = 0.3;
+  const auto t = semexp_ros::loadTf(ParamReader(p));
+  EXPECT_DOUBLE_EQ(t.timeout_s, 0.3);
+  EXPECT_DOUBLE_EQ(t.max_gap_s, 0.2);  // default
+  p["max_tf_gap_s"] = -1.0;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadTf(ParamReader(p)); }), "max_tf_gap_s");
+}
+
 TEST(Params, AtLeastNamesTheParameterAndKeepsTheDefault) {
   XmlRpcValue p;
   p["tf_timeout_s"] = -0.5;

@@ -62,7 +62,8 @@ class BackgroundMapNode {
   semexp::BackgroundMapConfig config_;
   semexp::ExplorationConfig exploration_;
   FrameNames frames_;
-  double tf_timeout_s_ = 0.1;
+  TfSettings tf_;
+  std::unique_ptr<TfGapGuard> tf_gap_guard_;  ///< refuses poses interpolated across a gap in tf
   double frontier_period_s_ = 0.5;  ///< minimum period between ~frontiers clouds, s
   double colour_wait_s_ = 0.05;     ///< how long a depth frame waits for its colour image, s (wall)
   double start_free_radius_m_ = 0.5;  ///< unknown space this close to the first camera pose is assumed free, m

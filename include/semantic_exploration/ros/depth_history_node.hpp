@@ -45,7 +45,8 @@ class DepthHistoryNode {
   semexp::PinholeCamera camera_;
   semexp::Bounds bounds_;
   FrameNames frames_;
-  double tf_timeout_s_ = 0.1;
+  TfSettings tf_;
+  std::unique_ptr<TfGapGuard> tf_gap_guard_;  ///< refuses poses interpolated across a gap in tf
   double marker_period_s_ = 1.0;
   std::unique_ptr<semexp::DepthHistory> history_;
   uint64_t frames_integrated_ = 0;

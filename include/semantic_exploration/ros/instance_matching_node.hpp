@@ -52,7 +52,8 @@ class InstanceMatchingNode {
   sensor_msgs::CameraInfo camera_info_;
   bool have_info_ = false;
   FrameNames frames_;
-  double tf_timeout_s_ = 0.1;
+  TfSettings tf_;
+  std::unique_ptr<TfGapGuard> tf_gap_guard_;  ///< refuses poses interpolated across a gap in tf
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   message_filters::Subscriber<semantic_exploration::Detections> detections_sub_;

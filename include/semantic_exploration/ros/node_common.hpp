@@ -4,6 +4,7 @@
 /// validation, camera_info to PinholeCamera, tf2 pose lookup, counted and
 /// throttled reporting of dropped input, and a guarded main.
 
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
@@ -12,8 +13,12 @@
 #include <Eigen/Geometry>
 #include <deque>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <opencv2/core.hpp>
+#include <set>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "semantic_exploration/core/camera.hpp"
@@ -42,11 +47,50 @@ sensor_msgs::Image floatImageMsg(const std_msgs::Header& header, const std::vect
 std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, double d_max_m,
                            semexp::PinholeCamera& camera);
 
+/// Stamps of the transforms on /tf (the dynamic ones), to refuse a pose that
+/// tf2 would interpolate across a gap in the pose stream: tf2 interpolates
+/// linearly between the two samples around a stamp however far apart they
+/// are, so a frame taken while the pose source stalled would get a pose the
+/// MAV never had. Listens on a thread of its own, as tf2's listener does, so
+/// that it keeps up while a node's callback waits for a pose.
+class TfGapGuard {
+ public:
+  /// max_gap_s: widest accepted interval between the samples around a stamp, s;
+  /// <= 0 disables the check. With `subscribe` false it only learns from add().
+  explicit TfGapGuard(double max_gap_s, bool subscribe = true);
+  ~TfGapGuard();
+  TfGapGuard(const TfGapGuard&) = delete;
+  TfGapGuard& operator=(const TfGapGuard&) = delete;
+
+  double max_gap_s() const { return max_gap_s_; }
+  /// Records a sample of child_frame's transform (samples older than 30 s before the newest are forgotten).
+  void add(const std::string& child_frame, const ros::Time& stamp);
+  /// Interval between child_frame's samples around `stamp`, s: 0 if a sample
+  /// is at `stamp` or there is none before it (tf2 cannot interpolate then),
+  /// -1 if there is none after it yet.
+  double intervalAround(const std::string& child_frame, const ros::Time& stamp) const;
+  /// "" if no frame on the chain target <- source is interpolated at `stamp`
+  /// across more than max_gap_s; else why. A sample tf2 already has may not
+  /// have reached this guard yet: it waits for it up to timeout_s (wall).
+  std::string check(const tf2_ros::Buffer& tf, const std::string& target, const std::string& source,
+                    const ros::Time& stamp, double timeout_s) const;
+
+ private:
+  double max_gap_s_;
+  mutable std::mutex mutex_;
+  std::unordered_map<std::string, std::set<ros::Time>> stamps_;
+  ros::CallbackQueue queue_;
+  ros::Subscriber sub_;
+  std::unique_ptr<ros::AsyncSpinner> spinner_;
+};
+
 /// T_target_source at `stamp` through tf2, waiting up to `timeout_s` wall
-/// seconds (not sim time, which a lockstep simulator holds meanwhile).
-/// Returns "" on success, else tf2's reason.
+/// seconds (not sim time, which a lockstep simulator holds meanwhile). With a
+/// `guard`, a pose interpolated across a gap in the pose stream is refused.
+/// Returns "" on success, else the reason.
 std::string lookupPose(const tf2_ros::Buffer& tf, const std::string& target, const std::string& source,
-                       const ros::Time& stamp, double timeout_s, Eigen::Isometry3d& T_target_source);
+                       const ros::Time& stamp, double timeout_s, Eigen::Isometry3d& T_target_source,
+                       const TfGapGuard* guard = nullptr);
 
 /// Counts dropped input per reason and logs each reason at most every
 /// `period_s` seconds, so a bad stream never floods the log. Constructed in a

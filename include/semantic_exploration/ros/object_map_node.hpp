@@ -58,7 +58,8 @@ class ObjectMapNode {
   semexp::ExplorationConfig exploration_;
   semexp::PinholeCamera camera_;
   FrameNames frames_;
-  double tf_timeout_s_ = 0.1;
+  TfSettings tf_;
+  std::unique_ptr<TfGapGuard> tf_gap_guard_;  ///< refuses poses interpolated across a gap in tf
   std::unique_ptr<semexp::ObjectMap> map_;
   ros::Time last_stamp_;
   /// Last render_instances answer, reused by the frame it was made for if the map did not change since.

@@ -34,6 +34,12 @@ struct FrameNames {
   std::string camera = "camera";
 };
 
+/// How a node gets poses from tf2.
+struct TfSettings {
+  double timeout_s = 0.1;  ///< `tf_timeout_s`: wait for a pose at an image stamp, wall s
+  double max_gap_s = 0.2;  ///< `max_tf_gap_s`: refuse a pose tf2 would interpolate across a wider gap between samples, s; 0 = off
+};
+
 /// Reads typed values out of a parameter tree (the node's private namespace).
 class ParamReader {
  public:
@@ -77,5 +83,6 @@ semexp::MatchingConfig loadMatching(const ParamReader& p);            ///< `matc
 semexp::DepthHistoryConfig loadDepthHistory(const ParamReader& p);    ///< `depth_history/*`
 semexp::PlannerConfig loadPlanner(const ParamReader& p);              ///< `planner/*`
 FrameNames loadFrames(const ParamReader& p);                          ///< `frames/*`
+TfSettings loadTf(const ParamReader& p);                              ///< `tf_timeout_s`, `max_tf_gap_s`
 
 }  // namespace semexp_ros

@@ -113,7 +113,7 @@ class PlannerNode {
   semexp::PinholeCamera camera_;
   semexp::Bounds bounds_;
   FrameNames frames_;
-  double tf_timeout_s_ = 0.1;
+  TfSettings tf_;
   double service_timeout_s_ = 5.0;
   double retry_period_s_ = 1.0;
   double goal_timeout_factor_ = 3.0;
