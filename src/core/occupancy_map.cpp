@@ -1,6 +1,8 @@
 // Background occupancy map: geometry, integration and summaries.
 #include "semantic_exploration/core/occupancy_map.hpp"
 
+#include "semantic_exploration/core/gains.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -86,6 +88,11 @@ void OccupancyMap::initGeometry() {
   l_occ_ = toFixed(cfg_.log_odds_occupied);
   l_min_ = toFixed(cfg_.log_odds_min);
   l_max_ = toFixed(cfg_.log_odds_max);
+  // Reducible entropy (gains.hpp) of every storable log-odds value, indexed by value - l_min_.
+  entropy_lut_.resize(static_cast<std::size_t>(l_max_ - l_min_ + 1));
+  for (std::size_t i = 0; i < entropy_lut_.size(); ++i)
+    entropy_lut_[i] = static_cast<float>(reducibleEntropy((l_min_ + static_cast<int>(i)) / kScale, l_min_ / kScale,
+                                                          l_max_ / kScale));
   const std::size_t ncell = static_cast<std::size_t>(nb_.prod());
   cell_block_.assign(ncell, -1);
   cell_value_.assign(ncell, kUnknown);

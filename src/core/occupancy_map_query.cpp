@@ -11,16 +11,6 @@ namespace semexp {
 namespace {
 constexpr std::uint16_t kNoDist = 0xFFFF;
 
-// Reducible entropy (gains.hpp) of every stored log-odds value in
-// [l_min, l_max], indexed by value - l_min.
-std::vector<float> entropyTable(std::int16_t l_min, std::int16_t l_max) {
-  std::vector<float> t(static_cast<std::size_t>(l_max - l_min + 1));
-  for (std::size_t i = 0; i < t.size(); ++i)
-    t[i] = static_cast<float>(reducibleEntropy((l_min + static_cast<int>(i)) / OccupancyMap::kScale,
-                                               l_min / OccupancyMap::kScale, l_max / OccupancyMap::kScale));
-  return t;
-}
-
 inline VoxelState stateOf(std::int16_t l) {
   if (l == OccupancyMap::kUnknown) return VoxelState::kUnknown;
   return l >= 0 ? VoxelState::kOccupied : VoxelState::kFree;
@@ -276,7 +266,7 @@ RaycastHit OccupancyMap::raycast(const Eigen::Vector3d& origin_W, const Eigen::V
 std::vector<GainImages> OccupancyMap::computeGains(const std::vector<Eigen::Vector3d>& positions_W,
                                                    const SphericalGrid& grid, const GainSettings& st,
                                                    const std::vector<float>& max_depth_m) const {
-  const std::vector<float> H = entropyTable(l_min_, l_max_);
+  const std::vector<float>& H = entropy_lut_;
   const int W = grid.width, Hh = grid.height, n = W * Hh;
   const bool have_max = max_depth_m.size() == positions_W.size() * static_cast<std::size_t>(n) && n > 0;
   const double norm = st.d_max_m - st.d_min_m;

@@ -246,6 +246,7 @@ class OccupancyMap {
   Eigen::Vector3d origin_;
   Eigen::Vector3i nb_;  ///< cells per axis
   std::int16_t l_free_, l_occ_, l_min_, l_max_;
+  std::vector<float> entropy_lut_;  ///< reducible entropy of log-odds l_min_ + i (computeGains)
 
   // per cell
   std::vector<std::int32_t> cell_block_;   ///< block slot or -1 (uniform leaf)
