@@ -12,6 +12,28 @@ from std_msgs.msg import UInt32
 from semantic_exploration.msg import ExplorationStatus, MapStats
 
 PKG = "semantic_exploration"
+REASONS = ("explored", "no_progress", "time_limit", "no_reachable_candidate")
+
+
+def wait_finished(test, status, collisions, timeout_s):
+    """Waits (wall time) for the planner's STATE_FINISHED on /planner/status
+    (`status`: the messages received so far) and asserts what any whole
+    exploration must end with: a known termination reason, more than one
+    iteration, no collision (`collisions[0]`: the latest /mav/collisions).
+    Returns the final status and the iteration count."""
+    deadline = time.time() + timeout_s
+    finished = None
+    while time.time() < deadline and finished is None and not rospy.is_shutdown():
+        done = [s for s in status if s.state == ExplorationStatus.STATE_FINISHED]
+        finished = done[-1] if done else None
+        time.sleep(1.0)
+    test.assertIsNotNone(finished, "the planner did not terminate; last status: %s" %
+                         (status[-1].message if status else "none"))
+    test.assertIn(finished.termination_reason, REASONS)
+    iterations = max(s.iteration for s in status)
+    test.assertGreater(iterations, 1)
+    test.assertEqual(collisions[0], 0, "the MAV collided %d times" % collisions[0])
+    return finished, iterations
 
 
 class Exploration(unittest.TestCase):
@@ -20,18 +42,7 @@ class Exploration(unittest.TestCase):
         rospy.Subscriber("/planner/status", ExplorationStatus, status.append)
         rospy.Subscriber("/background_map/stats", MapStats, stats.append)
         rospy.Subscriber("/mav/collisions", UInt32, lambda m: collisions.__setitem__(0, m.data))
-        deadline = time.time() + 1700.0
-        finished = None
-        while time.time() < deadline and finished is None and not rospy.is_shutdown():
-            done = [s for s in status if s.state == ExplorationStatus.STATE_FINISHED]
-            finished = done[-1] if done else None
-            time.sleep(1.0)
-        self.assertIsNotNone(finished, "the planner did not terminate; last status: %s" %
-                             (status[-1].message if status else "none"))
-        self.assertIn(finished.termination_reason, ("explored", "no_progress", "time_limit", "no_reachable_candidate"))
-        iterations = max(s.iteration for s in status)
-        self.assertGreater(iterations, 1)
-        self.assertEqual(collisions[0], 0, "the MAV collided %d times" % collisions[0])
+        finished, iterations = wait_finished(self, status, collisions, 1700.0)
         gt = os.path.join(rospy.get_param("/exploration_test/gt_dir"), "free_space.json")
         with open(gt) as f:
             free_m3 = json.load(f)["explorable_free_volume_m3"]

@@ -20,9 +20,9 @@ from std_msgs.msg import UInt32
 
 from semantic_exploration.msg import ExplorationStatus
 from semantic_exploration.srv import SaveMap
+from test_exploration import wait_finished  # installed beside this script
 
 PKG = "semantic_exploration"
-REASONS = ("explored", "no_progress", "time_limit", "no_reachable_candidate")
 MIN_COMPLETENESS = 0.7
 
 
@@ -32,18 +32,7 @@ class ExplorationObjects(unittest.TestCase):
         rospy.Subscriber("/planner/status", ExplorationStatus, status.append)
         rospy.Subscriber("/mav/collisions", UInt32, lambda m: collisions.__setitem__(0, m.data))
         wall0 = time.time()
-        deadline = wall0 + 1500.0
-        finished = None
-        while time.time() < deadline and finished is None and not rospy.is_shutdown():
-            done = [s for s in status if s.state == ExplorationStatus.STATE_FINISHED]
-            finished = done[-1] if done else None
-            time.sleep(1.0)
-        self.assertIsNotNone(finished, "the planner did not terminate; last status: %s" %
-                             (status[-1].message if status else "none"))
-        self.assertIn(finished.termination_reason, REASONS)
-        iterations = max(s.iteration for s in status)
-        self.assertGreater(iterations, 1)
-        self.assertEqual(collisions[0], 0, "the MAV collided %d times" % collisions[0])
+        finished, iterations = wait_finished(self, status, collisions, 1500.0)
         rospy.loginfo("exploration_objects: %s after %d iterations, sim %.1f s, wall %.0f s since the test started",
                       finished.termination_reason, iterations, rospy.get_time(), time.time() - wall0)
         if rospy.get_param("~check_objects", False):
