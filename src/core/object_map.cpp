@@ -102,6 +102,18 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
   // detection of the same class: they are pieces of the detected object.
   std::map<std::uint32_t, std::uint32_t> merged_into;
   {
+    // y's surface lies mostly inside x's box in 3D (boxes padded by 2 voxels).
+    const auto inside_box = [this](const MappedObject& y, const MappedObject& x, bool smaller) {
+      const TsdfSummary sx = x.tsdf.summarize(0.0), sy = y.tsdf.summarize(0.0);
+      if (sx.voxel_count == 0 || sy.voxel_count == 0 || (smaller && sy.voxel_count >= sx.voxel_count)) return false;
+      const Eigen::Vector3d pad = Eigen::Vector3d::Constant(2.0 * x.resolution_m);
+      const Eigen::AlignedBox3d bx(sx.bbox_min_W - pad, sx.bbox_max_W + pad);
+      const Eigen::AlignedBox3d by(sy.bbox_min_W - pad, sy.bbox_max_W + pad);
+      // Eigen's intersection of disjoint boxes is empty but its volume() is the product of the (negative)
+      // sizes: positive when two of them are negative.
+      const Eigen::AlignedBox3d both = bx.intersection(by);
+      return !both.isEmpty() && both.volume() >= config_.merge_fraction * by.volume();
+    };
     std::map<std::uint32_t, int> rendered_pixels;
     for (int v = 0; v < rendered.rows; ++v) {
       const std::uint16_t* row = rendered.ptr<std::uint16_t>(v);
@@ -119,12 +131,21 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
         if (inside < config_.merge_fraction * rp.second) continue;
         // A detector may also merge two neighbouring objects into one mask:
         // only merge if y's surface also lies mostly inside x's box in 3D.
-        const TsdfSummary sx = ox.tsdf.summarize(0.0), sy = oy.tsdf.summarize(0.0);
-        if (sx.voxel_count == 0 || sy.voxel_count == 0) continue;
-        const Eigen::Vector3d pad = Eigen::Vector3d::Constant(2.0 * ox.resolution_m);
-        const Eigen::AlignedBox3d bx(sx.bbox_min_W - pad, sx.bbox_max_W + pad);
-        const Eigen::AlignedBox3d by(sy.bbox_min_W - pad, sy.bbox_max_W + pad);
-        if (bx.intersection(by).volume() < config_.merge_fraction * by.volume()) continue;
+        if (!inside_box(oy, ox, false)) continue;
+        merged_into[y] = kv.first;
+        break;
+      }
+    }
+    // A piece made from one detection and not rendered (too small or thin for the raycast to hit) is never
+    // matched, updated or merged by the rule above: it would stay a ghost object that the planner keeps
+    // visiting. It joins a larger detected object of its class whose box holds it.
+    for (const auto& kv_y : objects_) {
+      const std::uint32_t y = kv_y.first;
+      const MappedObject& oy = *kv_y.second;
+      if (masks.count(y) || rendered_pixels.count(y) || oy.detection_count > 1) continue;
+      for (const auto& kv : masks) {
+        const MappedObject& ox = *objects_.at(kv.first);
+        if (ox.class_id != oy.class_id || ox.resolution_m != oy.resolution_m || !inside_box(oy, ox, true)) continue;
         merged_into[y] = kv.first;
         break;
       }

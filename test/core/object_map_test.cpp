@@ -197,6 +197,60 @@ TEST(ObjectMap, PieceOfAnObjectIsMergedIntoIt) {
   for (const auto& v : map.object(2)->tsdf.extractMesh().vertices_W) ASSERT_LT(std::abs(kA.sdf(v.cast<double>())), 0.02);
 }
 
+TEST(ObjectMap, PieceNeverSeenAgainIsMergedIntoTheObjectHoldingIt) {
+  PinholeCamera cam;
+  ObjectMapConfig cfg = config();
+  cfg.min_new_object_pixels = 1;  // let a detection of a few pixels make an object
+  ObjectMap map(cfg, ClassTable());
+  const auto poses = ring(kA.centre, 0.9, 0.3, 10);
+  cv::Mat depth, labels, ids;
+  // A first detection saw a 7 x 7 px speck of A (2.4 cm at 0.9 m): object 1, of two voxels.
+  renderShapes(cam, poses[0], {&kA}, depth, labels);
+  cv::Mat speck = cv::Mat::zeros(labels.size(), CV_16UC1);
+  labels(cv::Rect(157, 117, 7, 7)).copyTo(speck(cv::Rect(157, 117, 7, 7)));
+  const FrameIntegration first = map.integrateFrame(cam, poses[0], depth, cv::Mat(), speck, {{1, 0, kChair}});
+  ASSERT_EQ(first.created, std::vector<std::uint32_t>{1u});
+  // It hardly renders (a few pixels from one of the ten views round A), so the merge by rendered pixels
+  // does not see it from the views below.
+  for (size_t i = 0; i < 3; ++i) {
+    renderShapes(cam, poses[i], {&kA}, depth, labels);
+    map.render(cam, poses[i], depth, ids);
+    ASSERT_EQ(cv::countNonZero(ids == 1), 0);
+  }
+  // A is then taken for a new object (2) and tracked: the speck lies inside it and joins it.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> merged;
+  for (size_t i = 0; i < 3; ++i) {
+    renderShapes(cam, poses[i], {&kA}, depth, labels);
+    const FrameIntegration r =
+        map.integrateFrame(cam, poses[i], depth, cv::Mat(), labels, {{1, i == 0 ? 0u : 2u, kChair}});
+    merged.insert(merged.end(), r.merged.begin(), r.merged.end());
+  }
+  EXPECT_EQ(merged, (std::vector<std::pair<std::uint32_t, std::uint32_t>>{{1, 2}}));
+  ASSERT_EQ(map.objects().size(), 1u);
+  EXPECT_EQ(map.objects().begin()->first, 2u);
+}
+
+TEST(ObjectMap, OnceSeenObjectOutsideADetectedOneStays) {
+  PinholeCamera cam;
+  ObjectMapConfig cfg = config();
+  cfg.min_new_object_pixels = 1;
+  ObjectMap map(cfg, ClassTable());
+  // A speck of B, then A tracked: B's speck is not inside A's box and stays an object of its own.
+  const auto poses_a = ring(kA.centre, 0.9, 0.3, 10);
+  const auto T_B = lookAt(kB.centre + Eigen::Vector3d(-0.9, 0.0, 0.3), kB.centre);
+  cv::Mat depth, labels;
+  renderShapes(cam, T_B, {&kB}, depth, labels);
+  cv::Mat speck = cv::Mat::zeros(labels.size(), CV_16UC1);
+  labels(cv::Rect(157, 117, 7, 7)).copyTo(speck(cv::Rect(157, 117, 7, 7)));
+  ASSERT_EQ(map.integrateFrame(cam, T_B, depth, cv::Mat(), speck, {{1, 0, kChair}}).created.size(), 1u);
+  for (size_t i = 0; i < 3; ++i) {
+    renderShapes(cam, poses_a[i], {&kA}, depth, labels);
+    EXPECT_TRUE(map.integrateFrame(cam, poses_a[i], depth, cv::Mat(), labels, {{1, i == 0 ? 0u : 2u, kChair}})
+                    .merged.empty());
+  }
+  EXPECT_EQ(map.objects().size(), 2u);
+}
+
 TEST(ObjectMap, NewDetectionWithFewPixelsBesideKnownObjectsMakesNoObject) {
   PinholeCamera cam;
   ObjectMap map = twoObjects(cam);

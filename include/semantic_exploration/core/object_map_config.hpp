@@ -25,7 +25,9 @@ struct ObjectMapConfig {
   /// A visible object that was not detected in a frame, whose rendered pixels
   /// lie at least this much (fraction) inside the mask of a detected object
   /// of the same class and whose surface box lies this much inside that
-  /// object's box, is the same object: it is merged into that one.
+  /// object's box, is the same object: it is merged into that one. So is an
+  /// object detected only once and not rendered in the frame whose surface
+  /// box lies this much inside a larger detected object's box.
   double merge_fraction = 0.8;
   /// A new object is made only from a detection that keeps at least this many
   /// mask pixels with valid depth outside the (grown) renders of known objects,
