@@ -93,10 +93,7 @@ sensor_msgs::ImageConstPtr BackgroundMapNode::matchingRgb(const ros::Time& stamp
 }
 
 void BackgroundMapNode::depthCallback(const sensor_msgs::ImageConstPtr& msg) {
-  if (const auto missing = depth_gaps_.add(msg->header.stamp))
-    drops_.drop("frame_gap", std::to_string(missing) + " depth frame(s) missing before " +
-                                 std::to_string(msg->header.stamp.toSec()) + " s (camera period " +
-                                 std::to_string(depth_gaps_.period_s()) + " s)", missing);
+  countFrameGaps(depth_gaps_, drops_, msg->header.stamp, "depth");
   if (pending_depth_) {  // an older frame whose colour never came
     processFrame(pending_depth_, nullptr);
     pending_depth_.reset();

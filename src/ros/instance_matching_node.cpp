@@ -95,6 +95,8 @@ void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsC
     drops_.drop(reason, detail);
     publishEmpty(msg->header);
   };
+  // Frames missing from the detector's stream, or whose depth never came (they never pair).
+  countFrameGaps(frame_gaps_, drops_, msg->header.stamp, "detection");
   cv::Mat depth_m, instances;
   std::string err = depthToMeters(*depth_msg, depth_m);
   if (!err.empty()) return fail("bad_depth", err);

@@ -266,6 +266,13 @@ uint64_t FrameGapCounter::add(const ros::Time& stamp) {
   return k > 1 ? static_cast<uint64_t>(k - 1) : 0;
 }
 
+void countFrameGaps(FrameGapCounter& gaps, DropCounter& drops, const ros::Time& stamp, const std::string& stream) {
+  if (const uint64_t missing = gaps.add(stamp))
+    drops.drop("frame_gap", std::to_string(missing) + " " + stream + " frame(s) missing before " +
+                                std::to_string(stamp.toSec()) + " s (period " + std::to_string(gaps.period_s()) +
+                                " s)", missing);
+}
+
 uint64_t DropCounter::count(const std::string& reason) const {
   const auto it = counts_.find(reason);
   return it == counts_.end() ? 0 : it->second;

@@ -80,6 +80,9 @@ def test_mission_with_faults_completes_and_counts_drops(mission):
     n_dropped = injected["frames_dropped"]
     assert n_dropped > 0
     assert n_dropped - 3 <= bg.get("frame_gap", 0) <= n_dropped, (bg, n_dropped)
+    # instance_matching, from gaps in its (detections, depth) pairs: the same frames
+    im_gap = by_node["instance_matching"].get("frame_gap", 0)
+    assert n_dropped - 3 <= im_gap <= n_dropped, (by_node["instance_matching"], n_dropped)
 
     # detector at another resolution: instance_matching refuses every such frame
     # (it reaches it before the tf check, so frames in the gap count here too).

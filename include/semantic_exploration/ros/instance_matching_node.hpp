@@ -63,6 +63,7 @@ class InstanceMatchingNode {
   ros::Publisher matched_pub_;
   ros::ServiceClient render_client_;
   DropCounter drops_;
+  FrameGapCounter frame_gaps_;  ///< detection frames missing from the paired stream ("frame_gap")
 };
 
 }  // namespace semexp_ros

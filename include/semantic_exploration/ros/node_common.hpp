@@ -136,6 +136,10 @@ class FrameGapCounter {
   double period_s_ = 0.0;
 };
 
+/// Feeds `stamp` to `gaps` and counts the frames found missing before it as
+/// "frame_gap" drops of `stream` (e.g. "depth"), with one throttled log line.
+void countFrameGaps(FrameGapCounter& gaps, DropCounter& drops, const ros::Time& stamp, const std::string& stream);
+
 /// Runs a node class: constructs it (it loads and validates parameters) and
 /// spins. Invalid configuration logs FATAL naming the parameter and returns 2.
 template <typename NodeT>
