@@ -341,7 +341,9 @@ def main(argv=None):
                 break
             time.sleep(0.5)
         print(mon.line(rospy.get_time(), time.time() - t0, n_gt), flush=True)
-        mon.freeze_drops()  # the simulator runs on while the maps are saved: count up to the stop
+        # The simulator runs on while the maps are saved: the report's figures are those at the stop.
+        mon.freeze()
+        sim_end, wall_end = rospy.get_time(), time.time() - t0
         if writer is not None:
             writer.writerow(mon.row(rospy.get_time(), time.time() - t0, gt_objs))
         series.close()
@@ -352,7 +354,6 @@ def main(argv=None):
         print("[mission] stopping: %s; saving maps" % reason, flush=True)
         saved["background_map"] = call_save("/background_map/save", os.path.join(out, "map"))
         saved["object_map"] = call_save("/object_map/save", os.path.join(out, "objects"))
-        sim_end, wall_end = rospy.get_time(), time.time() - t0
         # The evaluation reads only the saved files: stop the simulator and
         # the nodes first instead of letting them run on beside it.
         stop_launch(launch)

@@ -16,7 +16,7 @@ def read_bag(path: str, gt_objs: List[Dict], period_s: float = 1.0,
     """Feeds every evaluation topic of the bag into a RunLog in recording order.
 
     Returns (log, rows, info): rows are RunLog.row() every period_s of bag
-    time plus one at the end (wall_s empty); info holds start_s, end_s (bag
+    time plus one at the end unless a row fell there (wall_s empty); info holds start_s, end_s (bag
     time of the first and last message, s), the topics found with their
     message counts, and the evaluation topics the bag lacks.
     """
@@ -25,7 +25,7 @@ def read_bag(path: str, gt_objs: List[Dict], period_s: float = 1.0,
     rows: List[Dict] = []
     counts: Dict[str, int] = {}
     start = end = None
-    next_row = None
+    next_row = last_row = None
     with rosbag.Bag(path) as bag:
         present = set(bag.get_type_and_topic_info().topics)
         for topic, msg, t in bag.read_messages(topics=[k for k in TOPICS if k in present]):
@@ -34,11 +34,12 @@ def read_bag(path: str, gt_objs: List[Dict], period_s: float = 1.0,
                 start, next_row = t_s, t_s
             while t_s >= next_row:  # rows describe the state before this message
                 rows.append(log.row(next_row, None, gt_objs))
+                last_row = next_row
                 next_row += period_s
             log.handle(topic, msg)
             counts[topic] = counts.get(topic, 0) + 1
             end = t_s
-    if end is not None:
+    if end is not None and end > last_row:  # not when the last message fell on a row's time
         rows.append(log.row(end, None, gt_objs))
     info = {"start_s": start, "end_s": end, "topics": counts,
             "missing_topics": sorted(k for k in TOPICS if k not in counts)}

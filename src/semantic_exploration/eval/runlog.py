@@ -56,12 +56,12 @@ class RunLog:
         self.faults: Dict[str, int] = {}             # injected by mav_sim
         self.last_pose = None                        # (x, y, z) of the last mav/pose
         self._last_pos = None
-        self._drops_frozen = False
+        self._frozen = False
 
-    def freeze_drops(self):
-        """Keeps the drop and fault counts as they are now (the run stopped; a
-        simulator that goes on while the maps are saved does not add to them)."""
-        self._drops_frozen = True
+    def freeze(self):
+        """Keeps every figure as it is now (the run stopped; a simulator that
+        goes on while the maps are saved adds nothing to it)."""
+        self._frozen = True
 
     # ------------------------------------------------------------- input
     def subscribe(self):
@@ -73,14 +73,15 @@ class RunLog:
         types = {"/planner/status": ExplorationStatus, "/background_map/stats": MapStats,
                  "/object_map/objects": ObjectArray, "/mav/collisions": UInt32, "/mav/pose": PoseStamped,
                  "/dropped_input": DropCounts, "/mav_sim/faults": DropCounts}
-        for topic, handler in TOPICS.items():
-            rospy.Subscriber(topic, types[topic], getattr(self, handler), queue_size=50)
+        for topic in TOPICS:
+            rospy.Subscriber(topic, types[topic], lambda msg, t=topic: self.handle(t, msg), queue_size=50)
         return self
 
     def handle(self, topic: str, msg) -> None:
-        """Feeds one message of `topic` (e.g. read from a bag); other topics are ignored."""
+        """Feeds one message of `topic` (live, or read from a bag); other
+        topics, and everything after freeze(), are ignored."""
         h = TOPICS.get(topic)
-        if h is not None:
+        if h is not None and not self._frozen:
             getattr(self, h)(msg)
 
     def _on_status(self, msg):
@@ -102,13 +103,9 @@ class RunLog:
         self._last_pos = self.last_pose = (p.x, p.y, p.z)
 
     def _on_drops(self, msg):
-        if self._drops_frozen:
-            return
         self.drops[short_node(msg.node)] = dict(zip(msg.reasons, (int(c) for c in msg.counts)))
 
     def _on_faults(self, msg):
-        if self._drops_frozen:
-            return
         self.faults = dict(zip(msg.reasons, (int(c) for c in msg.counts)))
 
     # ------------------------------------------------------------ output
