@@ -40,6 +40,21 @@ ObjectMap twoObjects(const PinholeCamera& cam) {
   return map;
 }
 
+// A detected as a new object (it becomes id 2) from poses[0], then tracked as 2 over poses[1 .. n): the merges.
+using Merges = std::vector<std::pair<std::uint32_t, std::uint32_t>>;  // (merged id, into id)
+Merges trackAAsObject2(ObjectMap& map, const PinholeCamera& cam, const std::vector<Eigen::Isometry3d>& poses,
+                       size_t n) {
+  Merges merged;
+  cv::Mat depth, labels;
+  for (size_t i = 0; i < n; ++i) {
+    renderShapes(cam, poses[i], {&kA}, depth, labels);
+    const FrameIntegration r =
+        map.integrateFrame(cam, poses[i], depth, cv::Mat(), labels, {{1, i == 0 ? 0u : 2u, kChair}});
+    merged.insert(merged.end(), r.merged.begin(), r.merged.end());
+  }
+  return merged;
+}
+
 // IoU of the pixels showing object `id` in the rendering and in the truth.
 double iou(const cv::Mat& ids, const cv::Mat& expected, int id) {
   const cv::Mat a = ids == id, b = expected == id;
@@ -184,14 +199,7 @@ TEST(ObjectMap, PieceOfAnObjectIsMergedIntoIt) {
   map.integrateFrame(cam, poses[0], depth, cv::Mat(), patch, {{1, 0, kChair}});
   ASSERT_EQ(map.objects().size(), 1u);
   // Later A is taken for a new object (2) and tracked all round: the patch is part of it.
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> merged;
-  for (size_t i = 0; i < poses.size(); ++i) {
-    renderShapes(cam, poses[i], {&kA}, depth, labels);
-    const FrameIntegration r =
-        map.integrateFrame(cam, poses[i], depth, cv::Mat(), labels, {{1, i == 0 ? 0u : 2u, kChair}});
-    merged.insert(merged.end(), r.merged.begin(), r.merged.end());
-  }
-  EXPECT_EQ(merged, (std::vector<std::pair<std::uint32_t, std::uint32_t>>{{1, 2}}));
+  EXPECT_EQ(trackAAsObject2(map, cam, poses, poses.size()), (Merges{{1, 2}}));
   ASSERT_EQ(map.objects().size(), 1u);
   EXPECT_EQ(map.objects().begin()->first, 2u);
   for (const auto& v : map.object(2)->tsdf.extractMesh().vertices_W) ASSERT_LT(std::abs(kA.sdf(v.cast<double>())), 0.02);
@@ -218,14 +226,7 @@ TEST(ObjectMap, PieceNeverSeenAgainIsMergedIntoTheObjectHoldingIt) {
     ASSERT_EQ(cv::countNonZero(ids == 1), 0);
   }
   // A is then taken for a new object (2) and tracked: the speck lies inside it and joins it.
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> merged;
-  for (size_t i = 0; i < 3; ++i) {
-    renderShapes(cam, poses[i], {&kA}, depth, labels);
-    const FrameIntegration r =
-        map.integrateFrame(cam, poses[i], depth, cv::Mat(), labels, {{1, i == 0 ? 0u : 2u, kChair}});
-    merged.insert(merged.end(), r.merged.begin(), r.merged.end());
-  }
-  EXPECT_EQ(merged, (std::vector<std::pair<std::uint32_t, std::uint32_t>>{{1, 2}}));
+  EXPECT_EQ(trackAAsObject2(map, cam, poses, 3), (Merges{{1, 2}}));
   ASSERT_EQ(map.objects().size(), 1u);
   EXPECT_EQ(map.objects().begin()->first, 2u);
 }
@@ -243,11 +244,7 @@ TEST(ObjectMap, OnceSeenObjectOutsideADetectedOneStays) {
   cv::Mat speck = cv::Mat::zeros(labels.size(), CV_16UC1);
   labels(cv::Rect(157, 117, 7, 7)).copyTo(speck(cv::Rect(157, 117, 7, 7)));
   ASSERT_EQ(map.integrateFrame(cam, T_B, depth, cv::Mat(), speck, {{1, 0, kChair}}).created.size(), 1u);
-  for (size_t i = 0; i < 3; ++i) {
-    renderShapes(cam, poses_a[i], {&kA}, depth, labels);
-    EXPECT_TRUE(map.integrateFrame(cam, poses_a[i], depth, cv::Mat(), labels, {{1, i == 0 ? 0u : 2u, kChair}})
-                    .merged.empty());
-  }
+  EXPECT_TRUE(trackAAsObject2(map, cam, poses_a, 3).empty());
   EXPECT_EQ(map.objects().size(), 2u);
 }
 
