@@ -54,7 +54,7 @@ BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) 
   map_ = std::make_unique<semexp::OccupancyMap>(config_, bounds_);
 
   occupied_pub_ = pnh.advertise<sensor_msgs::PointCloud2>(
-      "occupied", 1, [this](const ros::SingleSubscriberPublisher& p) { occupiedConnected(p); },
+      "occupied", 1, [this](const ros::SingleSubscriberPublisher& sub) { occupiedConnected(sub); },
       ros::SubscriberStatusCallback(), ros::VoidConstPtr(), true);
   frontiers_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("frontiers", 1, true);
   update_pub_ = pnh.advertise<semantic_exploration::MapBlocks>("map_update", 50);

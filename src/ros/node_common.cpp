@@ -138,6 +138,7 @@ void TfGapGuard::add(const std::string& child_frame, const ros::Time& stamp) {
   if (!frame.empty() && frame[0] == '/') frame.erase(0, 1);  // tf2 ignores a leading slash too
   std::lock_guard<std::mutex> lock(mutex_);
   auto& s = stamps_[frame];
+  if (!s.empty() && stamp + ros::Duration(1.0) < *s.rbegin()) s.clear();  // time went back
   s.insert(stamp);
   const ros::Time newest = *s.rbegin();
   const ros::Time keep_from = newest.toSec() > 30.0 ? newest - ros::Duration(30.0) : ros::Time(0);
@@ -156,6 +157,21 @@ double TfGapGuard::intervalAround(const std::string& child_frame, const ros::Tim
   return (*after - *std::prev(after)).toSec();
 }
 
+double TfGapGuard::limit_s(const std::string& child_frame) const {
+  std::vector<double> dt;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = stamps_.find(child_frame);
+    if (it != stamps_.end())
+      for (auto b = it->second.rbegin(), a = std::next(b); a != it->second.rend() && dt.size() < 15; ++a, ++b)
+        dt.push_back((*b - *a).toSec());
+  }
+  if (dt.empty()) return max_gap_s_;
+  const size_t q = (dt.size() - 1) / 4;  // lower quartile: robust to the gaps themselves
+  std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(q), dt.end());
+  return std::max(max_gap_s_, kGapPeriods * dt[q]);
+}
+
 std::string TfGapGuard::check(const tf2_ros::Buffer& tf, const std::string& target, const std::string& source,
                               const ros::Time& stamp, double timeout_s) const {
   if (!(max_gap_s_ > 0.0)) return "";
@@ -172,11 +188,12 @@ std::string TfGapGuard::check(const tf2_ros::Buffer& tf, const std::string& targ
       ros::WallDuration(0.002).sleep();
       gap = intervalAround(frame, stamp);
     }
-    if (gap > max_gap_s_) {
-      char buf[200];
+    const double limit = gap > max_gap_s_ ? limit_s(frame) : max_gap_s_;
+    if (gap > limit) {
+      char buf[240];
       std::snprintf(buf, sizeof(buf), "the pose of '%s' at %.3f s lies in a %.3f s gap between its tf samples "
-                    "(max_tf_gap_s %.3f): tf2 would interpolate across it", frame.c_str(), stamp.toSec(), gap,
-                    max_gap_s_);
+                    "(limit %.3f s: max_tf_gap_s or %.0f sample periods): tf2 would interpolate across it",
+                    frame.c_str(), stamp.toSec(), gap, limit, kGapPeriods);
       return buf;
     }
   }

@@ -91,7 +91,7 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listene
   camera_ = loadCamera(p);
   bounds_ = loadBounds(p);
   frames_ = loadFrames(p);
-  tf_ = loadTf(p);
+  tf_ = loadTf(p);  // max_tf_gap_s unused here: the planner takes the latest pose, never an interpolated one
   p.get("planner/service_timeout_s", service_timeout_s_);
   if (!(service_timeout_s_ > 0)) throw semexp::ConfigError("planner/service_timeout_s", "must be > 0 s");
   p.get("planner/retry_period_s", retry_period_s_);

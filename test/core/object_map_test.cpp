@@ -244,6 +244,12 @@ TEST(ObjectMap, OnceSeenObjectOutsideADetectedOneStays) {
   cv::Mat speck = cv::Mat::zeros(labels.size(), CV_16UC1);
   labels(cv::Rect(157, 117, 7, 7)).copyTo(speck(cv::Rect(157, 117, 7, 7)));
   ASSERT_EQ(map.integrateFrame(cam, T_B, depth, cv::Mat(), speck, {{1, 0, kChair}}).created.size(), 1u);
+  cv::Mat ids;
+  for (size_t i = 0; i < 3; ++i) {  // unrendered from A's views: only the box rule could merge it
+    renderShapes(cam, poses_a[i], {&kA}, depth, labels);
+    map.render(cam, poses_a[i], depth, ids);
+    ASSERT_EQ(cv::countNonZero(ids == 1), 0);
+  }
   EXPECT_TRUE(trackAAsObject2(map, cam, poses_a, 3).empty());
   EXPECT_EQ(map.objects().size(), 2u);
 }

@@ -1,6 +1,6 @@
 """eval.bag.read_bag on small hand-written bags: one time-series row per
-second of bag time, the state before each row's time, one more at the end
-unless a row already fell there, and a live RunLog's freeze()."""
+second of bag time with the state before that time, the last one at the last
+message with the state after it, and a live RunLog's freeze()."""
 import pytest
 
 rosbag = pytest.importorskip("rosbag")
@@ -31,11 +31,11 @@ def test_rows_every_second_and_one_at_the_end(tmp_path):
 
 
 def test_no_second_row_when_the_last_message_falls_on_a_row(tmp_path):
-    _write(tmp_path / "b.bag", [(1.0, 0), (1.5, 1), (3.0, 2)])
-    _, rows, _ = read_bag(str(tmp_path / "b.bag"), [])
-    t = [r["sim_s"] for r in rows]
-    assert t == [1.0, 2.0, 3.0]  # not 3.0 twice
-    assert all(b > a for a, b in zip(t, t[1:]))
+    _write(tmp_path / "b.bag", [(1.0, 5), (1.5, 6), (3.0, 7)])
+    log, rows, _ = read_bag(str(tmp_path / "b.bag"), [])
+    assert [r["sim_s"] for r in rows] == [1.0, 2.0, 3.0]  # not 3.0 twice
+    assert [r["collisions"] for r in rows] == [0, 6, 7]  # the last row after the message at 3.0
+    assert log.collisions == 7
 
 
 def test_freeze_keeps_every_figure():

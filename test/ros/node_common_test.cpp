@@ -99,6 +99,22 @@ TEST(TfGapGuard, IntervalAroundAStamp) {
   EXPECT_DOUBLE_EQ(g.intervalAround("camera", ros::Time(2.0)), 0.0);  // no samples: a static frame
 }
 
+TEST(TfGapGuard, TheLimitFollowsEachFramesOwnRate) {
+  TfGapGuard g(0.2, false);
+  for (int k = 0; k <= 20; ++k) g.add("body", ros::Time(1.0 + 0.02 * k));  // 50 Hz
+  for (int k = 0; k <= 20; ++k) g.add("odom", ros::Time(1.0 + 1.0 * k));   // 1 Hz (a SLAM correction)
+  EXPECT_DOUBLE_EQ(g.limit_s("body"), 0.2);                 // max_tf_gap_s beats 5 x 0.02 s
+  EXPECT_NEAR(g.limit_s("odom"), 5.0, 1e-9);                // 5 sample periods beat 0.2 s
+  EXPECT_DOUBLE_EQ(g.limit_s("camera"), 0.2);               // no samples
+  g.add("body", ros::Time(3.0));                            // a 1.6 s gap: the lower quartile ignores it
+  EXPECT_DOUBLE_EQ(g.limit_s("body"), 0.2);
+  // Time jumping back (a bag replayed again) forgets the samples of the first pass.
+  g.add("body", ros::Time(1.5));
+  EXPECT_DOUBLE_EQ(g.intervalAround("body", ros::Time(2.0)), -1.0);  // nothing after 1.5 yet
+  g.add("body", ros::Time(1.52));
+  EXPECT_NEAR(g.intervalAround("body", ros::Time(1.51)), 0.02, 1e-9);
+}
+
 TEST(TfGapGuard, RefusesAPoseInterpolatedAcrossAGap) {
   tf2_ros::Buffer tf;
   TfGapGuard guard(0.2, false);

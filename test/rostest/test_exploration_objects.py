@@ -20,7 +20,10 @@ from std_msgs.msg import UInt32
 
 from semantic_exploration.msg import ExplorationStatus
 from semantic_exploration.srv import SaveMap
-from test_exploration import wait_finished  # installed beside this script
+
+# test_exploration.py lies beside this file's real path (a catkin devel-space relay runs this file from elsewhere).
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+from test_exploration import wait_finished  # noqa: E402
 
 PKG = "semantic_exploration"
 MIN_COMPLETENESS = 0.7

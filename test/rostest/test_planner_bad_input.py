@@ -31,6 +31,7 @@ row (planner/max_failed_iterations) ends the exploration with
 "no_reachable_candidate".
 """
 import math
+import os
 import sys
 import threading
 import time
@@ -48,7 +49,10 @@ from semantic_exploration.msg import ExplorationStatus, MapBlocks
 from semantic_exploration.srv import (ComputeGains, ComputeGainsResponse, GetHistoryMasks,
                                       GetHistoryMasksResponse, GetMap, GetMapResponse)
 from sensor_msgs.msg import Image
-from test_planner_node import R, START, assert_path_safe, blocks_msg, cloud, gain_image, room
+
+# test_planner_node.py lies beside this file's real path (a catkin devel-space relay runs this file from elsewhere).
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+from test_planner_node import R, START, assert_path_safe, blocks_msg, cloud, gain_image, room  # noqa: E402
 
 PKG = "semantic_exploration"
 HANG_CALLS = 3  # compute_gains calls that hang

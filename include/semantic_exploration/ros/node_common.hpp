@@ -51,8 +51,11 @@ std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, 
 /// tf2 would interpolate across a gap in the pose stream: tf2 interpolates
 /// linearly between the two samples around a stamp however far apart they
 /// are, so a frame taken while the pose source stalled would get a pose the
-/// MAV never had. Listens on a thread of its own, as tf2's listener does, so
-/// that it keeps up while a node's callback waits for a pose.
+/// MAV never had. A gap is wider than both max_gap_s and kGapPeriods of the
+/// frame's own sample period, so that a slow transform (a SLAM map -> odom at
+/// 1 Hz) is not taken for a stalled one. Listens on a thread of its own, as
+/// tf2's listener does, so that it keeps up while a node's callback waits for
+/// a pose.
 class TfGapGuard {
  public:
   /// max_gap_s: widest accepted interval between the samples around a stamp, s;
@@ -62,15 +65,23 @@ class TfGapGuard {
   TfGapGuard(const TfGapGuard&) = delete;
   TfGapGuard& operator=(const TfGapGuard&) = delete;
 
+  static constexpr double kGapPeriods = 5.0;  ///< a gap is at least this many sample periods
+
   double max_gap_s() const { return max_gap_s_; }
-  /// Records a sample of child_frame's transform (samples older than 30 s before the newest are forgotten).
+  /// Records a sample of child_frame's transform. Samples older than 30 s
+  /// before the newest are forgotten; a sample more than 1 s older than the
+  /// newest (time jumped back: a bag replayed again) forgets all before it.
   void add(const std::string& child_frame, const ros::Time& stamp);
+  /// Widest accepted interval between child_frame's samples around a stamp:
+  /// max(max_gap_s, kGapPeriods x its sample period), the period being the
+  /// lower quartile of its last 15 sample intervals, s.
+  double limit_s(const std::string& child_frame) const;
   /// Interval between child_frame's samples around `stamp`, s: 0 if a sample
   /// is at `stamp` or there is none before it (tf2 cannot interpolate then),
   /// -1 if there is none after it yet.
   double intervalAround(const std::string& child_frame, const ros::Time& stamp) const;
   /// "" if no frame on the chain target <- source is interpolated at `stamp`
-  /// across more than max_gap_s; else why. A sample tf2 already has may not
+  /// across more than its limit_s(); else why. A sample tf2 already has may not
   /// have reached this guard yet: it waits for it up to timeout_s (wall).
   std::string check(const tf2_ros::Buffer& tf, const std::string& target, const std::string& source,
                     const ros::Time& stamp, double timeout_s) const;

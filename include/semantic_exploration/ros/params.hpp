@@ -37,7 +37,7 @@ struct FrameNames {
 /// How a node gets poses from tf2.
 struct TfSettings {
   double timeout_s = 0.1;  ///< `tf_timeout_s`: wait for a pose at an image stamp, wall s
-  double max_gap_s = 0.2;  ///< `max_tf_gap_s`: refuse a pose tf2 would interpolate across a wider gap between samples, s; 0 = off
+  double max_gap_s = 0.2;  ///< `max_tf_gap_s`: refuse a pose interpolated across a wider gap (TfGapGuard), s; 0 = off
 };
 
 /// Reads typed values out of a parameter tree (the node's private namespace).

@@ -16,7 +16,8 @@ def read_bag(path: str, gt_objs: List[Dict], period_s: float = 1.0,
     """Feeds every evaluation topic of the bag into a RunLog in recording order.
 
     Returns (log, rows, info): rows are RunLog.row() every period_s of bag
-    time plus one at the end unless a row fell there (wall_s empty); info holds start_s, end_s (bag
+    time, the last one at the last message with the state after it (wall_s
+    empty); info holds start_s, end_s (bag
     time of the first and last message, s), the topics found with their
     message counts, and the evaluation topics the bag lacks.
     """
@@ -39,7 +40,9 @@ def read_bag(path: str, gt_objs: List[Dict], period_s: float = 1.0,
             log.handle(topic, msg)
             counts[topic] = counts.get(topic, 0) + 1
             end = t_s
-    if end is not None and end > last_row:  # not when the last message fell on a row's time
+    if end is not None:  # the state after every message; it replaces a row that fell on the last message's time
+        if end <= last_row:
+            rows.pop()
         rows.append(log.row(end, None, gt_objs))
     info = {"start_s": start, "end_s": end, "topics": counts,
             "missing_topics": sorted(k for k in TOPICS if k not in counts)}
