@@ -102,11 +102,18 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
   // detection of the same class: they are pieces of the detected object.
   std::map<std::uint32_t, std::uint32_t> merged_into;
   {
+    // summarize() walks all of an object's blocks: once per object and frame (nothing merges before the end).
+    std::map<std::uint32_t, TsdfSummary> summaries;
+    const auto summary = [this, &summaries](std::uint32_t id) -> const TsdfSummary& {
+      auto it = summaries.find(id);
+      if (it == summaries.end()) it = summaries.emplace(id, objects_.at(id)->tsdf.summarize(0.0)).first;
+      return it->second;
+    };
     // y's surface lies mostly inside x's box in 3D (boxes padded by 2 voxels).
-    const auto inside_box = [this](const MappedObject& y, const MappedObject& x, bool smaller) {
-      const TsdfSummary sx = x.tsdf.summarize(0.0), sy = y.tsdf.summarize(0.0);
+    const auto inside_box = [this, &summary](std::uint32_t y, std::uint32_t x, bool smaller) {
+      const TsdfSummary &sx = summary(x), &sy = summary(y);
       if (sx.voxel_count == 0 || sy.voxel_count == 0 || (smaller && sy.voxel_count >= sx.voxel_count)) return false;
-      const Eigen::Vector3d pad = Eigen::Vector3d::Constant(2.0 * x.resolution_m);
+      const Eigen::Vector3d pad = Eigen::Vector3d::Constant(2.0 * objects_.at(x)->resolution_m);
       const Eigen::AlignedBox3d bx(sx.bbox_min_W - pad, sx.bbox_max_W + pad);
       const Eigen::AlignedBox3d by(sy.bbox_min_W - pad, sy.bbox_max_W + pad);
       // Eigen's intersection of disjoint boxes is empty but its volume() is the product of the (negative)
@@ -131,7 +138,7 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
         if (inside < config_.merge_fraction * rp.second) continue;
         // A detector may also merge two neighbouring objects into one mask:
         // only merge if y's surface also lies mostly inside x's box in 3D.
-        if (!inside_box(oy, ox, false)) continue;
+        if (!inside_box(y, kv.first, false)) continue;
         merged_into[y] = kv.first;
         break;
       }
@@ -145,7 +152,7 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
       if (masks.count(y) || rendered_pixels.count(y) || oy.detection_count > 1) continue;
       for (const auto& kv : masks) {
         const MappedObject& ox = *objects_.at(kv.first);
-        if (ox.class_id != oy.class_id || ox.resolution_m != oy.resolution_m || !inside_box(oy, ox, true)) continue;
+        if (ox.class_id != oy.class_id || ox.resolution_m != oy.resolution_m || !inside_box(y, kv.first, true)) continue;
         merged_into[y] = kv.first;
         break;
       }

@@ -39,15 +39,14 @@ semantic_exploration::MapBlocks toMsg(const semexp::MapBlocksData& d, const ros:
 
 }  // namespace
 
-BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listener_(tf_buffer_) {
+BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   const auto p = ParamReader::fromNodeHandle(pnh);
   camera_ = loadCamera(p);
   bounds_ = loadBounds(p);
   config_ = loadBackgroundMap(p);
   exploration_ = loadExploration(p);
   frames_ = loadFrames(p);
-  tf_ = loadTf(p);
-  tf_gap_guard_ = std::make_unique<TfGapGuard>(tf_.max_gap_s);
+  poses_ = std::make_unique<PoseSource>(loadTf(p));
   p.getAtLeast("background_map/frontier_period_s", frontier_period_s_, 0.0, "s");
   p.getAtLeast("background_map/colour_wait_s", colour_wait_s_, 0.0, "s");
   p.getAtLeast("background_map/start_free_radius_m", start_free_radius_m_, 0.0, "m");
@@ -166,9 +165,7 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
     }
   }
   Eigen::Isometry3d T_WC;
-  const std::string frame = msg->header.frame_id.empty() ? frames_.camera : msg->header.frame_id;
-  err = lookupPose(tf_buffer_, frames_.world, frame, msg->header.stamp, tf_.timeout_s, T_WC,
-                   tf_gap_guard_.get());
+  err = poses_->cameraPose(frames_, msg->header, T_WC);
   if (!err.empty()) return fail("no_tf", err);
   if (!bounds_.contains(T_WC.translation()))
     return fail("out_of_bounds", "camera at (" + std::to_string(T_WC.translation().x()) + ", " +

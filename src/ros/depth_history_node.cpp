@@ -9,14 +9,13 @@
 
 namespace semexp_ros {
 
-DepthHistoryNode::DepthHistoryNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listener_(tf_buffer_) {
+DepthHistoryNode::DepthHistoryNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   const auto p = ParamReader::fromNodeHandle(pnh);
   config_ = loadDepthHistory(p);
   camera_ = loadCamera(p);
   bounds_ = loadBounds(p);
   frames_ = loadFrames(p);
-  tf_ = loadTf(p);
-  tf_gap_guard_ = std::make_unique<TfGapGuard>(tf_.max_gap_s);
+  poses_ = std::make_unique<PoseSource>(loadTf(p));
   p.getAtLeast("depth_history/marker_period_s", marker_period_s_, 0.0, "s");
   markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("markers", 1, true);
   integrated_pub_ = nh.advertise<semantic_exploration::FrameIntegrated>("frame_integrated", 10);
@@ -72,9 +71,7 @@ void DepthHistoryNode::depthCallback(const sensor_msgs::ImageConstPtr& msg) {
     return;
   }
   Eigen::Isometry3d T_WC;
-  const std::string frame = msg->header.frame_id.empty() ? frames_.camera : msg->header.frame_id;
-  err = lookupPose(tf_buffer_, frames_.world, frame, msg->header.stamp, tf_.timeout_s, T_WC,
-                   tf_gap_guard_.get());
+  err = poses_->cameraPose(frames_, msg->header, T_WC);
   if (!err.empty()) {
     drops_.drop("no_tf", err);
     reportFrame(msg->header, false, 0.0);

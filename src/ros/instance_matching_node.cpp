@@ -27,14 +27,13 @@ std::string toMat16(const sensor_msgs::Image& im, cv::Mat& out) {
 
 }  // namespace
 
-InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh), tf_listener_(tf_buffer_) {
+InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   const auto p = ParamReader::fromNodeHandle(pnh);
   config_ = loadMatching(p);
   classes_ = loadClasses(p);
   camera_ = loadCamera(p);
   frames_ = loadFrames(p);
-  tf_ = loadTf(p);
-  tf_gap_guard_ = std::make_unique<TfGapGuard>(tf_.max_gap_s);
+  poses_ = std::make_unique<PoseSource>(loadTf(p));
   matched_pub_ = nh.advertise<semantic_exploration::MatchedDetections>("matched_detections", 10);
   info_sub_ = nh.subscribe("camera/camera_info", 1, &InstanceMatchingNode::infoCallback, this);
   detections_sub_.subscribe(nh, "detections", 5);
@@ -139,9 +138,7 @@ void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsC
   if (unlisted) drops_.drop("unlisted_instance", std::to_string(unlisted) + " mask pixels of unlisted instance ids");
 
   Eigen::Isometry3d T_WC;
-  const std::string frame = msg->header.frame_id.empty() ? frames_.camera : msg->header.frame_id;
-  err = lookupPose(tf_buffer_, frames_.world, frame, msg->header.stamp, tf_.timeout_s, T_WC,
-                   tf_gap_guard_.get());
+  err = poses_->cameraPose(frames_, msg->header, T_WC);
   if (!err.empty()) return fail("no_tf", err);
 
   semantic_exploration::RenderInstances srv;

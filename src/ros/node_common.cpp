@@ -200,6 +200,20 @@ std::string TfGapGuard::check(const tf2_ros::Buffer& tf, const std::string& targ
   return "";
 }
 
+PoseSource::PoseSource(const TfSettings& settings, bool guard_gaps) : settings_(settings), listener_(buffer_) {
+  if (guard_gaps) guard_ = std::make_unique<TfGapGuard>(settings_.max_gap_s);
+}
+
+std::string PoseSource::lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
+                               Eigen::Isometry3d& T) const {
+  return lookupPose(buffer_, target, source, stamp, settings_.timeout_s, T, guard_.get());
+}
+
+std::string PoseSource::cameraPose(const FrameNames& frames, const std_msgs::Header& header,
+                                   Eigen::Isometry3d& T_WC) const {
+  return lookup(frames.world, header.frame_id.empty() ? frames.camera : header.frame_id, header.stamp, T_WC);
+}
+
 std::string lookupPose(const tf2_ros::Buffer& tf, const std::string& target, const std::string& source,
                        const ros::Time& stamp, double timeout_s, Eigen::Isometry3d& T, const TfGapGuard* guard) {
   // Waits in wall time: under /use_sim_time a lockstep simulator holds the

@@ -61,15 +61,14 @@ void boxEdges(const geometry_msgs::Point& lo, const geometry_msgs::Point& hi, st
 
 }  // namespace
 
-ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listener_(tf_buffer_) {
+ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   const auto p = ParamReader::fromNodeHandle(pnh);
   config_ = loadObjectMap(p);
   classes_ = loadClasses(p);
   exploration_ = loadExploration(p);
   camera_ = loadCamera(p);
   frames_ = loadFrames(p);
-  tf_ = loadTf(p);
-  tf_gap_guard_ = std::make_unique<TfGapGuard>(tf_.max_gap_s);
+  poses_ = std::make_unique<PoseSource>(loadTf(p));
   map_ = std::make_unique<semexp::ObjectMap>(config_, classes_);
 
   objects_pub_ = pnh.advertise<semantic_exploration::ObjectArray>("objects", 1, true);
@@ -143,9 +142,7 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
   cv::Mat(im.height, im.width, CV_16UC1, const_cast<uint8_t*>(im.data.data()), im.step).copyTo(instances);
 
   Eigen::Isometry3d T_WC;
-  const std::string frame = matched->header.frame_id.empty() ? frames_.camera : matched->header.frame_id;
-  err = lookupPose(tf_buffer_, frames_.world, frame, matched->header.stamp, tf_.timeout_s, T_WC,
-                   tf_gap_guard_.get());
+  err = poses_->cameraPose(frames_, matched->header, T_WC);
   if (!err.empty()) return fail("no_tf", err);
 
   std::vector<semexp::ObjectDetection> detections;

@@ -84,14 +84,14 @@ std_msgs::ColorRGBA colour(float r, float g, float b, float a) {
 
 }  // namespace
 
-PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : tf_listener_(tf_buffer_), nh_(nh) {
+PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
   const auto p = ParamReader::fromNodeHandle(pnh);
   config_ = loadPlanner(p);
   exploration_ = loadExploration(p);
   camera_ = loadCamera(p);
   bounds_ = loadBounds(p);
   frames_ = loadFrames(p);
-  tf_ = loadTf(p);  // max_tf_gap_s unused here: the planner takes the latest pose, never an interpolated one
+  poses_ = std::make_unique<PoseSource>(loadTf(p), false);  // the latest pose, never an interpolated one: no gap guard
   p.get("planner/service_timeout_s", service_timeout_s_);
   if (!(service_timeout_s_ > 0)) throw semexp::ConfigError("planner/service_timeout_s", "must be > 0 s");
   p.get("planner/retry_period_s", retry_period_s_);
@@ -503,7 +503,7 @@ bool PlannerNode::iterate(std::string& message) {
     return false;
   }
   Eigen::Isometry3d T_WB;
-  const std::string err = lookupPose(tf_buffer_, frames_.world, frames_.body, ros::Time(0), tf_.timeout_s, T_WB);
+  const std::string err = poses_->lookup(frames_.world, frames_.body, ros::Time(0), T_WB);
   if (!err.empty()) {
     message = "waiting for the MAV pose: " + err;
     publishStatus(ExplorationStatus::STATE_WAITING, message);

@@ -62,15 +62,12 @@ class BackgroundMapNode {
   semexp::BackgroundMapConfig config_;
   semexp::ExplorationConfig exploration_;
   FrameNames frames_;
-  TfSettings tf_;
-  std::unique_ptr<TfGapGuard> tf_gap_guard_;  ///< refuses poses interpolated across a gap in tf
+  std::unique_ptr<PoseSource> poses_;  ///< T_WC at image stamps (tf2, gap-guarded)
   double frontier_period_s_ = 0.5;  ///< minimum period between ~frontiers clouds, s
   double colour_wait_s_ = 0.05;     ///< how long a depth frame waits for its colour image, s (wall)
   double start_free_radius_m_ = 0.5;  ///< unknown space this close to the first camera pose is assumed free, m
 
   std::unique_ptr<semexp::OccupancyMap> map_;
-  tf2_ros::Buffer tf_buffer_;
-  tf2_ros::TransformListener tf_listener_;
   ros::Subscriber depth_sub_, rgb_sub_, info_sub_;
   ros::Publisher occupied_pub_, frontiers_pub_, update_pub_, stats_pub_, integrated_pub_;
   ros::ServiceServer gains_srv_, get_map_srv_, save_srv_;

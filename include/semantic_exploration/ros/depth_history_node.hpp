@@ -45,15 +45,12 @@ class DepthHistoryNode {
   semexp::PinholeCamera camera_;
   semexp::Bounds bounds_;
   FrameNames frames_;
-  TfSettings tf_;
-  std::unique_ptr<TfGapGuard> tf_gap_guard_;  ///< refuses poses interpolated across a gap in tf
+  std::unique_ptr<PoseSource> poses_;  ///< T_WC at image stamps (tf2, gap-guarded)
   double marker_period_s_ = 1.0;
   std::unique_ptr<semexp::DepthHistory> history_;
   uint64_t frames_integrated_ = 0;
   bool markers_dirty_ = false;
   ros::WallTime last_markers_;
-  tf2_ros::Buffer tf_buffer_;
-  tf2_ros::TransformListener tf_listener_;
   ros::Subscriber depth_sub_, info_sub_;
   ros::Publisher markers_pub_, integrated_pub_;
   ros::ServiceServer masks_srv_;

@@ -52,10 +52,7 @@ class InstanceMatchingNode {
   sensor_msgs::CameraInfo camera_info_;
   bool have_info_ = false;
   FrameNames frames_;
-  TfSettings tf_;
-  std::unique_ptr<TfGapGuard> tf_gap_guard_;  ///< refuses poses interpolated across a gap in tf
-  tf2_ros::Buffer tf_buffer_;
-  tf2_ros::TransformListener tf_listener_;
+  std::unique_ptr<PoseSource> poses_;  ///< T_WC at image stamps (tf2, gap-guarded)
   message_filters::Subscriber<semantic_exploration::Detections> detections_sub_;
   message_filters::Subscriber<sensor_msgs::Image> depth_sub_;
   std::unique_ptr<message_filters::Synchronizer<SyncPolicy>> sync_;

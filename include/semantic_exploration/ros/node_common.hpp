@@ -9,6 +9,7 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
 
 #include <Eigen/Geometry>
 #include <deque>
@@ -23,6 +24,7 @@
 
 #include "semantic_exploration/core/camera.hpp"
 #include "semantic_exploration/core/config_error.hpp"
+#include "semantic_exploration/ros/params.hpp"
 
 namespace semexp_ros {
 
@@ -102,6 +104,32 @@ class TfGapGuard {
 std::string lookupPose(const tf2_ros::Buffer& tf, const std::string& target, const std::string& source,
                        const ros::Time& stamp, double timeout_s, Eigen::Isometry3d& T_target_source,
                        const TfGapGuard* guard = nullptr);
+
+/// Where a node gets its poses: a tf2 buffer and listener, the node's tf
+/// settings and, for poses at image stamps, a TfGapGuard. One per node.
+class PoseSource {
+ public:
+  /// guard_gaps: refuse poses interpolated across a gap (settings.max_gap_s);
+  /// off for a node that only takes the latest pose (the planner).
+  explicit PoseSource(const TfSettings& settings, bool guard_gaps = true);
+  PoseSource(const PoseSource&) = delete;
+  PoseSource& operator=(const PoseSource&) = delete;
+
+  const TfSettings& settings() const { return settings_; }
+  /// T_target_source at `stamp` (ros::Time(0) = latest), waiting up to
+  /// settings().timeout_s wall seconds; see lookupPose(). "" on success, else why.
+  std::string lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
+                     Eigen::Isometry3d& T_target_source) const;
+  /// T_WC of an image: the pose of its header.frame_id (frames.camera when
+  /// empty) in frames.world at its stamp, as lookup().
+  std::string cameraPose(const FrameNames& frames, const std_msgs::Header& header, Eigen::Isometry3d& T_WC) const;
+
+ private:
+  TfSettings settings_;
+  tf2_ros::Buffer buffer_;
+  tf2_ros::TransformListener listener_;
+  std::unique_ptr<TfGapGuard> guard_;  ///< null when gaps are not guarded
+};
 
 /// Counts dropped input per reason and logs each reason at most every
 /// `period_s` seconds, so a bad stream never floods the log. Constructed in a

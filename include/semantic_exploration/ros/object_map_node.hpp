@@ -58,8 +58,7 @@ class ObjectMapNode {
   semexp::ExplorationConfig exploration_;
   semexp::PinholeCamera camera_;
   FrameNames frames_;
-  TfSettings tf_;
-  std::unique_ptr<TfGapGuard> tf_gap_guard_;  ///< refuses poses interpolated across a gap in tf
+  std::unique_ptr<PoseSource> poses_;  ///< T_WC at image stamps (tf2, gap-guarded)
   std::unique_ptr<semexp::ObjectMap> map_;
   ros::Time last_stamp_;
   /// Last render_instances answer, reused by the frame it was made for if the map did not change since.
@@ -70,8 +69,6 @@ class ObjectMapNode {
   } cached_render_;
   ros::WallTime last_publish_;
   std::set<std::uint32_t> marker_ids_;  ///< objects whose markers rviz holds (deleted when the object goes)
-  tf2_ros::Buffer tf_buffer_;
-  tf2_ros::TransformListener tf_listener_;
   message_filters::Subscriber<semantic_exploration::MatchedDetections> matched_sub_;
   message_filters::Subscriber<sensor_msgs::Image> depth_sub_, rgb_sub_;
   std::unique_ptr<message_filters::Synchronizer<SyncPolicy>> sync_;

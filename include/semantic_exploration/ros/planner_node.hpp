@@ -113,7 +113,7 @@ class PlannerNode {
   semexp::PinholeCamera camera_;
   semexp::Bounds bounds_;
   FrameNames frames_;
-  TfSettings tf_;
+  std::unique_ptr<PoseSource> poses_;  ///< the MAV pose (tf2, latest)
   double service_timeout_s_ = 5.0;
   double retry_period_s_ = 1.0;
   double goal_timeout_factor_ = 3.0;
@@ -134,8 +134,6 @@ class PlannerNode {
   double expected_duration_s_ = 0.0;
   ros::WallTime last_attempt_;
 
-  tf2_ros::Buffer tf_buffer_;
-  tf2_ros::TransformListener tf_listener_;
   ros::Subscriber update_sub_, frontiers_sub_, objects_sub_, goal_sub_, stats_sub_, rejected_sub_;
   ros::Publisher path_pub_, candidates_pub_, markers_pub_, status_pub_;
   ros::Publisher gain_pubs_[4];
