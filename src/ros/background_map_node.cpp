@@ -127,6 +127,8 @@ void BackgroundMapNode::flushTimer(const ros::WallTimerEvent&) {
     pending_depth_.reset();
     processFrame(d, nullptr);
   }
+  // Frames may stop (the MAV hovers, a bag ends): the last change still goes out once its period is over.
+  if (map_ && (frontiers_dirty_ || occupied_dirty_)) publishClouds(last_header_.stamp, false);
 }
 
 // -------------------------------------------------------------- integration
@@ -196,7 +198,7 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
   last_header_.frame_id = frames_.world;
   if (map_->pendingUpdateCount() > 0) update_pub_.publish(toMsg(map_->takeUpdate(), msg->header.stamp, frames_.world));
   publishStats(msg->header);
-  clouds_dirty_ = true;
+  frontiers_dirty_ = occupied_dirty_ = true;
   publishClouds(msg->header.stamp, false);
   reportFrame(msg->header, true, (ros::WallTime::now() - t0).toSec() * 1e3);
 }
@@ -224,10 +226,13 @@ void BackgroundMapNode::publishStats(const std_msgs::Header& header) {
 }
 
 void BackgroundMapNode::publishClouds(const ros::Time& stamp, bool force) {
+  // Each cloud keeps its own dirty flag: the frontier cloud falls due more often than the occupied one, and
+  // the map change that made both dirty must still reach the occupied cloud.
   const ros::WallTime now = ros::WallTime::now();
-  if (!clouds_dirty_ && !force) return;
-  bool published_any = false;
-  if (force || last_frontier_pub_.isZero() || (now - last_frontier_pub_).toSec() >= frontier_period_s_) {
+  const auto due = [&](const ros::WallTime& last, double period_s) {
+    return last.isZero() || (now - last).toSec() >= period_s;
+  };
+  if (force || (frontiers_dirty_ && due(last_frontier_pub_, frontier_period_s_))) {
     sensor_msgs::PointCloud2 cloud;
     cloud.header.stamp = stamp;
     cloud.header.frame_id = frames_.world;
@@ -246,17 +251,16 @@ void BackgroundMapNode::publishClouds(const ros::Time& stamp, bool force) {
     mod.resize(n);
     frontiers_pub_.publish(cloud);
     last_frontier_pub_ = now;
-    published_any = true;
+    frontiers_dirty_ = false;
   }
-  if (force || last_occupied_pub_.isZero() || (now - last_occupied_pub_).toSec() >= config_.publish_period_s) {
+  if (force || (occupied_dirty_ && due(last_occupied_pub_, config_.publish_period_s))) {
     // Built only for a listener; a skipped cloud is sent when one connects (the topic is latched, and rviz
     // started after the map stopped changing must still get it).
     occupied_skipped_ = !(occupied_pub_.getNumSubscribers() > 0 || force);
     if (!occupied_skipped_) publishOccupied(stamp);
     last_occupied_pub_ = now;
-    published_any = true;
+    occupied_dirty_ = false;
   }
-  if (published_any) clouds_dirty_ = false;
 }
 
 void BackgroundMapNode::publishOccupied(const ros::Time& stamp) {

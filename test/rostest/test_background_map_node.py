@@ -200,6 +200,17 @@ class TestBackgroundMapNode(unittest.TestCase):
         self.assertTrue(any(_has_point_near_x(c, 2.0) for c in late),
                         "a late subscriber got %d clouds, none with the wall at 2.0 m" % len(late))
 
+        # 7. The last change before frames stop reaches a listener once publish_period_s is over, though the
+        # frontier cloud (period 0 here) went out with that frame while the occupied one was not due yet.
+        # (A farther wall: voxels at 4.0 m are still unknown, so one frame makes them occupied.)
+        farther = np.full((H, W), 4.0, dtype=np.float32)
+        self.assertTrue(self.send(depth_image(rospy.Time.now(), farther)).integrated)
+        deadline = time.time() + 5.0
+        while not any(_has_point_near_x(c, 4.0) for c in late) and time.time() < deadline:
+            time.sleep(0.05)
+        self.assertTrue(any(_has_point_near_x(c, 4.0) for c in late),
+                        "no cloud with the wall at 4.0 m in %d clouds after the frames stopped" % len(late))
+
 
 def _has_point_near_x(cloud, x, tol=0.05):
     off = {f.name: f.offset for f in cloud.fields}["x"]
