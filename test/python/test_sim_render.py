@@ -274,3 +274,27 @@ def test_detector_hides_chosen_objects_without_changing_the_others():
             assert d1 == d0 and np.array_equal(m1, m0)
     assert seen > 5  # the plain detector did report the hidden chair
 
+
+
+def test_campaign_detector_sees_a_whole_chair_from_d_bg_but_not_from_5_m():
+    """config/experiments_sim.yaml's min_mask_pixels: a generated chair, seen whole from d_bg (3 m) by a
+    camera at 1.4 m, is detected; from 5 m it is missed (the detector range the paper's d_bg assumes)."""
+    import yaml
+    from semantic_exploration.sim.generator import three_chairs_room
+    with open(os.path.join(ROOT, "config", "experiments_sim.yaml")) as f:
+        cfg = DetectorConfig(**yaml.safe_load(f)["detector"])
+    with open(os.path.join(ROOT, "config", "semantic.yaml")) as f:
+        d_bg = yaml.safe_load(f)["exploration"]["d_bg_m"]
+    scene = three_chairs_room()
+    classes = ClassTable()
+    r = Renderer(scene, CameraConfig(), classes)
+    chair_xy = np.array([1.3, 1.0])  # chair 1, alone, facing +x
+    away = np.array([4.5, 2.5]) / np.linalg.norm([4.5, 2.5])  # towards the room's far corner
+    found = {}
+    for d in (d_bg, 5.0):
+        p = np.append(chair_xy + d * away, 1.4)
+        out = r.render(T_WC(p, yaw=math.atan2(-away[1], -away[0])))
+        found[d] = [det["object_id"] for det in Detector(cfg, classes).detect(out["instance"], out["class"])[1]]
+    chair = min(i for i, c in scene.objects.items() if c == "chair")
+    assert chair in found[d_bg]
+    assert chair not in found[5.0]

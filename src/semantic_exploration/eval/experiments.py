@@ -108,8 +108,26 @@ def paper_claims(agg: Dict[str, Dict[str, Dict[str, np.ndarray]]], grid: np.ndar
     ]
 
 
-def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: float = 5.0) -> Dict:
-    """CSV of the aggregated curves, one PNG per curve, and report.md."""
+def describe_yaml(path: str) -> str:
+    """A YAML file's settings as "section/key value" pairs for a report (its path, then the pairs)."""
+    import yaml
+    with open(path) as f:
+        tree = yaml.safe_load(f) or {}
+    pairs = []
+
+    def walk(node, prefix):
+        for k, v in node.items():
+            if isinstance(v, dict):
+                walk(v, prefix + str(k) + "/")
+            else:
+                pairs.append("%s%s %s" % (prefix, k, v))
+    walk(tree, "")
+    return "%s (%s)" % (os.path.basename(path), ", ".join(pairs) if pairs else "empty")
+
+
+def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: float = 5.0,
+                  setup: Sequence[str] = ()) -> Dict:
+    """CSV of the aggregated curves, one PNG per curve, and report.md (`setup`: lines on how the runs were made)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -156,7 +174,7 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
                      "time_to_all_found_s_median": float(np.median(t100)),
                      "collisions": int(sum(r["summary"].get("collisions", 0) for r in runs)),
                      "termination": ", ".join(reasons)})
-    lines = ["# Experiment report", "",
+    lines = ["# Experiment report", ""] + ["- %s" % l for l in setup] + ([""] if setup else []) + [
              "Median over runs; curves show the median and the 10th-90th percentile band.", "",
              "| mode | runs | objects found (final, median) | explored volume (final, median) | "
              "time to find all (median) | collisions | termination |", "|---|---|---|---|---|---|---|"]
