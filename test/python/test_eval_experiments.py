@@ -71,3 +71,36 @@ def test_report_names_the_setup_and_the_simulator_overrides(tmp_path):
     assert report[2:4] == ["- scenes 0 1 2", "- simulator overrides: sim.yaml (detector/min_mask_pixels 1200, "
                            "real_time_factor 0)"]
 
+
+def test_paper_claims_on_known_curves(tmp_path):
+    # Semantic: all 4 found at 20 s, 30 m3 at the end; classic: all at 30 s, 32 m3.
+    sem = [make_run(str(tmp_path / "s0"), [0, 10, 20, 30], [0, 10, 20, 30], [0, 2, 4, 4])]
+    cls = [make_run(str(tmp_path / "c0"), [0, 10, 20, 30], [0, 12, 24, 32], [0, 1, 3, 4])]
+    res = experiments.write_outputs(str(tmp_path / "out"), {"semantic": sem, "classic": cls}, grid_step_s=10)
+    claims = res["claims"]
+    assert [c["holds"] for c in claims] == [True, True, True]
+    assert claims[1]["measured"] == "semantic 20 s, classic 30 s"
+    assert "ratio 0.938" in claims[2]["measured"]  # 30 / 32
+    report = open(str(tmp_path / "out" / "report.md")).read()
+    assert "## The paper's claims, measured here" in report
+
+
+def test_paper_claims_that_fail_say_where(tmp_path):
+    # Semantic is behind at 10 s (1 vs 2 found), never finds all, and explores 20% less.
+    sem = [make_run(str(tmp_path / "s0"), [0, 10, 20], [0, 8, 16], [0, 1, 3])]
+    cls = [make_run(str(tmp_path / "c0"), [0, 10, 20], [0, 10, 20], [0, 2, 4])]
+    res = experiments.write_outputs(str(tmp_path / "out"), {"semantic": sem, "classic": cls}, grid_step_s=10)
+    c = res["claims"]
+    assert [x["holds"] for x in c] == [False, False, False]
+    assert c[0]["measured"] == "behind at 2 of 3 times (first at 10 s, by up to 25 points)"
+    assert c[1]["measured"] == "semantic never, classic 20 s"
+    assert "ratio 0.800" in c[2]["measured"]
+    assert experiments.write_outputs(str(tmp_path / "one"), {"semantic": sem}, grid_step_s=10)["claims"] == []
+
+
+def test_implausible_runs_are_named(tmp_path):
+    ok = make_run(str(tmp_path / "ok"), [0, 10, 200], [0, 1, 2], [0, 1, 2])
+    assert experiments.implausible(ok, sim_limit_s=200) == ""
+    # A mission that took wall time (seconds since 1970) for sim time.
+    bad = make_run(str(tmp_path / "bad"), [1795335807.5], [0], [0])
+    assert experiments.implausible(bad, sim_limit_s=200) == "sim time 1795335808 s is beyond the 200 s limit"

@@ -275,7 +275,6 @@ def test_detector_hides_chosen_objects_without_changing_the_others():
     assert seen > 5  # the plain detector did report the hidden chair
 
 
-
 def test_campaign_detector_sees_a_whole_chair_from_d_bg_but_not_from_5_m():
     """config/experiments_sim.yaml's min_mask_pixels: a generated chair, seen whole from d_bg (3 m) by a
     camera at 1.4 m, is detected; from 5 m it is missed (the detector range the paper's d_bg assumes)."""
@@ -288,7 +287,7 @@ def test_campaign_detector_sees_a_whole_chair_from_d_bg_but_not_from_5_m():
     scene = three_chairs_room()
     classes = ClassTable()
     r = Renderer(scene, CameraConfig(), classes)
-    chair_xy = np.array([1.3, 1.0])  # chair 1, alone, facing +x
+    chair_xy = np.array([1.3, 1.0])  # chair 1, alone in the south-west
     away = np.array([4.5, 2.5]) / np.linalg.norm([4.5, 2.5])  # towards the room's far corner
     found = {}
     for d in (d_bg, 5.0):

@@ -188,7 +188,7 @@ class TestBackgroundMapNode(unittest.TestCase):
         # 6. A cloud that fell due while nobody listened reaches the next listener (rviz started late), with
         # nothing integrated after it: a nearer wall at 2.0 m is in the cloud the new subscriber gets.
         self.occupied_sub.unregister()
-        time.sleep(1.5)  # past publish_period_s (1 s): the next frame's cloud is due, with no listener
+        time.sleep(3.5)  # past publish_period_s (3 s here): the next frame's cloud is due, with no listener
         near = np.full((H, W), 2.0, dtype=np.float32)
         self.assertTrue(self.send(depth_image(rospy.Time.now(), near)).integrated)
         late = []
@@ -201,7 +201,8 @@ class TestBackgroundMapNode(unittest.TestCase):
                         "a late subscriber got %d clouds, none with the wall at 2.0 m" % len(late))
 
         # 7. The last change before frames stop reaches a listener once publish_period_s is over, though the
-        # frontier cloud (period 0 here) went out with that frame while the occupied one was not due yet.
+        # frontier cloud (period 0 here) went out with that frame while the occupied one was not due yet
+        # (the step-6 frame's cloud went out under 3 s ago).
         # (A farther wall: voxels at 4.0 m are still unknown, so one frame makes them occupied.)
         farther = np.full((H, W), 4.0, dtype=np.float32)
         self.assertTrue(self.send(depth_image(rospy.Time.now(), farther)).integrated)
