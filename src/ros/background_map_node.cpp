@@ -128,7 +128,7 @@ void BackgroundMapNode::flushTimer(const ros::WallTimerEvent&) {
     processFrame(d, nullptr);
   }
   // Frames may stop (the MAV hovers, a bag ends): the last change still goes out once its period is over.
-  if (map_ && (frontiers_dirty_ || occupied_dirty_)) publishClouds(last_header_.stamp, false);
+  if (map_ && (frontiers_dirty_ || occupied_dirty_)) publishClouds(last_header_.stamp);
 }
 
 // -------------------------------------------------------------- integration
@@ -199,7 +199,7 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
   if (map_->pendingUpdateCount() > 0) update_pub_.publish(toMsg(map_->takeUpdate(), msg->header.stamp, frames_.world));
   publishStats(msg->header);
   frontiers_dirty_ = occupied_dirty_ = true;
-  publishClouds(msg->header.stamp, false);
+  publishClouds(msg->header.stamp);
   reportFrame(msg->header, true, (ros::WallTime::now() - t0).toSec() * 1e3);
 }
 
@@ -225,14 +225,14 @@ void BackgroundMapNode::publishStats(const std_msgs::Header& header) {
   stats_pub_.publish(s);
 }
 
-void BackgroundMapNode::publishClouds(const ros::Time& stamp, bool force) {
+void BackgroundMapNode::publishClouds(const ros::Time& stamp) {
   // Each cloud keeps its own dirty flag: the frontier cloud falls due more often than the occupied one, and
   // the map change that made both dirty must still reach the occupied cloud.
   const ros::WallTime now = ros::WallTime::now();
   const auto due = [&](const ros::WallTime& last, double period_s) {
     return last.isZero() || (now - last).toSec() >= period_s;
   };
-  if (force || (frontiers_dirty_ && due(last_frontier_pub_, frontier_period_s_))) {
+  if (frontiers_dirty_ && due(last_frontier_pub_, frontier_period_s_)) {
     sensor_msgs::PointCloud2 cloud;
     cloud.header.stamp = stamp;
     cloud.header.frame_id = frames_.world;
@@ -253,10 +253,10 @@ void BackgroundMapNode::publishClouds(const ros::Time& stamp, bool force) {
     last_frontier_pub_ = now;
     frontiers_dirty_ = false;
   }
-  if (force || (occupied_dirty_ && due(last_occupied_pub_, config_.publish_period_s))) {
+  if (occupied_dirty_ && due(last_occupied_pub_, config_.publish_period_s)) {
     // Built only for a listener; a skipped cloud is sent when one connects (the topic is latched, and rviz
     // started after the map stopped changing must still get it).
-    occupied_skipped_ = !(occupied_pub_.getNumSubscribers() > 0 || force);
+    occupied_skipped_ = occupied_pub_.getNumSubscribers() == 0;
     if (!occupied_skipped_) publishOccupied(stamp);
     last_occupied_pub_ = now;
     occupied_dirty_ = false;

@@ -20,8 +20,6 @@
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
-#include <tf2_ros/buffer.h>
-#include <tf2_ros/transform_listener.h>
 
 #include <deque>
 #include <memory>
@@ -49,7 +47,7 @@ class BackgroundMapNode {
   sensor_msgs::ImageConstPtr matchingRgb(const ros::Time& stamp) const;
   void reportFrame(const std_msgs::Header& header, bool integrated, double time_ms);
   void publishStats(const std_msgs::Header& header);
-  void publishClouds(const ros::Time& stamp, bool force);
+  void publishClouds(const ros::Time& stamp);
   void publishOccupied(const ros::Time& stamp);
   /// A new ~occupied subscriber: sends the cloud if the last one was skipped for want of listeners.
   void occupiedConnected(const ros::SingleSubscriberPublisher&);
