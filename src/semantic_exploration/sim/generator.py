@@ -582,6 +582,8 @@ def generate(seed: int = 0, size_m=(15.0, 12.0, 3.0), name: Optional[str] = None
             if rng.random() < 0.7:
                 plant(b, (x + 0.4, y_n - WALL_T / 2 - 0.32, 0.0))
                 corridor.taken.append((x, y_n - 0.7, x + 0.8, y_n))
+                if x < start[0]:  # the MAV starts clear of it: the map takes 0.5 m around the start as free
+                    start = (1.5,) + start[1:]
     # A mirror on an interior wall of some rooms (partition or corridor side).
     for room in rooms:
         if room.kind in ("bedroom", "living", "studio") and rng.random() < 0.7:
