@@ -1,6 +1,7 @@
 """Scene generator, Habitat/JSON loaders and ground-truth export (known answers, temp dirs only)."""
 import collections
 import json
+import math
 import os
 import sys
 
@@ -12,6 +13,7 @@ sys.path.insert(0, os.path.join(ROOT, "src"))
 
 from semantic_exploration.sim.classes import DEFAULT_CLASS_NAMES  # noqa: E402
 from semantic_exploration.sim.generator import generate, three_chairs_room  # noqa: E402
+from semantic_exploration.sim.mav import CollisionChecker  # noqa: E402
 from semantic_exploration.sim.scene import (Scene, SceneError, export_ground_truth, load_habitat,  # noqa: E402
                                             load_scene, read_house, save_habitat,
                                             write_semantic_ply)
@@ -41,32 +43,6 @@ def test_house_has_rooms_furniture_and_non_returning_surfaces(seed):
     assert s.non_returning_faces(["window", "mirror"]).any()
 
 
-def _point_triangle_distance(p, tri):
-    """Exact distance from point p to each triangle (N, 3, 3), m."""
-    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    n = np.cross(b - a, c - a)
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
-    d_plane = np.einsum("ij,ij->i", p - a, n)
-    q = p - d_plane[:, None] * n  # p projected on the plane
-    inside = np.ones(len(tri), bool)
-    for u, v in ((a, b), (b, c), (c, a)):
-        inside &= np.einsum("ij,ij->i", np.cross(v - u, q - u), n) >= 0
-
-    def seg(u, v):
-        t = np.clip(np.einsum("ij,ij->i", p - u, v - u) / np.maximum(np.einsum("ij,ij->i", v - u, v - u), 1e-12), 0, 1)
-        return np.linalg.norm(p - (u + t[:, None] * (v - u)), axis=1)
-    edge = np.minimum(np.minimum(seg(a, b), seg(b, c)), seg(c, a))
-    return np.where(inside, np.abs(d_plane), edge)
-
-
-def test_point_triangle_distance_on_known_cases():
-    tri = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]] * 3, float)
-    p_above, p_beside, p_corner = np.array([0.2, 0.2, 0.5]), np.array([0.5, -0.3, 0.4]), np.array([-0.3, -0.4, 0])
-    assert _point_triangle_distance(p_above, tri[:1])[0] == pytest.approx(0.5)
-    assert _point_triangle_distance(p_beside, tri[:1])[0] == pytest.approx(0.5)
-    assert _point_triangle_distance(p_corner, tri[:1])[0] == pytest.approx(0.5)
-
-
 @pytest.mark.parametrize("size", [(8, 6, 3), (6, 5, 3), (6, 7, 3), (10, 8, 3), (15, 12, 3)])
 def test_start_pose_is_clear_of_the_space_the_map_takes_as_free(size):
     """background_map/start_free_radius_m (0.5 m) of unknown space around the start is taken as free: nothing
@@ -76,8 +52,9 @@ def test_start_pose_is_clear_of_the_space_the_map_takes_as_free(size):
         r_free = yaml.safe_load(f)["background_map"]["start_free_radius_m"]
     for seed in range(8):
         s = generate(seed, size)
-        d = _point_triangle_distance(np.array(s.start[:3], float), s.triangles()).min()
-        assert d > r_free + 0.1, "seed %d: start %s is %.2f m from the scene" % (seed, s.start, d)
+        # The simulator's own collision check (nearest triangle within a radius), the one that saw the MAV graze it.
+        d, _ = CollisionChecker(s.triangles(), radius_m=r_free + 0.1).nearest(s.start[:3])
+        assert d == math.inf, "seed %d: start %s is %.2f m from the scene" % (seed, s.start, d)
 
 
 def test_chairs_stand_close_to_tables():
