@@ -115,9 +115,8 @@ class PoseSource {
   PoseSource(const PoseSource&) = delete;
   PoseSource& operator=(const PoseSource&) = delete;
 
-  const TfSettings& settings() const { return settings_; }
-  /// T_target_source at `stamp` (ros::Time(0) = latest), waiting up to
-  /// settings().timeout_s wall seconds; see lookupPose(). "" on success, else why.
+  /// T_target_source at `stamp` (ros::Time(0) = latest), waiting up to the
+  /// settings' timeout_s wall seconds; see lookupPose(). "" on success, else why.
   std::string lookup(const std::string& target, const std::string& source, const ros::Time& stamp,
                      Eigen::Isometry3d& T_target_source) const;
   /// T_WC of an image: the pose of its header.frame_id (frames.camera when
