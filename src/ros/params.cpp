@@ -287,4 +287,14 @@ TfSettings loadTf(const ParamReader& p) {
   return t;
 }
 
+PlannerNodeConfig loadPlannerNode(const ParamReader& p) {
+  PlannerNodeConfig c;
+  p.get("planner/service_timeout_s", c.service_timeout_s);
+  if (!(c.service_timeout_s > 0)) throw semexp::ConfigError("planner/service_timeout_s", "must be > 0 s");
+  p.get("planner/retry_period_s", c.retry_period_s);
+  if (!(c.retry_period_s > 0)) throw semexp::ConfigError("planner/retry_period_s", "must be > 0 s");
+  p.getAtLeast("planner/goal_timeout_factor", c.goal_timeout_factor, 1.0, "(a factor)");
+  return c;
+}
+
 }  // namespace semexp_ros
