@@ -261,6 +261,9 @@ semexp::PlannerConfig loadPlanner(const ParamReader& p) {
   p.get(n + "planning_threads", c.planning_threads);
   p.get(n + "stall_iterations", c.stall_iterations);
   p.get(n + "stall_volume_m3", c.stall_volume_m3);
+  p.get(n + "ompl_termination", c.ompl_termination);
+  p.get(n + "ompl_iterations", c.ompl_iterations);
+  p.get(n + "lazy_planning", c.lazy_planning);
   int seed = static_cast<int>(c.seed);
   p.get(n + "seed", seed);
   if (seed < 0) throw ConfigError(n + "seed", "must be >= 0");
