@@ -211,6 +211,8 @@ void BackgroundMapNode::publishStats(const std_msgs::Header& header) {
   s.occupied_volume_m3 = map_->occupiedVolume();
   s.explored_volume_m3 = s.free_volume_m3 + s.occupied_volume_m3;
   s.frontier_count = static_cast<std::uint32_t>(map_->frontierCount());
+  s.surface_voxels = surface_.occupied_voxels;
+  s.surface_observed_share = surface_.share();
   s.block_count = static_cast<std::uint32_t>(map_->blockCount());
   s.memory_bytes = map_->memoryBytes();
   s.integration_time_ms = last_integration_ms_;
@@ -251,6 +253,8 @@ void BackgroundMapNode::publishClouds(const ros::Time& stamp) {
     mod.resize(n);
     frontiers_pub_.publish(cloud);
     last_frontier_pub_ = now;
+    // The termination's background share, at the frontier cloud's pace (one pass over the occupied blocks).
+    surface_ = map_->surfaceObservedWithin(exploration_.d_bg_m);
     frontiers_dirty_ = false;
   }
   if (occupied_dirty_ && due(last_occupied_pub_, config_.publish_period_s)) {

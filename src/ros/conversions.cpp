@@ -8,6 +8,14 @@
 
 namespace semexp_ros {
 
+static_assert(static_cast<uint8_t>(semexp::CandidateSource::kFrontier) ==
+                  semantic_exploration::CandidateView::SOURCE_FRONTIER &&
+                  static_cast<uint8_t>(semexp::CandidateSource::kObject) ==
+                      semantic_exploration::CandidateView::SOURCE_OBJECT &&
+                  static_cast<uint8_t>(semexp::CandidateSource::kFreeSpace) ==
+                      semantic_exploration::CandidateView::SOURCE_FREE_SPACE,
+              "CandidateSource and CandidateView.msg's SOURCE_* disagree");
+
 geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
   geometry_msgs::Point m;
   m.x = p.x();
@@ -173,8 +181,7 @@ semantic_exploration::CandidateViewArray toCandidateViewArray(const semexp::Iter
     v.gain = static_cast<float>(c.gain);
     v.path_time_s = static_cast<float>(c.path_time_s);
     v.utility = static_cast<float>(c.utility);
-    v.source = c.sample.source == semexp::CandidateSource::kObject ? semantic_exploration::CandidateView::SOURCE_OBJECT
-                                                                   : semantic_exploration::CandidateView::SOURCE_FRONTIER;
+    v.source = static_cast<uint8_t>(c.sample.source);  // CandidateSource values are CandidateView's SOURCE_*
     v.object_id = c.sample.object_id;
     v.reachable = c.reachable;
     std::vector<double> yaws(c.plan.path_W.size(), c.yaw_rad);
@@ -203,6 +210,15 @@ semantic_exploration::ExplorationStatus toExplorationStatus(const semexp::Iterat
   s.path_planning_time_s = static_cast<float>(r.path_planning_s);
   s.gains_time_s = static_cast<float>(r.gains_s);
   s.yaw_time_s = static_cast<float>(r.yaw_s);
+  s.active_frontiers = static_cast<uint32_t>(r.active_frontiers);
+  s.retired_frontiers = static_cast<uint32_t>(r.retired_frontiers_W.size());
+  s.frontier_clusters = static_cast<uint32_t>(r.frontier_clusters);
+  s.retired_clusters_geometry = static_cast<uint32_t>(r.retired_clusters_geometry);
+  s.retired_clusters_evidence = static_cast<uint32_t>(r.retired_clusters_evidence);
+  s.frontiers_done = r.termination.frontiers_done;
+  s.background_done = r.termination.background_done;
+  s.objects_done = r.termination.objects_done;
+  s.last_condition = r.termination.last_condition;
   return s;
 }
 

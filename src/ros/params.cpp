@@ -290,6 +290,31 @@ TfSettings loadTf(const ParamReader& p) {
   return t;
 }
 
+semexp::TerminationConfig loadTermination(const ParamReader& p) {
+  semexp::TerminationConfig c;
+  const std::string n = "termination/";
+  p.get(n + "max_active_frontiers", c.max_active_frontiers);
+  p.get(n + "background_observed_share", c.background_observed_share);
+  p.get(n + "stall_share", c.stall_share);
+  c.validate(n);
+  return c;
+}
+
+semexp::FrontierRetirementConfig loadFrontierRetirement(const ParamReader& p) {
+  semexp::FrontierRetirementConfig c;
+  const std::string n = "frontier_retirement/";
+  p.get(n + "enabled", c.enabled);
+  p.get(n + "cluster_size_m", c.cluster_size_m);
+  p.get(n + "max_failed_views", c.max_failed_views);
+  p.get(n + "shrink_fraction", c.shrink_fraction);
+  p.get(n + "view_range_m", c.view_range_m);
+  p.get(n + "min_view_distance_m", c.min_view_distance_m);
+  p.get(n + "fov_margin_rad", c.fov_margin_rad);
+  p.get(n + "recheck_iterations", c.recheck_iterations);
+  c.validate(n);
+  return c;
+}
+
 PlannerNodeConfig loadPlannerNode(const ParamReader& p) {
   PlannerNodeConfig c;
   p.get("planner/service_timeout_s", c.service_timeout_s);

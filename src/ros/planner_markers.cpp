@@ -20,7 +20,8 @@ std_msgs::ColorRGBA colour(float r, float g, float b, float a) {
 
 }  // namespace
 
-visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& r, const std_msgs::Header& header) {
+visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& r, const std_msgs::Header& header,
+                                                 double voxel_size_m) {
   double max_u = 0.0;
   for (const auto& c : r.candidates) max_u = std::max(max_u, c.utility);
   visualization_msgs::MarkerArray markers;
@@ -74,6 +75,18 @@ visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& 
     line.color = colour(0.2f, 0.4f, 1.f, 1.f);
     for (const auto& p : r.path_W) line.points.push_back(toPoint(p));
     markers.markers.push_back(line);
+  }
+  if (!r.retired_frontiers_W.empty()) {
+    visualization_msgs::Marker cubes;
+    cubes.header = header;
+    cubes.ns = "retired_frontiers";
+    cubes.id = id++;
+    cubes.type = visualization_msgs::Marker::CUBE_LIST;
+    cubes.pose.orientation.w = 1.0;
+    cubes.scale.x = cubes.scale.y = cubes.scale.z = voxel_size_m;
+    cubes.color = colour(0.6f, 0.2f, 0.8f, 0.6f);
+    for (const auto& p : r.retired_frontiers_W) cubes.points.push_back(toPoint(p));
+    markers.markers.push_back(cubes);
   }
   return markers;
 }

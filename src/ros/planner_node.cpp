@@ -26,6 +26,8 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   camera_ = loadCamera(p);
   bounds_ = loadBounds(p);
   frames_ = loadFrames(p);
+  termination_ = loadTermination(p);
+  retirement_ = loadFrontierRetirement(p);
   node_config_ = loadPlannerNode(p);
   poses_ = std::make_unique<PoseSource>(loadTf(p), false);  // the latest pose, never an interpolated one: no gap guard
   services_ = std::make_unique<PlannerServices>(nh, config_, camera_, node_config_.service_timeout_s, drops_);
@@ -120,6 +122,9 @@ void PlannerNode::objectsCallback(const semantic_exploration::ObjectArrayConstPt
 void PlannerNode::statsCallback(const semantic_exploration::MapStatsConstPtr& msg) {
   if (std::isfinite(msg->explored_volume_m3) && msg->explored_volume_m3 >= 0)
     explored_volume_m3_ = msg->explored_volume_m3;
+  if (std::isfinite(msg->surface_observed_share) && msg->surface_observed_share >= 0 &&
+      msg->surface_observed_share <= 1)
+    background_share_ = msg->surface_observed_share;
 }
 
 // ---------------------------------------------------------------- triggers
@@ -180,7 +185,7 @@ bool PlannerNode::iterate(std::string& message) {
   }
   if (!planner_ || planner_resolution_m_ != replica_.resolution_m()) {
     planner_ = std::make_unique<semexp::ExplorationPlanner>(config_, exploration_, bounds_, camera_,
-                                                             replica_.resolution_m());
+                                                             replica_.resolution_m(), termination_, retirement_);
     planner_resolution_m_ = replica_.resolution_m();
   }
   if (!have_frontiers_) {
@@ -204,6 +209,7 @@ bool PlannerNode::iterate(std::string& message) {
   in.frontiers_W = frontiers_W_;
   in.objects = objects_;
   in.explored_volume_m3 = explored_volume_m3_;
+  in.background_observed_share = background_share_;
 
   semexp::ExplorationProviders prov;
   const semexp::MapReplica& replica = replica_;
@@ -253,6 +259,11 @@ bool PlannerNode::iterate(std::string& message) {
   }
   auto status = toExplorationStatus(r, state_, iteration_, frames_.world, now);
   status.service_timeouts = static_cast<uint32_t>(drops_.count("service_timeout"));
+  status.background_observed_share = static_cast<float>(background_share_);
+  for (const auto& o : objects_) {
+    status.object_ids.push_back(o.id);
+    status.object_observed_shares.push_back(static_cast<float>(o.observed_fraction));
+  }
   status_pub_.publish(status);
   message = r.message;
   last_attempt_ = ros::WallTime::now();  // the retry period is the pause after an attempt, however long it took
@@ -266,18 +277,21 @@ void PlannerNode::publishWinner(const semexp::IterationResult& r, const ros::Tim
   executing_since_ = now;
   // One line per iteration: what won and why, so a run's log shows where the MAV went and for which gain.
   const bool object = w.sample.source == semexp::CandidateSource::kObject;
-  ROS_INFO("planner: iteration %u: %s candidate%s%s (%d of %zu reachable) at (%.2f, %.2f, %.2f) yaw %.2f: "
-           "gain %.3f (entropy %.3f, bg %.3f, obj %.3f), %s path %.1f s, utility %.4f",
-           iteration_, object ? "object" : "frontier", object ? " of object " : "",
-           object ? std::to_string(w.sample.object_id).c_str() : "", r.candidates_reachable, r.candidates.size(),
+  ROS_INFO("planner: iteration %u: %s candidate%s%s (%d of %zu planned, %d reachable) at (%.2f, %.2f, %.2f) yaw %.2f: "
+           "gain %.3f (entropy %.3f, bg %.3f, obj %.3f), %s path %.1f s, utility %.4f; %zu active frontier voxels "
+           "(%zu retired), background seen from <= d_bg %.3f",
+           iteration_, semexp::candidateSourceName(w.sample.source), object ? " of object " : "",
+           object ? std::to_string(w.sample.object_id).c_str() : "", r.candidates_planned, r.candidates.size(),
+           r.candidates_reachable,
            w.position_W.x(), w.position_W.y(), w.position_W.z(), w.yaw_rad, w.gain, w.gain_entropy, w.gain_bg,
-           w.gain_obj, semexp::PlannedPath::name(w.plan.status), w.path_time_s, w.utility);
+           w.gain_obj, semexp::PlannedPath::name(w.plan.status), w.path_time_s, w.utility, r.active_frontiers,
+           r.retired_frontiers_W.size(), background_share_);
 }
 
 void PlannerNode::publishResult(const semexp::IterationResult& r, const ros::Time& stamp, double current_yaw) {
   const semantic_exploration::CandidateViewArray arr = toCandidateViewArray(r, frames_.world, stamp, current_yaw);
   candidates_pub_.publish(arr);
-  markers_pub_.publish(candidateMarkers(r, arr.header));
+  markers_pub_.publish(candidateMarkers(r, arr.header, replica_.resolution_m()));
   if (r.winner < 0) return;
   const int w = config_.raycast_width, h = config_.raycast_height;
   gain_pubs_[0].publish(floatImageMsg(arr.header, r.winner_gains.entropy.values, w, h));

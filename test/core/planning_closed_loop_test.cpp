@@ -139,6 +139,7 @@ TEST(ClosedLoop, ExploresTwoRoomsUntilTermination) {
     in.position_W = pos;
     in.yaw_rad = yaw;
     in.explored_volume_m3 = map.exploredVolume();
+    in.background_observed_share = map.surfaceObservedWithin(exploration.d_bg_m).share();
     map.forEachFrontier([&in](const Eigen::Vector3d& c, double) { in.frontiers_W.push_back(c); });
     r = planner.plan(in, prov);
     if (r.finished) break;
@@ -178,8 +179,12 @@ TEST(ClosedLoop, ExploresTwoRoomsUntilTermination) {
         known += map.state(p) != VoxelState::kUnknown;
       }
   const double explored = static_cast<double>(known) / static_cast<double>(truth_free);
-  std::printf("closed loop: %d iterations, %.1f m flown, explored %.1f%% of the free volume, reason '%s' (%s)\n",
-              iterations, flown_m, 100.0 * explored, r.termination_reason.c_str(), r.message.c_str());
+  std::printf("closed loop: %d iterations, %.1f m flown, explored %.1f%% of the free volume, reason '%s' (%s); "
+              "%zu active and %zu retired frontier voxels, %zu clusters (%zu retired by geometry, %zu by evidence), "
+              "background share %.3f\n",
+              iterations, flown_m, 100.0 * explored, r.termination_reason.c_str(), r.message.c_str(),
+              r.active_frontiers, r.retired_frontiers_W.size(), r.frontier_clusters, r.retired_clusters_geometry,
+              r.retired_clusters_evidence, map.surfaceObservedWithin(exploration.d_bg_m).share());
   EXPECT_TRUE(r.finished) << r.message;
   EXPECT_FALSE(r.termination_reason.empty());
   EXPECT_EQ(collisions, 0);

@@ -135,6 +135,8 @@ TEST_F(ExplorationTest, IntermediateVertexYaw) {
 }
 
 TEST_F(ExplorationTest, TerminationExplored) {
+  config.a_ent = 0.34;  // semantic mode: background and objects are pursued
+  config.a_bg = config.a_obj = 0.33;
   ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
   ExplorationInputs in = inputs();
   in.frontiers_W.clear();
@@ -142,17 +144,25 @@ TEST_F(ExplorationTest, TerminationExplored) {
   o.id = 1;
   o.observed_fraction = 0.95;
   in.objects = {o};
+  in.background_observed_share = 0.95;
   IterationResult r = planner.plan(in, providers);
   EXPECT_TRUE(r.finished);
   EXPECT_EQ(r.termination_reason, "explored");
+  EXPECT_TRUE(r.termination.frontiers_done && r.termination.background_done && r.termination.objects_done);
   // An object not yet seen from <= d_obj keeps it going (semantic mode).
+  ExplorationPlanner again(config, exploration, room_bounds(), camera, 0.05);
   in.objects[0].observed_fraction = 0.5;
-  in.background_observed = true;
-  r = planner.plan(in, providers);
+  r = again.plan(in, providers);
   EXPECT_FALSE(r.finished && r.termination_reason == "explored");
+  EXPECT_FALSE(r.termination.objects_done);
+  // So does background seen from too far, or not measured at all.
   in.objects[0].observed_fraction = 0.95;
-  in.background_observed = false;
-  r = planner.plan(in, providers);
+  in.background_observed_share = 0.5;
+  r = again.plan(in, providers);
+  EXPECT_NE(r.termination_reason, "explored");
+  EXPECT_FALSE(r.termination.background_done);
+  in.background_observed_share = -1.0;
+  r = again.plan(in, providers);
   EXPECT_NE(r.termination_reason, "explored");
 }
 
@@ -175,7 +185,11 @@ TEST_F(ExplorationTest, TerminationTimeLimit) {
 TEST_F(ExplorationTest, TerminationNoProgress) {
   config.stall_iterations = 2;
   config.stall_volume_m3 = 0.05;
-  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  // The one frontier of these inputs never shrinks: with retirement on, three
+  // views of it would retire it and end the run "explored" (tested apart).
+  FrontierRetirementConfig keep;
+  keep.enabled = false;
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05, TerminationConfig(), keep);
   ExplorationInputs in = inputs();
   const double volumes[4] = {10.0, 10.05, 10.08, 10.09};
   for (int it = 0; it < 4; ++it) {
@@ -187,7 +201,7 @@ TEST_F(ExplorationTest, TerminationNoProgress) {
     }
   }
   // Unknown volume (negative): never stops for lack of progress.
-  ExplorationPlanner unknown(config, exploration, room_bounds(), camera, 0.05);
+  ExplorationPlanner unknown(config, exploration, room_bounds(), camera, 0.05, TerminationConfig(), keep);
   in.explored_volume_m3 = -1.0;
   for (int it = 0; it < 5; ++it) EXPECT_FALSE(unknown.plan(in, providers).finished);
 }

@@ -20,6 +20,8 @@
 #include "semantic_exploration/core/exploration_config.hpp"
 #include "semantic_exploration/core/object_map_config.hpp"
 #include "semantic_exploration/core/planner_config.hpp"
+#include "semantic_exploration/core/planning/frontier_retirement.hpp"
+#include "semantic_exploration/core/planning/termination.hpp"
 
 namespace ros {
 class NodeHandle;
@@ -91,6 +93,8 @@ semexp::DepthHistoryConfig loadDepthHistory(const ParamReader& p);    ///< `dept
 semexp::PlannerConfig loadPlanner(const ParamReader& p);              ///< `planner/*`
 FrameNames loadFrames(const ParamReader& p);                          ///< `frames/*`
 TfSettings loadTf(const ParamReader& p);                              ///< `tf_timeout_s`, `max_tf_gap_s`
-PlannerNodeConfig loadPlannerNode(const ParamReader& p);  ///< `planner/{service_timeout_s,retry_period_s,goal_timeout_factor}`
+PlannerNodeConfig loadPlannerNode(const ParamReader& p);
+semexp::TerminationConfig loadTermination(const ParamReader& p);               ///< `termination/*`
+semexp::FrontierRetirementConfig loadFrontierRetirement(const ParamReader& p);  ///< `frontier_retirement/*`  ///< `planner/{service_timeout_s,retry_period_s,goal_timeout_factor}`
 
 }  // namespace semexp_ros

@@ -14,7 +14,10 @@ namespace semexp_ros {
 /// as large) in namespace "candidates"; for reachable ones an arrow along the
 /// chosen yaw ("candidate_yaw") and the utility in 1/s as text
 /// ("candidate_utility"); and the winner's path as a blue line strip
-/// ("winner_path"). All in header.frame_id.
-visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& r, const std_msgs::Header& header);
+/// ("winner_path"), and the retired frontier voxels as purple cubes of
+/// voxel_size_m ("retired_frontiers"; active ones are in the background
+/// map's frontier cloud). All in header.frame_id.
+visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& r, const std_msgs::Header& header,
+                                                 double voxel_size_m);
 
 }  // namespace semexp_ros

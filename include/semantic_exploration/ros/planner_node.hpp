@@ -95,6 +95,9 @@ class PlannerNode {
   std::vector<semexp::ObjectSummary> objects_;
   bool have_frontiers_ = false;
   double explored_volume_m3_ = -1.0;  ///< from background_map/stats; negative until received
+  double background_share_ = -1.0;    ///< surface share seen from <= d_bg, from background_map/stats; negative until received
+  semexp::TerminationConfig termination_;
+  semexp::FrontierRetirementConfig retirement_;
 
   uint8_t state_ = 0;
   bool finished_ = false;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
@@ -73,14 +74,18 @@ void set_gains(EvaluatedCandidate& c, const ViewGains& g) {
 }  // namespace
 
 ExplorationPlanner::ExplorationPlanner(const PlannerConfig& planner, const ExplorationConfig& exploration,
-                                       const Bounds& bounds, const PinholeCamera& camera, double map_resolution_m)
+                                       const Bounds& bounds, const PinholeCamera& camera, double map_resolution_m,
+                                       const TerminationConfig& termination,
+                                       const FrontierRetirementConfig& retirement)
     : planner_(planner),
       exploration_(exploration),
       bounds_(bounds),
       camera_(camera),
       map_resolution_m_(map_resolution_m),
       sampler_(planner, exploration, bounds),
-      window_columns_(semexp::window_columns(camera.hfov_rad(), planner.raycast_width)) {
+      window_columns_(semexp::window_columns(camera.hfov_rad(), planner.raycast_width)),
+      termination_(termination, planner),
+      retirement_(retirement, camera, bounds, planner.clearance_radius_m(), map_resolution_m) {
   camera_.validate();
   if (!(std::isfinite(map_resolution_m_) && map_resolution_m_ > 0))
     throw std::invalid_argument("ExplorationPlanner: map_resolution_m must be > 0");
@@ -105,44 +110,45 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
     return r;
   };
 
-  // Termination (DESIGN Section 5 step 6).
-  if (planner_.time_limit_s > 0 && in.elapsed_s >= planner_.time_limit_s) {
-    r.finished = true;
-    r.termination_reason = "time_limit";
-    r.message = fmt("time limit of %.0f s reached", planner_.time_limit_s);
-    return finish();
-  }
-  bool objects_done = true;
-  for (const auto& o : in.objects) objects_done = objects_done && !sampler_.needs_observation(o);
-  if (in.frontiers_W.empty() && objects_done && in.background_observed) {
-    r.finished = true;
-    r.termination_reason = "explored";
-    r.message = "no frontier left and all objects observed from <= d_obj";
-    return finish();
-  }
-  if (in.explored_volume_m3 >= 0 && planner_.stall_iterations > 0) {
-    explored_volumes_m3_.push_back(in.explored_volume_m3);
-    const std::size_t k = static_cast<std::size_t>(planner_.stall_iterations);
-    if (explored_volumes_m3_.size() > k) {
-      const double grown = explored_volumes_m3_.back() - explored_volumes_m3_[explored_volumes_m3_.size() - 1 - k];
-      if (grown < planner_.stall_volume_m3) {
-        r.finished = true;
-        r.termination_reason = "no_progress";
-        r.message = fmt("explored volume grew %.3f m^3 (< %.3f) over the last %.0f iterations", grown,
-                        planner_.stall_volume_m3, static_cast<double>(k));
-        return finish();
-      }
-    }
-  }
   if (!prov.is_free || !prov.gains) throw std::invalid_argument("ExplorationPlanner: is_free and gains are required");
+  // Without an occupancy query every line of sight counts as clear.
+  const CollisionQuery not_occupied =
+      prov.not_occupied ? prov.not_occupied : CollisionQuery([](const Eigen::Vector3d&, double) { return true; });
+
+  // Frontiers no reachable view can observe do not hold the exploration open.
+  FrontierRetirement::Split split = retirement_.update(in.frontiers_W, not_occupied);
+  r.active_frontiers = split.active_W.size();
+  r.retired_frontiers_W = std::move(split.retired_W);
+  r.frontier_clusters = split.clusters;
+  r.retired_clusters_geometry = split.retired_by_geometry;
+  r.retired_clusters_evidence = split.retired_by_evidence;
+
+  // Termination (termination.hpp).
+  TerminationInputs ti;
+  ti.elapsed_s = in.elapsed_s;
+  ti.active_frontiers = split.active_W.size();
+  ti.background_share = in.background_observed_share;
+  ti.objects = in.objects;
+  ti.explored_volume_m3 = in.explored_volume_m3;
+  r.termination = termination_.check(ti);
+  if (r.termination.finished) {
+    r.finished = true;
+    r.termination_reason = r.termination.reason;
+    r.message = r.termination.message;
+    return finish();
+  }
 
   // 1. Sampling.
   auto t0 = Clock::now();
   const std::uint64_t iteration = sampling_iterations_++;
-  const std::vector<CandidateSample> samples = sampler_.sample(in.frontiers_W, in.objects, prov.is_free);
+  std::vector<CandidateSample> samples = sampler_.sample(split.active_W, in.objects, prov.is_free);
+  // Frontiers and objects done but background seen from too far: the paper
+  // samples nothing else, so view points in known free space, chosen by
+  // their background gain like any other candidate, close the gap.
+  if (samples.empty() && !r.termination.background_done) samples = sampler_.sample_free_space(prov.is_free);
   r.sampling_s = seconds_since(t0);
   if (samples.empty()) {
-    fail(r, "nothing to sample (no frontiers and no object left to observe)");
+    fail(r, "nothing to sample (no active frontiers, no object left to observe, no free view point)");
     return finish();
   }
   const std::size_t n = samples.size();
@@ -306,6 +312,22 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
     }
   }
   r.yaw_s = seconds_since(t0);
+
+  // The camera looks along the whole path, turning from each vertex's yaw to
+  // the next: poses every 0.5 m are evidence for frontier retirement.
+  std::vector<ViewPose> poses;
+  for (std::size_t i = 1; i < r.path_W.size(); ++i) {
+    const Eigen::Vector3d d = r.path_W[i] - r.path_W[i - 1];
+    const int steps = std::max(1, static_cast<int>(std::ceil(d.norm() / 0.5)));
+    const double dyaw = std::remainder(r.path_yaw_rad[i] - r.path_yaw_rad[i - 1], 2.0 * M_PI);
+    for (int k = 1; k <= steps; ++k) {
+      const double f = static_cast<double>(k) / steps;
+      poses.push_back({r.path_W[i - 1] + f * d, r.path_yaw_rad[i - 1] + f * dyaw});
+    }
+  }
+  std::vector<Eigen::Vector3d> targets;
+  if (win.sample.source == CandidateSource::kFrontier) targets.push_back(win.sample.position_W);
+  retirement_.recordViews(poses, not_occupied, targets);
 
   failed_iterations_ = 0;
   r.message += fmt("winner %.0f: utility %.3f 1/s, gain %.3f", r.winner, win.utility, win.gain) +

@@ -6,6 +6,15 @@
 
 namespace semexp {
 
+const char* candidateSourceName(CandidateSource s) {
+  switch (s) {
+    case CandidateSource::kFrontier: return "frontier";
+    case CandidateSource::kObject: return "object";
+    case CandidateSource::kFreeSpace: return "free_space";
+  }
+  return "?";
+}
+
 CandidateSampler::CandidateSampler(const PlannerConfig& planner, const ExplorationConfig& exploration,
                                    const Bounds& bounds)
     : planner_(planner), exploration_(exploration), bounds_(bounds), rng_(planner.seed) {
@@ -84,6 +93,23 @@ std::vector<CandidateSample> CandidateSampler::sample(const std::vector<Eigen::V
         }
       }
     }
+    out.push_back(s);
+  }
+  return out;
+}
+
+std::vector<CandidateSample> CandidateSampler::sample_free_space(const CollisionQuery& is_free) {
+  std::vector<CandidateSample> out;
+  if (!is_free) return out;
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int k = 0; k < 20 * planner_.n_candidates && static_cast<int>(out.size()) < planner_.n_candidates; ++k) {
+    Eigen::Vector3d p;
+    for (int i = 0; i < 3; ++i) p[i] = bounds_.min_m[i] + unit(rng_) * (bounds_.max_m[i] - bounds_.min_m[i]);
+    p = clamp_to_bounds(p);
+    if (!is_free(p, planner_.clearance_radius_m())) continue;
+    CandidateSample s;
+    s.source = CandidateSource::kFreeSpace;
+    s.position_W = p;
     out.push_back(s);
   }
   return out;

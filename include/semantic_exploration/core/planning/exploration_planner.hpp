@@ -22,7 +22,9 @@
 #include "semantic_exploration/core/planner_config.hpp"
 #include "semantic_exploration/core/planning/gain.hpp"
 #include "semantic_exploration/core/planning/interfaces.hpp"
+#include "semantic_exploration/core/planning/frontier_retirement.hpp"
 #include "semantic_exploration/core/planning/path_planner.hpp"
+#include "semantic_exploration/core/planning/termination.hpp"
 #include "semantic_exploration/core/planning/sampler.hpp"
 
 namespace semexp {
@@ -34,15 +36,12 @@ struct ExplorationInputs {
   double elapsed_s = 0.0;                                ///< time since exploration started, s
   std::vector<Eigen::Vector3d> frontiers_W;              ///< frontier voxel centres, m
   std::vector<ObjectSummary> objects;
-  /// Whether all of the background has been observed from <= d_bg. The
-  /// planner cannot know this from frontiers and objects; callers that do not
-  /// track it leave it true (candidates are only sampled at frontiers and
-  /// objects anyway, so nothing else could be planned for).
-  bool background_observed = true;
+  /// Share of the observed background surface seen from <= d_bg, [0, 1]
+  /// (OccupancyMap::surfaceObservedWithin); negative if unknown, which keeps
+  /// the background condition of "explored" from holding where it is pursued.
+  double background_observed_share = -1.0;
   /// Explored (free + occupied) volume of the background map, m^3; negative
-  /// if unknown. Feeds the "no_progress" stop: the map's entropy never drops
-  /// to zero (free voxels clamp at a non-zero entropy), and frontiers that no
-  /// view can resolve would otherwise keep the exploration going forever.
+  /// if unknown. Feeds the "no_progress" stop (termination.hpp).
   double explored_volume_m3 = -1.0;
 };
 
@@ -85,6 +84,11 @@ struct IterationResult {
   std::string message;                   ///< what happened, human readable
   int candidates_reachable = 0;          ///< of the planned candidates
   int candidates_planned = 0;            ///< candidates a path was planned for
+  /// The termination check of this iteration: which conditions of "explored" hold.
+  TerminationDecision termination;
+  std::size_t active_frontiers = 0;              ///< frontier voxels still to be observed
+  std::vector<Eigen::Vector3d> retired_frontiers_W;  ///< frontier voxels no reachable view can observe
+  std::size_t retired_clusters_geometry = 0, retired_clusters_evidence = 0, frontier_clusters = 0;
   double sampling_s = 0.0, path_planning_s = 0.0, gains_s = 0.0, yaw_s = 0.0, total_s = 0.0;  ///< wall times
 };
 
@@ -92,7 +96,9 @@ class ExplorationPlanner {
  public:
   /// map_resolution_m: the background map's voxel edge (motion checks).
   ExplorationPlanner(const PlannerConfig& planner, const ExplorationConfig& exploration, const Bounds& bounds,
-                     const PinholeCamera& camera, double map_resolution_m);
+                     const PinholeCamera& camera, double map_resolution_m,
+                     const TerminationConfig& termination = TerminationConfig(),
+                     const FrontierRetirementConfig& retirement = FrontierRetirementConfig());
 
   /// Runs one iteration. Never throws for provider failures (they are
   /// reported in the result and do not count as failed iterations).
@@ -114,7 +120,8 @@ class ExplorationPlanner {
   CandidateSampler sampler_;
   int window_columns_;
   int failed_iterations_ = 0;
-  std::vector<double> explored_volumes_m3_;  ///< per iteration with a known volume
+  TerminationCheck termination_;
+  FrontierRetirement retirement_;
   std::uint64_t sampling_iterations_ = 0;   ///< iterations that sampled candidates; seeds their paths
 };
 

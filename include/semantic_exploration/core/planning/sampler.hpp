@@ -15,7 +15,10 @@
 namespace semexp {
 
 /// Where a candidate came from (values as CandidateView.msg's SOURCE_*).
-enum class CandidateSource : std::uint8_t { kFrontier = 0, kObject = 1 };
+enum class CandidateSource : std::uint8_t { kFrontier = 0, kObject = 1, kFreeSpace = 2 };
+
+/// "frontier", "object" or "free_space".
+const char* candidateSourceName(CandidateSource s);
 
 struct CandidateSample {
   Eigen::Vector3d position_W = Eigen::Vector3d::Zero();  ///< sampled position, m
@@ -46,6 +49,11 @@ class CandidateSampler {
   /// is_free may be empty (then object view points are not checked).
   std::vector<CandidateSample> sample(const std::vector<Eigen::Vector3d>& frontiers_W,
                                       const std::vector<ObjectSummary>& objects, const CollisionQuery& is_free);
+
+  /// Up to n view points drawn uniformly in the bounds shrunk by R whose
+  /// sphere of the clearance radius is free (at most 20 n draws), for the
+  /// background once no frontier or object is left to sample.
+  std::vector<CandidateSample> sample_free_space(const CollisionQuery& is_free);
 
   /// True if the object still needs a closer observation.
   bool needs_observation(const ObjectSummary& object) const {

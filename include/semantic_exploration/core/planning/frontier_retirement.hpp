@@ -1,0 +1,139 @@
+#pragma once
+/// @file frontier_retirement.hpp
+/// Frontiers that no reachable camera pose can observe stop holding the
+/// exploration open (paper Section IV-D ends it at F = {}; a level camera
+/// with a 49 deg vertical field of view cannot look into every corner, and
+/// the unknown inside of a wall behind a surface voxel that noise carved free
+/// is a frontier no view resolves).
+///
+/// Frontier voxels are grouped into clusters, the cubes of cluster_size_m
+/// holding them. A cluster is retired
+///  - by geometry, when none of a fixed set of view points around it is a
+///    possible camera centre (in the bounds, no occupied voxel in its
+///    clearance sphere: unknown space may yet turn out free)
+///    that sees it inside the vertical field of view minus fov_margin_rad,
+///    within view_range_m, with no occupied voxel on the line of sight; the
+///    view points lie at the reachable heights nearest the cluster's (steps
+///    of 0.3 m, 5 heights), at horizontal distances from the cluster that the
+///    field of view needs (steps of 0.5 m) and 12 azimuths;
+///  - by evidence, after max_failed_views views that were meant to observe
+///    it (the winner was a frontier candidate in it) or that had it inside the
+///    field of view within view_range_m with nothing occupied between the
+///    camera and the cluster's cube (poses every 0.5 m along each winning
+///    path) and after which it did not shrink by at least shrink_fraction.
+/// A cluster's "view" is one iteration whose path it was seen from.
+/// Every cluster is judged by geometry again every recheck_iterations
+/// iterations (surface found since can hide it): one retired by geometry
+/// comes back once a view point is possible, one retired by evidence once
+/// more view points are possible than when it was retired (new free space
+/// around it). Retired frontiers are not sampled and
+/// do not count towards termination.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "semantic_exploration/core/bounds.hpp"
+#include "semantic_exploration/core/camera.hpp"
+#include "semantic_exploration/core/config_error.hpp"
+#include "semantic_exploration/core/planning/interfaces.hpp"
+
+namespace semexp {
+
+struct FrontierRetirementConfig {
+  bool enabled = true;              ///< false: every frontier stays active
+  double cluster_size_m = 0.5;      ///< edge of the cubes that group frontier voxels, m
+  int max_failed_views = 3;         ///< views that did not shrink a cluster before it is retired (K)
+  double shrink_fraction = 0.2;     ///< a view shrinks a cluster when its voxel count drops by this fraction, (0, 1]
+  double view_range_m = 3.0;        ///< farthest view point / view that counts, m (the paper's d_bg)
+  double min_view_distance_m = 0.3; ///< nearest horizontal standoff of a view point, m
+  double fov_margin_rad = 0.05;     ///< a cluster must lie this far inside the vertical field of view, rad
+  int recheck_iterations = 5;       ///< clusters are judged by geometry again this often, iterations
+
+  void validate(const std::string& ns = "frontier_retirement/") const {
+    require(std::isfinite(cluster_size_m) && cluster_size_m > 0, ns + "cluster_size_m", "must be > 0 m");
+    require(max_failed_views > 0, ns + "max_failed_views", "must be > 0");
+    require(std::isfinite(shrink_fraction) && shrink_fraction > 0 && shrink_fraction <= 1, ns + "shrink_fraction",
+            "must be in (0, 1]");
+    require(std::isfinite(view_range_m) && view_range_m > 0, ns + "view_range_m", "must be > 0 m");
+    require(std::isfinite(min_view_distance_m) && min_view_distance_m >= 0, ns + "min_view_distance_m",
+            "must be >= 0 m");
+    require(std::isfinite(fov_margin_rad) && fov_margin_rad >= 0, ns + "fov_margin_rad", "must be >= 0 rad");
+    require(recheck_iterations > 0, ns + "recheck_iterations", "must be > 0");
+  }
+};
+
+/// A camera pose a view was taken from: position and yaw (level camera).
+struct ViewPose {
+  Eigen::Vector3d position_W = Eigen::Vector3d::Zero();  ///< m
+  double yaw_rad = 0.0;                                  ///< rad
+};
+
+class FrontierRetirement {
+ public:
+  /// Where a camera centre can be: inside `bounds`, with no occupied voxel
+  /// within clearance_radius_m (m). The camera gives the fields of view. Throws
+  /// ConfigError on an invalid config.
+  FrontierRetirement(const FrontierRetirementConfig& config, const PinholeCamera& camera, const Bounds& bounds,
+                     double clearance_radius_m, double map_resolution_m);
+
+  /// The frontier voxels of one iteration, split.
+  struct Split {
+    std::vector<Eigen::Vector3d> active_W;
+    std::vector<Eigen::Vector3d> retired_W;
+    std::size_t clusters = 0;             ///< clusters holding frontier voxels
+    std::size_t retired_by_geometry = 0;  ///< of those, retired clusters
+    std::size_t retired_by_evidence = 0;
+  };
+
+  /// Judges this iteration's frontiers. The views recorded since the last
+  /// call (recordViews) count as evidence now. not_occupied: sphere queries
+  /// with unknown space allowed (radius 0 = the voxel at the point).
+  Split update(const std::vector<Eigen::Vector3d>& frontiers_W, const CollisionQuery& not_occupied);
+
+  /// The poses the camera will look from while the published path is flown,
+  /// and the frontier voxels the path was chosen to observe (a frontier
+  /// candidate's goal): the clusters of the targets and every active cluster
+  /// a pose sees count as viewed; whether they shrank is judged at the next
+  /// update().
+  void recordViews(const std::vector<ViewPose>& poses, const CollisionQuery& not_occupied,
+                   const std::vector<Eigen::Vector3d>& targets_W = {});
+
+  /// Possible view points of a cluster at `centre_W` (0 = not observable).
+  /// `stop_at` > 0 stops counting there.
+  int viewPoints(const Eigen::Vector3d& centre_W, const CollisionQuery& not_occupied, int stop_at = 0) const;
+
+  /// Whether `pose` sees `p_W` inside both fields of view, within view_range_m, with a clear line of sight.
+  bool sees(const ViewPose& pose, const Eigen::Vector3d& p_W, const CollisionQuery& not_occupied) const;
+
+  const FrontierRetirementConfig& config() const { return config_; }
+
+ private:
+  struct Cluster {
+    int voxels = 0;               ///< frontier voxels now
+    int failed_views = 0;
+    int viewpoints = -1;          ///< possible view points at the last judgement (-1 never judged)
+    int viewpoints_at_retirement = 0;
+    long judged_at = -1;          ///< iteration of the last geometry judgement
+    bool by_geometry = false;
+    bool by_evidence = false;
+    int voxels_at_view = -1;      ///< voxel count when a view of it was recorded (-1 none)
+    Eigen::Vector3d centre_W = Eigen::Vector3d::Zero();  ///< mean of its frontier voxels, m
+  };
+  std::uint64_t key(const Eigen::Vector3d& p_W) const;
+  /// No occupied voxel on the segment from `from_W` up to short_m (m) before `to_W`.
+  bool lineOfSight(const Eigen::Vector3d& from_W, const Eigen::Vector3d& to_W, double short_m,
+                   const CollisionQuery& not_occupied) const;
+
+  FrontierRetirementConfig config_;
+  PinholeCamera camera_;
+  Bounds bounds_;
+  double clearance_radius_m_;
+  double resolution_m_;
+  std::unordered_map<std::uint64_t, Cluster> clusters_;
+  long iteration_ = 0;
+};
+
+}  // namespace semexp

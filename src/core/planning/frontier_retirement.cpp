@@ -1,0 +1,178 @@
+#include "semantic_exploration/core/planning/frontier_retirement.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+namespace semexp {
+
+namespace {
+
+constexpr double kHeightStepM = 0.3;   // between the view heights tried
+constexpr int kHeights = 5;            // the nearest reachable height, then +-1 and +-2 steps
+constexpr double kRadiusStepM = 0.5;   // between the horizontal distances tried
+constexpr int kAzimuths = 12;
+
+double wrapAngle(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+
+}  // namespace
+
+FrontierRetirement::FrontierRetirement(const FrontierRetirementConfig& config, const PinholeCamera& camera,
+                                       const Bounds& bounds, double clearance_radius_m, double map_resolution_m)
+    : config_(config),
+      camera_(camera),
+      bounds_(bounds),
+      clearance_radius_m_(clearance_radius_m),
+      resolution_m_(map_resolution_m) {
+  config_.validate();
+  camera_.validate();
+  bounds_.validate();
+  require(std::isfinite(resolution_m_) && resolution_m_ > 0, "background_map/resolution_m", "must be > 0 m");
+}
+
+std::uint64_t FrontierRetirement::key(const Eigen::Vector3d& p) const {
+  const auto c = [this](double v) {
+    return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v / config_.cluster_size_m)) + (1 << 20)) &
+           0x1FFFFF;
+  };
+  return c(p.x()) | (c(p.y()) << 21) | (c(p.z()) << 42);
+}
+
+bool FrontierRetirement::lineOfSight(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double short_m,
+                                     const CollisionQuery& not_occupied) const {
+  const Eigen::Vector3d d = to - from;
+  const double len = d.norm() - short_m;
+  if (len <= 0) return true;
+  const Eigen::Vector3d u = d / d.norm();
+  for (double t = 0.0; t <= len; t += resolution_m_)
+    if (!not_occupied(from + t * u, 0.0)) return false;
+  return true;
+}
+
+bool FrontierRetirement::sees(const ViewPose& pose, const Eigen::Vector3d& p, const CollisionQuery& not_occupied) const {
+  const Eigen::Vector3d d = p - pose.position_W;
+  const double dist = d.norm();
+  if (dist > config_.view_range_m || dist < 1e-6) return false;
+  const double horizontal = std::hypot(d.x(), d.y());
+  if (std::abs(std::atan2(d.z(), horizontal)) > 0.5 * camera_.vfov_rad()) return false;
+  if (std::abs(wrapAngle(std::atan2(d.y(), d.x()) - pose.yaw_rad)) > 0.5 * camera_.hfov_rad()) return false;
+  // A view reaches the cluster when nothing occupied lies between the camera
+  // and the cluster's cube: the surface a frontier borders is allowed to
+  // hide the frontier voxel itself (that is what the evidence is about).
+  return lineOfSight(pose.position_W, p, 0.5 * config_.cluster_size_m, not_occupied);
+}
+
+int FrontierRetirement::viewPoints(const Eigen::Vector3d& c, const CollisionQuery& not_occupied,
+                                   int stop_at) const {
+  const double half = 0.5 * camera_.vfov_rad() - config_.fov_margin_rad;
+  const double z_lo = bounds_.min_m.z() + clearance_radius_m_, z_hi = bounds_.max_m.z() - clearance_radius_m_;
+  if (half <= 0 || z_lo > z_hi) return 0;
+  const double z0 = std::clamp(c.z(), z_lo, z_hi);
+  const double range = config_.view_range_m;
+  int n = 0;
+  for (int k = 0; k < kHeights; ++k) {
+    const int step = (k + 1) / 2 * (k % 2 == 1 ? -1 : 1);  // 0, -1, +1, -2, +2
+    const double zc = z0 + step * kHeightStepM;
+    if (zc < z_lo - 1e-9 || zc > z_hi + 1e-9) continue;
+    const double dz = std::abs(c.z() - zc);
+    if (dz >= range) continue;
+    const double h_min = std::max(config_.min_view_distance_m, dz / std::tan(half));
+    const double h_max = std::sqrt(range * range - dz * dz);
+    for (double h = h_min; h <= h_max + 1e-9; h += kRadiusStepM)
+      for (int a = 0; a < kAzimuths; ++a) {
+        const double az = 2.0 * M_PI * a / kAzimuths;
+        const Eigen::Vector3d p(c.x() + h * std::cos(az), c.y() + h * std::sin(az), zc);
+        // Two voxels short: a grazing line meets the voxels of the surface the frontier borders next to it.
+        if (!bounds_.contains(p) || !not_occupied(p, clearance_radius_m_) ||
+            !lineOfSight(p, c, 2.0 * resolution_m_, not_occupied))
+          continue;
+        if (++n == stop_at) return n;
+      }
+  }
+  return n;
+}
+
+FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Vector3d>& frontiers_W,
+                                                     const CollisionQuery& not_occupied) {
+  ++iteration_;
+  Split out;
+  if (!config_.enabled) {
+    out.active_W = frontiers_W;
+    return out;
+  }
+  // Members of each cluster now.
+  std::unordered_map<std::uint64_t, std::vector<std::size_t>> members;
+  for (std::size_t i = 0; i < frontiers_W.size(); ++i) members[key(frontiers_W[i])].push_back(i);
+  for (auto it = clusters_.begin(); it != clusters_.end();) {
+    // A cluster without frontiers keeps its state only while retired by evidence.
+    if (!members.count(it->first) && !it->second.by_evidence) {
+      it = clusters_.erase(it);
+      continue;
+    }
+    it->second.voxels = 0;
+    ++it;
+  }
+  for (const auto& m : members) {
+    Cluster& c = clusters_[m.first];
+    c.voxels = static_cast<int>(m.second.size());
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (std::size_t i : m.second) sum += frontiers_W[i];
+    c.centre_W = sum / static_cast<double>(m.second.size());
+  }
+  // Evidence: the views recorded last iteration.
+  for (auto& kv : clusters_) {
+    Cluster& c = kv.second;
+    if (c.voxels_at_view < 0) continue;
+    const bool shrank = c.voxels <= c.voxels_at_view * (1.0 - config_.shrink_fraction);
+    c.failed_views = shrank ? 0 : c.failed_views + 1;
+    c.voxels_at_view = -1;
+    if (!c.by_evidence && c.failed_views >= config_.max_failed_views) {
+      c.by_evidence = true;
+      c.viewpoints_at_retirement = viewPoints(c.centre_W, not_occupied);
+      c.judged_at = iteration_;
+    }
+  }
+  // Geometry: new clusters now, every cluster again each recheck_iterations
+  // (surface found since can hide a cluster, free space found can reveal it).
+  for (const auto& m : members) {
+    Cluster& c = clusters_[m.first];
+    if (c.judged_at >= 0 && iteration_ - c.judged_at < config_.recheck_iterations) continue;
+    c.judged_at = iteration_;
+    c.viewpoints = viewPoints(c.centre_W, not_occupied, c.by_evidence ? 0 : 1);
+    c.by_geometry = c.viewpoints == 0;
+    if (c.by_evidence && c.viewpoints > c.viewpoints_at_retirement) {
+      c.by_evidence = false;  // new free space around it: worth another look
+      c.failed_views = 0;
+    }
+  }
+  for (const auto& m : members) {
+    const Cluster& c = clusters_[m.first];
+    ++out.clusters;
+    const bool retired = c.by_geometry || c.by_evidence;
+    out.retired_by_geometry += c.by_geometry;
+    out.retired_by_evidence += !c.by_geometry && c.by_evidence;
+    for (std::size_t i : m.second) (retired ? out.retired_W : out.active_W).push_back(frontiers_W[i]);
+  }
+  return out;
+}
+
+void FrontierRetirement::recordViews(const std::vector<ViewPose>& poses, const CollisionQuery& not_occupied,
+                                     const std::vector<Eigen::Vector3d>& targets_W) {
+  if (!config_.enabled) return;
+  for (const auto& t : targets_W) {
+    const auto it = clusters_.find(key(t));
+    if (it != clusters_.end() && it->second.voxels > 0) it->second.voxels_at_view = it->second.voxels;
+  }
+  for (auto& kv : clusters_) {
+    Cluster& c = kv.second;
+    if (c.voxels == 0 || c.by_geometry || c.by_evidence || c.voxels_at_view >= 0) continue;
+    for (const auto& pose : poses)
+      if (sees(pose, c.centre_W, not_occupied)) {
+        c.voxels_at_view = c.voxels;
+        break;
+      }
+  }
+}
+
+}  // namespace semexp

@@ -1,0 +1,246 @@
+// The paper's termination conditions (termination.hpp) and frontier
+// retirement (frontier_retirement.hpp) on hand-built inputs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "semantic_exploration/core/planning/frontier_retirement.hpp"
+#include "semantic_exploration/core/planning/termination.hpp"
+
+using namespace semexp;
+
+namespace {
+
+PlannerConfig semantic() {
+  PlannerConfig c;  // a_ent/a_bg/a_obj 0.34/0.33/0.33
+  c.stall_iterations = 3;
+  c.stall_volume_m3 = 0.1;
+  c.time_limit_s = 600.0;
+  return c;
+}
+
+PlannerConfig classic() {
+  PlannerConfig c = semantic();
+  c.a_ent = 1.0;
+  c.a_bg = c.a_obj = 0.0;
+  c.p_frontier = 1.0;
+  return c;
+}
+
+ObjectSummary object(std::uint32_t id, double share) {
+  ObjectSummary o;
+  o.id = id;
+  o.observed_fraction = share;
+  return o;
+}
+
+}  // namespace
+
+TEST(Termination, ExploredNeedsAllThreeAndNamesTheLastToHold) {
+  TerminationCheck t(TerminationConfig(), semantic());  // 0 frontiers, background >= 0.9, objects >= 0.9
+  TerminationInputs in;
+  in.active_frontiers = 0;
+  in.background_share = 0.5;
+  in.objects = {object(1, 0.95), object(2, 0.5)};
+  TerminationDecision d = t.check(in);
+  EXPECT_FALSE(d.finished);
+  EXPECT_TRUE(d.frontiers_done);
+  EXPECT_FALSE(d.background_done);
+  EXPECT_FALSE(d.objects_done);
+  in.objects[1].observed_fraction = 0.9;  // objects hold from the second check on
+  d = t.check(in);
+  EXPECT_FALSE(d.finished);
+  EXPECT_TRUE(d.objects_done);
+  in.background_share = 0.9;  // the background holds last
+  d = t.check(in);
+  EXPECT_TRUE(d.finished);
+  EXPECT_EQ(d.reason, "explored");
+  EXPECT_EQ(d.last_condition, "background");
+  EXPECT_NE(d.message.find("the last condition to hold: background"), std::string::npos) << d.message;
+}
+
+TEST(Termination, AFrontierLeftOrAnUnmeasuredBackgroundKeepsItGoing) {
+  TerminationCheck t(TerminationConfig(), semantic());
+  TerminationInputs in;
+  in.active_frontiers = 1;
+  in.background_share = 1.0;
+  EXPECT_FALSE(t.check(in).finished);
+  in.active_frontiers = 0;
+  in.background_share = -1.0;  // not measured
+  EXPECT_FALSE(t.check(in).finished);
+  TerminationConfig some;
+  some.max_active_frontiers = 20;
+  TerminationCheck lenient(some, semantic());
+  in.active_frontiers = 20;
+  in.background_share = 0.95;
+  EXPECT_EQ(lenient.check(in).reason, "explored");
+}
+
+TEST(Termination, ClassicStopsOnFrontiersAlone) {
+  TerminationCheck t(TerminationConfig(), classic());
+  TerminationInputs in;
+  in.active_frontiers = 0;
+  in.background_share = 0.1;                // not pursued
+  in.objects = {object(1, 0.0)};            // not pursued
+  const TerminationDecision d = t.check(in);
+  EXPECT_TRUE(d.finished);
+  EXPECT_EQ(d.reason, "explored");
+  EXPECT_TRUE(d.background_done && d.objects_done);
+}
+
+TEST(Termination, NoProgressLooksAtAllThreeGains) {
+  // Volume flat at 100 m^3 and frontiers flat at 50 voxels, stall window 3
+  // iterations; one object's share grows 0.30, 0.35, 0.40, 0.45, 0.50, then
+  // stays: growth over each window is 0.15 >= 0.01 until the share stops.
+  TerminationCheck t(TerminationConfig(), semantic());
+  TerminationInputs in;
+  in.explored_volume_m3 = 100.0;
+  in.active_frontiers = 50;
+  in.background_share = 0.5;
+  const double shares[] = {0.30, 0.35, 0.40, 0.45, 0.50, 0.50, 0.50, 0.50};
+  for (int it = 0; it < 8; ++it) {
+    in.objects = {object(7, shares[it])};
+    const TerminationDecision d = t.check(in);
+    // Windows (3 iterations back): it 3: 0.30 -> 0.45, it 4: 0.35 -> 0.50, it 5: 0.40 -> 0.50,
+    // it 6: 0.45 -> 0.50 (0.05 >= 0.01) go on; it 7: 0.50 -> 0.50 stops.
+    EXPECT_EQ(d.finished, it == 7) << it << ": " << d.message;
+    if (it == 7) {
+      EXPECT_EQ(d.reason, "no_progress");
+    }
+  }
+}
+
+TEST(Termination, ClassicNoProgressIsVolumeAndFrontiersOnly) {
+  TerminationCheck t(TerminationConfig(), classic());
+  TerminationInputs in;
+  in.explored_volume_m3 = 100.0;
+  in.active_frontiers = 50;
+  const double shares[] = {0.1, 0.3, 0.5, 0.7};  // an object's share grows: not pursued in classic mode
+  for (int it = 0; it < 4; ++it) {
+    in.objects = {object(1, shares[it])};
+    EXPECT_EQ(t.check(in).finished, it == 3) << it;
+  }
+}
+
+TEST(Termination, FewerActiveFrontiersIsProgress) {
+  TerminationCheck t(TerminationConfig(), classic());
+  TerminationInputs in;
+  in.explored_volume_m3 = 100.0;
+  for (int it = 0; it < 6; ++it) {
+    in.active_frontiers = 60 - 10 * it;  // retired clusters leave the count
+    EXPECT_FALSE(t.check(in).finished) << it;
+  }
+}
+
+// ------------------------------------------------------------ retirement
+
+namespace {
+
+// A level camera with the default 320 x 240, f 262.5 intrinsics: 49.2 deg vertical field of view.
+PinholeCamera camera() { return PinholeCamera(); }
+
+Bounds box(double xy, double z_max) {
+  Bounds b;
+  b.min_m = {-xy, -xy, 0.0};
+  b.max_m = {xy, xy, z_max};
+  return b;
+}
+
+// Free space: a vertical cylinder of radius `rho` around the vertical line
+// through kAxis; a sphere is free when it fits inside.
+const Eigen::Vector3d kAxis(0.25, 0.25, 0.0);  // the middle of a 0.5 m cluster cube
+CollisionQuery cylinder(double rho) {
+  return [rho](const Eigen::Vector3d& p, double r) {
+    return std::hypot(p.x() - kAxis.x(), p.y() - kAxis.y()) + r <= rho + 1e-9;
+  };
+}
+
+std::vector<Eigen::Vector3d> patch(const Eigen::Vector3d& c) {
+  std::vector<Eigen::Vector3d> v;
+  for (int i = -2; i <= 2; ++i)
+    for (int j = -2; j <= 2; ++j) v.push_back(c + Eigen::Vector3d(0.04 * i, 0.04 * j, 0.0));
+  return v;
+}
+
+constexpr double kClearance = 0.165;
+
+}  // namespace
+
+TEST(FrontierRetirement, APatchAboveTheEnvelopeSeenFromTooCloseIsRetiredByGeometry) {
+  // Bounds up to 3.0 m: the highest reachable camera centre is at 2.835 m.
+  // The patch lies 0.3 m above it (the map's blocks reach past the bounds).
+  // Seeing it inside the field of view (24.6 deg - 0.05 rad margin = 21.7
+  // deg) needs a horizontal standoff of 0.3 / tan(21.7 deg) = 0.75 m.
+  const Bounds b = box(5.0, 3.0);
+  FrontierRetirementConfig cfg;
+  const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 2.835 + 0.3);
+  // Free space 0.2 m around the patch's axis: no camera centre farther than 0.2 m.
+  FrontierRetirement narrow(cfg, camera(), b, kClearance, 0.04);
+  EXPECT_EQ(narrow.viewPoints(centre, cylinder(0.2 + kClearance)), 0);
+  FrontierRetirement::Split s = narrow.update(patch(centre), cylinder(0.2 + kClearance));
+  EXPECT_EQ(s.active_W.size(), 0u);
+  EXPECT_EQ(s.retired_W.size(), 25u);
+  EXPECT_EQ(s.retired_by_geometry, 1u);
+  // 0.7 m is still too close for the field of view.
+  EXPECT_EQ(narrow.viewPoints(centre, cylinder(0.7 + kClearance)), 0);
+  // Free space 2 m around it: seen from 0.75 m on.
+  FrontierRetirement wide(cfg, camera(), b, kClearance, 0.04);
+  EXPECT_GT(wide.viewPoints(centre, cylinder(2.0 + kClearance)), 0);
+  s = wide.update(patch(centre), cylinder(2.0 + kClearance));
+  EXPECT_EQ(s.active_W.size(), 25u);
+  EXPECT_EQ(s.retired_by_geometry, 0u);
+}
+
+TEST(FrontierRetirement, RetiredByEvidenceAfterKViewsAndBackWhenFreeSpaceGrows) {
+  FrontierRetirementConfig cfg;
+  cfg.max_failed_views = 3;
+  cfg.recheck_iterations = 1;
+  const Bounds b = box(5.0, 3.0);
+  FrontierRetirement fr(cfg, camera(), b, kClearance, 0.04);
+  const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.75);  // level with a camera: observable by geometry
+  const auto voxels = patch(centre);
+  const CollisionQuery small = cylinder(1.0);
+  for (int view = 1; view <= 3; ++view) {
+    const auto s = fr.update(voxels, small);
+    EXPECT_EQ(s.active_W.size(), 25u) << view;  // not yet: views 1..view-1 failed
+    fr.recordViews({}, small, {centre});          // the winner was meant to observe it
+  }
+  auto s = fr.update(voxels, small);  // the third view did not shrink it either
+  EXPECT_EQ(s.active_W.size(), 0u);
+  EXPECT_EQ(s.retired_by_evidence, 1u);
+  EXPECT_EQ(fr.update(voxels, small).retired_by_evidence, 1u);  // same free space: stays retired
+  // New free space around it (the cylinder grows to 2.5 m): more view points, back to active.
+  s = fr.update(voxels, cylinder(2.5));
+  EXPECT_EQ(s.active_W.size(), 25u);
+  EXPECT_EQ(s.retired_by_evidence, 0u);
+}
+
+TEST(FrontierRetirement, AViewThatShrinksTheClusterIsNoFailure) {
+  FrontierRetirementConfig cfg;
+  cfg.max_failed_views = 2;
+  FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
+  const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.75);
+  auto voxels = patch(centre);
+  const CollisionQuery free_space = cylinder(2.0);
+  fr.update(voxels, free_space);
+  fr.recordViews({}, free_space, {centre});
+  fr.update(voxels, free_space);  // failed view 1
+  fr.recordViews({}, free_space, {centre});
+  voxels.resize(15);  // 25 -> 15 voxels: shrank by 40% >= 20%, the count restarts
+  EXPECT_EQ(fr.update(voxels, free_space).active_W.size(), 15u);
+  fr.recordViews({}, free_space, {centre});
+  EXPECT_EQ(fr.update(voxels, free_space).active_W.size(), 15u);  // failed view 1 of 2 again
+}
+
+TEST(FrontierRetirement, APoseCountsAsAViewOnlyInsideTheFieldOfViewAndRange) {
+  FrontierRetirementConfig cfg;
+  FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
+  const CollisionQuery free_space = [](const Eigen::Vector3d&, double) { return true; };
+  const Eigen::Vector3d p(2.0, 0.0, 1.0);
+  EXPECT_TRUE(fr.sees({{0.0, 0.0, 1.0}, 0.0}, p, free_space));
+  EXPECT_FALSE(fr.sees({{0.0, 0.0, 1.0}, M_PI}, p, free_space));          // looking away
+  EXPECT_FALSE(fr.sees({{0.0, 0.0, 0.0}, 0.0}, {1.0, 0.0, 1.0}, free_space));  // 45 deg up
+  EXPECT_FALSE(fr.sees({{-1.5, 0.0, 1.0}, 0.0}, p, free_space));          // 3.5 m > view_range_m
+  const CollisionQuery wall = [](const Eigen::Vector3d& q, double) { return std::abs(q.x() - 1.0) > 0.05; };
+  EXPECT_FALSE(fr.sees({{0.0, 0.0, 1.0}, 0.0}, p, wall));  // a wall in between
+}
