@@ -17,6 +17,7 @@
 // columns 15 and 16), so its mask holds u <= 127.
 #include <gtest/gtest.h>
 
+#include <opencv2/core/version.hpp>
 #include <opencv2/dnn.hpp>
 
 #include <cstdio>
@@ -273,14 +274,34 @@ TEST(Segmenter, ABadModelFailsAtStartupNamingTheParameter) {
   c.class_map = {{"chair", "chair"}};
   EXPECT_EQ(rejected([&] { InstanceSegmenter s(c); }), "detector/model_classes");
   c = sceneConfig();
-  c.input_size = {{256, 256}};
-  EXPECT_EQ(rejected([&] { InstanceSegmenter s(c); }), "detector/input_size");
+  c.input_size = {{256, 256}};  // the graph cannot run at that size
+  EXPECT_EQ(rejected([&] { InstanceSegmenter s(c); }), "detector/model_path");
   c = sceneConfig();
   c.backend = "cuda";
   c.target = "cuda";
   if (cv::dnn::getAvailableTargets(cv::dnn::DNN_BACKEND_CUDA).empty()) {
     EXPECT_EQ(rejected([&] { InstanceSegmenter s(c); }), "detector/backend");
   }
+}
+
+TEST(Segmenter, AnExportThatBroadcastsRunsAfterOnnxForOpencv) {
+  // output0 = boxes [1, 39, 8] x a [1, 8] constant, as a stock export's anchor strides.
+  DetectorConfig c = sceneConfig();
+  c.model_path = makeModel("broadcast");
+  if (CV_VERSION_MAJOR == 4 && CV_VERSION_MINOR < 7) {
+    EXPECT_EQ(rejected([&] { InstanceSegmenter s(c); }), "detector/model_path");
+  }
+  const std::string prepared = g_dir + "/broadcast_prepared.onnx";
+  const std::string cmd = std::string(SEMEXP_PYTHON) + " " + SEMEXP_ONNX_FOR_OPENCV + " " + c.model_path + " " + prepared;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  c.model_path = prepared;
+  InstanceSegmenter seg(c);
+  const InstanceImage img = seg.segment(cv::Mat(192, 256, CV_8UC3, cv::Scalar(0)), cv::Size(256, 192));
+  ASSERT_EQ(img.entries.size(), 4u);
+  EXPECT_EQ(img.entries[0].pixel_count, 4096u);
+  EXPECT_EQ(img.entries[1].pixel_count, 2048u);
+  EXPECT_EQ(img.entries[2].pixel_count, 256u);
+  EXPECT_EQ(img.entries[3].pixel_count, 512u);
 }
 
 TEST(DetectorConfig, ValidateNamesTheParameter) {

@@ -14,6 +14,9 @@ Variants (--variant):
   stock       the size of a stock export (80 classes, 32 prototypes, N anchors of strides 8, 16, 32)
               with random candidates, for the benchmark; --input W H sets imgsz
   one_output  the scene with output1 left out (a detection-only export)
+  broadcast   the scene with output0 multiplied by a [1, N] constant of ones, as a stock export
+              multiplies its boxes by anchor strides: OpenCV < 4.7 runs it only after
+              scripts/onnx_for_opencv.py
 Needs Debian's python3-onnx and numpy.
 """
 import argparse
@@ -78,7 +81,7 @@ def stock_outputs(w, h, nc=80, seed=0):
     return out0, protos
 
 
-def build(out0, protos, size, one_output=False):
+def build(out0, protos, size, one_output=False, broadcast=False):
     w, h = size
     c, n = out0.shape[1], out0.shape[2]
     inits = [
@@ -92,8 +95,11 @@ def build(out0, protos, size, one_output=False):
         helper.make_node("GlobalAveragePool", ["images"], ["pooled"]),
         helper.make_node("Conv", ["pooled", "w0"], ["zero0"], kernel_shape=[1, 1]),
         helper.make_node("Add", ["zero0", "c0"], ["flat0"]),
-        helper.make_node("Reshape", ["flat0", "shape0"], ["output0"]),
+        helper.make_node("Reshape", ["flat0", "shape0"], ["boxes0" if broadcast else "output0"]),
     ]
+    if broadcast:
+        inits.append(numpy_helper.from_array(np.ones((1, n), np.float32), "strides"))
+        nodes.append(helper.make_node("Mul", ["boxes0", "strides"], ["output0"]))
     outputs = [helper.make_tensor_value_info("output0", TensorProto.FLOAT, [1, c, n])]
     if not one_output:
         nodes += [
@@ -112,7 +118,7 @@ def build(out0, protos, size, one_output=False):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("out", help="ONNX file to write")
-    ap.add_argument("--variant", choices=["scene", "stock", "one_output"], default="scene")
+    ap.add_argument("--variant", choices=["scene", "stock", "one_output", "broadcast"], default="scene")
     ap.add_argument("--input", nargs=2, type=int, default=[640, 640], metavar=("W", "H"),
                     help="input size of the stock variant, px")
     a = ap.parse_args(argv)
@@ -121,7 +127,8 @@ def main(argv=None):
         size = tuple(a.input)
     else:
         out0, protos, size = scene_outputs()
-    onnx.save(build(out0, protos, size, one_output=a.variant == "one_output"), a.out)
+    onnx.save(build(out0, protos, size, one_output=a.variant == "one_output", broadcast=a.variant == "broadcast"),
+              a.out)
     return 0
 
 

@@ -23,10 +23,18 @@ std::string shapeOf(const cv::Mat& m) {
   return s + "]";
 }
 
-// OpenCV's messages run over several lines; the first holds the failing check.
-std::string firstLine(const std::string& s) {
-  const auto nl = s.find('\n');
-  return nl == std::string::npos ? s : s.substr(0, nl);
+// OpenCV's messages run over several lines: joined into one, at most 400 characters.
+std::string oneLine(const std::string& s) {
+  std::string r;
+  for (const char ch : s) {
+    if (ch == '\n') {
+      if (!r.empty() && r.back() != ' ') r += ' ';
+    } else {
+      r += ch;
+    }
+  }
+  while (!r.empty() && r.back() == ' ') r.pop_back();
+  return r.size() > 400 ? r.substr(0, 400) + "..." : r;
 }
 
 std::string expected() { return std::string("; expected ") + kYoloSegLayout; }
@@ -42,8 +50,8 @@ InstanceSegmenter::InstanceSegmenter(const DetectorConfig& config, const std::st
   try {
     net_ = cv::dnn::readNetFromONNX(path);
   } catch (const cv::Exception& e) {
-    throw ConfigError(p_model, "OpenCV " CV_VERSION " cannot load '" + path + "' as ONNX (" + firstLine(e.what()) +
-                                   ")" + expected() + " (for OpenCV 4.6 export with opset=12)");
+    throw ConfigError(p_model, "OpenCV " CV_VERSION " cannot load '" + path + "' as ONNX (" + oneLine(e.what()) +
+                                   ")" + expected() + " (export with opset=12)");
   }
   if (net_.empty()) throw ConfigError(p_model, "'" + path + "' holds no network" + expected());
 
@@ -70,9 +78,11 @@ InstanceSegmenter::InstanceSegmenter(const DetectorConfig& config, const std::st
     net_.setInput(blob);
     net_.forward(outs, out_names_);
   } catch (const cv::Exception& e) {
-    throw ConfigError(p_input, "'" + path + "' does not run on a " + std::to_string(w) + " x " + std::to_string(h) +
-                                   " input (" + firstLine(e.what()) + "); input_size must be the export's imgsz" +
-                                   expected());
+    // Either input_size is not the export's imgsz, or the graph broadcasts in a way this OpenCV cannot.
+    throw ConfigError(p_model, "OpenCV " CV_VERSION " cannot run '" + path + "' on a " + std::to_string(w) + " x " +
+                                   std::to_string(h) + " input (" + oneLine(e.what()) + "): " + p_input +
+                                   " must be the export's imgsz, and OpenCV before 4.7 needs the export passed "
+                                   "through scripts/onnx_for_opencv.py" + expected());
   }
   if (outs.size() != 2) throw ConfigError(p_model, "'" + path + "' gave " + std::to_string(outs.size()) + " outputs" + expected());
   if (outs[0].dims == 4 && outs[1].dims == 3) std::swap(out0_index_, out1_index_);
