@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core/version.hpp>
+
 #include "bench_common.hpp"
 #include "semantic_exploration/core/detector/instance_segmenter.hpp"
 
@@ -49,8 +51,9 @@ int main(int argc, char** argv) {
   c.class_map.clear();
   for (const auto& n : c.model_classes) c.class_map[n] = n;
   InstanceSegmenter seg(c);
-  std::printf("model %s: input %dx%d, %d candidates, prototypes %dx%d\n", c.model_path.c_str(), c.input_size[0],
-              c.input_size[1], seg.numCandidates(), seg.protoSize().width, seg.protoSize().height);
+  std::printf("model %s: input %dx%d, %d candidates, prototypes %dx%d; OpenCV %s, %d threads\n", c.model_path.c_str(),
+              c.input_size[0], c.input_size[1], seg.numCandidates(), seg.protoSize().width, seg.protoSize().height,
+              CV_VERSION, cv::getNumThreads());
   std::printf("%-10s %10s %10s %10s %10s %10s\n", "frame", "pre ms", "infer ms", "decode ms", "total ms", "instances");
 
   cv::RNG rng(1);
