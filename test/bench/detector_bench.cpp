@@ -31,7 +31,11 @@ int main(int argc, char** argv) {
   char dir[] = "/tmp/semexp_detector_bench.XXXXXX";
   bool made = false;
   for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--model") == 0 && i + 1 < argc) c.model_path = argv[++i], tag = "model";
+    if (std::strcmp(argv[i], "--model") == 0 && i + 1 < argc) {
+      c.model_path = argv[++i];
+      tag = c.model_path.substr(c.model_path.find_last_of('/') + 1);  // the file name without .onnx
+      tag = tag.substr(0, tag.rfind(".onnx"));
+    }
     if (std::strcmp(argv[i], "--input-size") == 0 && i + 2 < argc) {
       c.input_size = {{std::atoi(argv[i + 1]), std::atoi(argv[i + 2])}};
       i += 2;
