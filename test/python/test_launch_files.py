@@ -46,6 +46,8 @@ def test_detector_launch():
 
 def test_replay_and_record_launch():
     assert nodes("replay.launch", "bag:=/tmp/x.bag") == MAPPING | {"/play"}
+    assert nodes("replay.launch", "bag:=/tmp/x.bag", "detector:=true", "detector_model:=/tmp/m.onnx") == \
+        MAPPING | {"/play", "/detector"}
     assert nodes("record.launch") == {"/record"}
 
 
