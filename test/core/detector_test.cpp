@@ -23,6 +23,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <string>
 
 #include "semantic_exploration/core/detector/instance_segmenter.hpp"
@@ -37,7 +38,8 @@ std::string g_dir;  // temporary directory of this run's models
 std::string makeModel(const std::string& variant) {
   const std::string out = g_dir + "/" + variant + ".onnx";
   if (std::ifstream(out).good()) return out;
-  const std::string cmd = std::string(SEMEXP_PYTHON) + " " + SEMEXP_MAKE_SEG_MODEL + " " + out + " --variant " + variant;
+  const std::string cmd =
+      std::string(SEMEXP_PYTHON) + " " + SEMEXP_MAKE_SEG_MODEL + " " + out + " --variant " + variant;
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
   return out;
 }
@@ -197,6 +199,23 @@ TEST(Decode, NmsAndClassMapAndThresholdAreWhatRemoveCandidates) {
   EXPECT_EQ(inst[4].roi, cv::Rect(190, 18, 20, 20));  // x [95, 105) -> u 190..209; y [25, 35) -> v 18..37
 }
 
+TEST(Decode, NonFiniteOrHugeBoxesAreSkipped) {
+  // Three chair candidates of score 0.9 (1 class, 1 prototype of 2 x 2 = 1): NaN centre, 1e30 width, a good box.
+  const int s0[] = {1, 6, 3}, s1[] = {1, 1, 2, 2};
+  cv::Mat out0(3, s0, CV_32F, cv::Scalar(0)), out1(4, s1, CV_32F, cv::Scalar(1));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float rows[6][3] = {{nan, 4, 4}, {4, 4, 4}, {2, 1e30f, 4}, {2, 2, 4}, {0.9f, 0.9f, 0.9f}, {10, 10, 10}};
+  for (int r = 0; r < 6; ++r)
+    for (int j = 0; j < 3; ++j) out0.at<float>(cv::Vec3i(0, r, j)) = rows[r][j];
+  DetectorConfig c;
+  c.model_classes = {"chair"};
+  c.class_map = {{"chair", "chair"}};
+  const auto inst = decodeYoloSeg(out0, out1, Letterbox::fit(cv::Size(8, 8), cv::Size(8, 8)), cv::Size(8, 8), c);
+  ASSERT_EQ(inst.size(), 1u);
+  EXPECT_EQ(inst[0].roi, cv::Rect(2, 2, 4, 4));  // box x, y [2, 6)
+  EXPECT_EQ(cv::countNonZero(inst[0].mask), 16);
+}
+
 TEST(Segmenter, InstanceImageOfALandscapeFrame) {
   InstanceSegmenter seg(sceneConfig());
   EXPECT_EQ(seg.protoSize(), cv::Size(32, 32));
@@ -292,7 +311,8 @@ TEST(Segmenter, AnExportThatBroadcastsRunsAfterOnnxForOpencv) {
     EXPECT_EQ(rejected([&] { InstanceSegmenter s(c); }), "detector/model_path");
   }
   const std::string prepared = g_dir + "/broadcast_prepared.onnx";
-  const std::string cmd = std::string(SEMEXP_PYTHON) + " " + SEMEXP_ONNX_FOR_OPENCV + " " + c.model_path + " " + prepared;
+  const std::string cmd =
+      std::string(SEMEXP_PYTHON) + " " + SEMEXP_ONNX_FOR_OPENCV + " " + c.model_path + " " + prepared;
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   c.model_path = prepared;
   InstanceSegmenter seg(c);

@@ -61,8 +61,9 @@ InstanceSegmenter::InstanceSegmenter(const DetectorConfig& config, const std::st
                                                      : cv::dnn::DNN_TARGET_CPU;
   const auto targets = cv::dnn::getAvailableTargets(static_cast<cv::dnn::Backend>(backend));
   if (std::find(targets.begin(), targets.end(), static_cast<cv::dnn::Target>(target)) == targets.end())
-    throw ConfigError(ns + "backend", "this OpenCV (" CV_VERSION ") offers no " + config_.backend + " backend with target " +
-                                          config_.target + " (built without CUDA?); use backend opencv, target cpu");
+    throw ConfigError(ns + "backend", "this OpenCV (" CV_VERSION ") offers no " + config_.backend +
+                                          " backend with target " + config_.target +
+                                          " (built without CUDA?); use backend opencv, target cpu");
   net_.setPreferableBackend(backend);
   net_.setPreferableTarget(target);
 
@@ -84,12 +85,15 @@ InstanceSegmenter::InstanceSegmenter(const DetectorConfig& config, const std::st
                                    " must be the export's imgsz, and OpenCV before 4.7 needs the export passed "
                                    "through scripts/onnx_for_opencv.py" + expected());
   }
-  if (outs.size() != 2) throw ConfigError(p_model, "'" + path + "' gave " + std::to_string(outs.size()) + " outputs" + expected());
+  if (outs.size() != 2)
+    throw ConfigError(p_model, "'" + path + "' gave " + std::to_string(outs.size()) + " outputs" + expected());
   if (outs[0].dims == 4 && outs[1].dims == 3) std::swap(out0_index_, out1_index_);
   const cv::Mat& o0 = outs[static_cast<std::size_t>(out0_index_)];
   const cv::Mat& o1 = outs[static_cast<std::size_t>(out1_index_)];
-  if (o0.dims != 3 || o1.dims != 4 || o0.size[0] != 1 || o1.size[0] != 1 || o0.type() != CV_32F || o1.type() != CV_32F)
-    throw ConfigError(p_model, "'" + path + "' has outputs " + shapeOf(outs[0]) + " and " + shapeOf(outs[1]) + expected());
+  if (o0.dims != 3 || o1.dims != 4 || o0.size[0] != 1 || o1.size[0] != 1 || o0.type() != CV_32F ||
+      o1.type() != CV_32F)
+    throw ConfigError(p_model,
+                      "'" + path + "' has outputs " + shapeOf(outs[0]) + " and " + shapeOf(outs[1]) + expected());
   const int nm = o1.size[1];
   const int nc = o0.size[1] - 4 - nm;
   if (o1.size[2] * 4 != h || o1.size[3] * 4 != w)
@@ -118,8 +122,10 @@ void InstanceSegmenter::runNetwork(const cv::Mat& blob, cv::Mat& output0, cv::Ma
 }
 
 InstanceImage InstanceSegmenter::segment(const cv::Mat& rgb, cv::Size out_size, DetectorTiming* timing) {
-  if (rgb.empty() || rgb.type() != CV_8UC3) throw std::invalid_argument("segment: the colour image must be CV_8UC3 RGB");
-  if (out_size.width <= 0 || out_size.height <= 0) throw std::invalid_argument("segment: the output size must be positive");
+  if (rgb.empty() || rgb.type() != CV_8UC3)
+    throw std::invalid_argument("segment: the colour image must be CV_8UC3 RGB");
+  if (out_size.width <= 0 || out_size.height <= 0)
+    throw std::invalid_argument("segment: the output size must be positive");
   const auto t0 = Clock::now();
   const Letterbox lb = Letterbox::fit(rgb.size(), cv::Size(config_.input_size[0], config_.input_size[1]));
   const cv::Mat blob = letterboxBlob(rgb, lb);

@@ -112,8 +112,12 @@ std::vector<SegmentedInstance> decodeYoloSeg(const cv::Mat& output0, const cv::M
   std::vector<int> best_class(static_cast<std::size_t>(n), 0);
   for (int c = 1; c < nc; ++c) {
     const float* row = out + static_cast<std::size_t>(4 + c) * n;
-    for (int j = 0; j < n; ++j)
-      if (row[j] > best_score[static_cast<std::size_t>(j)]) best_score[static_cast<std::size_t>(j)] = row[j], best_class[static_cast<std::size_t>(j)] = c;
+    for (std::size_t j = 0; j < best_score.size(); ++j) {
+      if (row[j] > best_score[j]) {
+        best_score[j] = row[j];
+        best_class[j] = c;
+      }
+    }
   }
   std::vector<Candidate> cands;
   for (int j = 0; j < n; ++j) {
@@ -121,7 +125,9 @@ std::vector<SegmentedInstance> decodeYoloSeg(const cv::Mat& output0, const cv::M
     const float score = best_score[static_cast<std::size_t>(j)];
     if (!(score >= config.conf_threshold) || project[static_cast<std::size_t>(best)].empty()) continue;
     const double cx = at(0, j), cy = at(1, j), w = at(2, j), h = at(3, j);
-    if (!(w > 0 && h > 0)) continue;
+    // A box must be finite and of sane size (a broken model's NaN or 1e30 would overflow pixel indices).
+    const double lim = 1e6;
+    if (!(w > 0 && h > 0 && w < lim && h < lim && std::abs(cx) < lim && std::abs(cy) < lim)) continue;
     cands.push_back({j, best, score, cv::Rect2d(cx - 0.5 * w, cy - 0.5 * h, w, h)});
   }
   std::stable_sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.conf > b.conf; });
