@@ -24,6 +24,12 @@
 using namespace semexp;
 using semexp_bench::median;
 
+// The Python with the onnx package: the venv's where there is one (Ubuntu 20.04 has it only there).
+static std::string python() {
+  const char* venv = std::getenv("SEMEXP_VENV");
+  return venv && *venv ? std::string(venv) + "/bin/python" : std::string(SEMEXP_PYTHON);
+}
+
 int main(int argc, char** argv) {
   semexp_bench::Reporter rep(argc, argv);
   DetectorConfig c;
@@ -45,7 +51,7 @@ int main(int argc, char** argv) {
     if (!mkdtemp(dir)) return 1;
     made = true;
     c.model_path = std::string(dir) + "/stock.onnx";
-    const std::string cmd = std::string(SEMEXP_PYTHON) + " " + SEMEXP_MAKE_SEG_MODEL + " " + c.model_path +
+    const std::string cmd = python() + " " + SEMEXP_MAKE_SEG_MODEL + " " + c.model_path +
                             " --variant stock --input 640 640";
     if (std::system(cmd.c_str()) != 0) {
       std::fprintf(stderr, "failed: %s\n", cmd.c_str());

@@ -35,11 +35,17 @@ namespace {
 
 std::string g_dir;  // temporary directory of this run's models
 
+// The Python with the onnx package: the venv's where there is one (Ubuntu 20.04 has it only there).
+std::string python() {
+  const char* venv = std::getenv("SEMEXP_VENV");
+  return venv && *venv ? std::string(venv) + "/bin/python" : std::string(SEMEXP_PYTHON);
+}
+
 std::string makeModel(const std::string& variant) {
   const std::string out = g_dir + "/" + variant + ".onnx";
   if (std::ifstream(out).good()) return out;
   const std::string cmd =
-      std::string(SEMEXP_PYTHON) + " " + SEMEXP_MAKE_SEG_MODEL + " " + out + " --variant " + variant;
+      python() + " " + SEMEXP_MAKE_SEG_MODEL + " " + out + " --variant " + variant;
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
   return out;
 }
@@ -312,7 +318,7 @@ TEST(Segmenter, AnExportThatBroadcastsRunsAfterOnnxForOpencv) {
   }
   const std::string prepared = g_dir + "/broadcast_prepared.onnx";
   const std::string cmd =
-      std::string(SEMEXP_PYTHON) + " " + SEMEXP_ONNX_FOR_OPENCV + " " + c.model_path + " " + prepared;
+      python() + " " + SEMEXP_ONNX_FOR_OPENCV + " " + c.model_path + " " + prepared;
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   c.model_path = prepared;
   InstanceSegmenter seg(c);

@@ -44,7 +44,7 @@ def node_phase(work):
     import rviz_screenshot as rs
     import run_mission as mission
     model = os.path.join(work, "scene.onnx")
-    subprocess.check_call(["/usr/bin/python3", MAKE_MODEL, model, "--variant", "scene"])
+    subprocess.check_call([sys.executable, MAKE_MODEL, model, "--variant", "scene"])
     config = os.path.join(work, "detector.yaml")
     with open(config, "w") as f:
         f.write(DETECTOR_CONFIG)

@@ -146,7 +146,7 @@ def replay_phase(work, bag):
     import run_mission as mission
     from test_replay import _nodes, _ros_env, _start, _wait_master, _wait_subscribed
     model = os.path.join(work, "scene.onnx")
-    subprocess.check_call(["/usr/bin/python3", MAKE_MODEL, model, "--variant", "scene"])
+    subprocess.check_call([sys.executable, MAKE_MODEL, model, "--variant", "scene"])
     config = os.path.join(work, "detector.yaml")
     with open(config, "w") as f:
         f.write(DETECTOR_CONFIG)
