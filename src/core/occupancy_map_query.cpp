@@ -355,4 +355,30 @@ void OccupancyMap::forEachOccupied(
   }
 }
 
+OccupancyMap::SurfaceObservation OccupancyMap::surfaceObservedWithin(double d_m) const {
+  SurfaceObservation out;
+  // Distances are stored in whole mm, rounded (see the integrator): compare in mm.
+  const double d_mm = std::floor(d_m * 1000.0 + 0.5);
+  const auto within = [d_mm](std::uint16_t d) { return d != kNoDist && d <= d_mm; };
+  for (int cell = 0; cell < static_cast<int>(cell_block_.size()); ++cell) {
+    const Summary& s = levels_[0].s[cell];
+    if (!s.known_any || s.max_l < 0) continue;  // nothing occupied below
+    const int b = cell_block_[cell];
+    if (b < 0) {  // a uniform occupied cell
+      out.occupied_voxels += static_cast<std::size_t>(bs3_);
+      if (within(cell_dist_[cell])) out.within_voxels += static_cast<std::size_t>(bs3_);
+      continue;
+    }
+    const std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
+    const std::uint16_t* D =
+        block_surf_[b] >= 0 ? block_dist_.data() + static_cast<std::size_t>(block_surf_[b]) * bs3_ : nullptr;
+    for (int i = 0; i < bs3_; ++i) {
+      if (L[i] == kUnknown || L[i] < 0) continue;
+      ++out.occupied_voxels;
+      if (D && within(D[i])) ++out.within_voxels;
+    }
+  }
+  return out;
+}
+
 }  // namespace semexp

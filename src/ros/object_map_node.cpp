@@ -8,18 +8,11 @@
 
 #include "semantic_exploration/FrameIntegrated.h"
 #include "semantic_exploration/ObjectArray.h"
+#include "semantic_exploration/ros/conversions.hpp"
 
 namespace semexp_ros {
 
 namespace {
-
-geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
-  geometry_msgs::Point q;
-  q.x = p.x();
-  q.y = p.y();
-  q.z = p.z();
-  return q;
-}
 
 /// A distinct, stable colour per class (hue steps of the golden angle).
 std_msgs::ColorRGBA classColour(int class_id) {

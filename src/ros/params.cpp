@@ -261,6 +261,9 @@ semexp::PlannerConfig loadPlanner(const ParamReader& p) {
   p.get(n + "planning_threads", c.planning_threads);
   p.get(n + "stall_iterations", c.stall_iterations);
   p.get(n + "stall_volume_m3", c.stall_volume_m3);
+  p.get(n + "ompl_termination", c.ompl_termination);
+  p.get(n + "ompl_iterations", c.ompl_iterations);
+  p.get(n + "lazy_planning", c.lazy_planning);
   int seed = static_cast<int>(c.seed);
   p.get(n + "seed", seed);
   if (seed < 0) throw ConfigError(n + "seed", "must be >= 0");
@@ -320,6 +323,16 @@ TfSettings loadTf(const ParamReader& p) {
   p.getAtLeast("tf_timeout_s", t.timeout_s, 0.0, "s");
   p.getAtLeast("max_tf_gap_s", t.max_gap_s, 0.0, "s");
   return t;
+}
+
+PlannerNodeConfig loadPlannerNode(const ParamReader& p) {
+  PlannerNodeConfig c;
+  p.get("planner/service_timeout_s", c.service_timeout_s);
+  if (!(c.service_timeout_s > 0)) throw semexp::ConfigError("planner/service_timeout_s", "must be > 0 s");
+  p.get("planner/retry_period_s", c.retry_period_s);
+  if (!(c.retry_period_s > 0)) throw semexp::ConfigError("planner/retry_period_s", "must be > 0 s");
+  p.getAtLeast("planner/goal_timeout_factor", c.goal_timeout_factor, 1.0, "(a factor)");
+  return c;
 }
 
 }  // namespace semexp_ros

@@ -1,6 +1,11 @@
-// Planning iteration time: n = 20 candidates, 36 x 10 raycasts, the default
-// OMPL budget (0.1 s per candidate), all hardware threads. Prints the median
-// iteration time and its parts (sampling, path planning, gains, yaw).
+// Planning iteration time, lazy against exhaustive path planning, side by
+// side on the same map, candidates and seeds: n = 20 candidates, 36 x 10
+// raycasts, OMPL stopped after planner/ompl_iterations iterations per
+// candidate (deterministic mode, so both modes plan identical paths to the
+// candidates they both plan), all hardware threads. Prints both iteration
+// medians and their ratio, the share of iterations with an identical winner
+// (same candidate, same path), the candidates planned per iteration, and the
+// lazy mode's stages (sampling, path planning, gains, yaw).
 //
 // Scene: three rooms in a row (12 x 8 x 3 m, walls with doorways, four
 // chair-sized boxes), as a ground-truth voxel grid. Depth frames (Table I
@@ -16,8 +21,6 @@
 // a reference value from the paper, not measured here.
 #include <cstdio>
 #include <thread>
-
-#include <ompl/util/RandomNumbers.h>
 
 #include "../core/planning_test_map.hpp"
 #include "bench_common.hpp"
@@ -44,7 +47,6 @@ Eigen::Isometry3d camera_pose(const Eigen::Vector3d& p, double yaw) {
 
 int main(int argc, char** argv) {
   semexp_bench::Reporter rep(argc, argv);
-  ompl::RNG::setSeed(3);
 
   semexp::Bounds bounds;
   bounds.min_m = {0.0, 0.0, 0.0};
@@ -69,7 +71,8 @@ int main(int argc, char** argv) {
     objects.push_back(o);
   }
 
-  semexp::PlannerConfig config;  // defaults: n = 20, 36 x 10, 0.1 s per candidate
+  semexp::PlannerConfig config;  // defaults (n = 20, 36 x 10), OMPL by iterations
+  config.ompl_termination = "iterations";
   semexp::ExplorationConfig exploration;
   semexp::PinholeCamera camera;  // Table I
   semexp::BackgroundMapConfig map_config;
@@ -143,45 +146,80 @@ int main(int argc, char** argv) {
   };
   prov.history = [&history](const std::vector<Eigen::Vector3d>& ps) { return history.masks(ps); };
 
-  semexp::ExplorationPlanner planner(config, exploration, bounds, camera, res);
+  // Two planners with the same settings and seed: their samplers draw the
+  // same candidates, and the same (seed, iteration, candidate) gives the same
+  // path in both.
+  semexp::PlannerConfig lazy_config = config, all_config = config;
+  lazy_config.lazy_planning = true;
+  all_config.lazy_planning = false;
+  semexp::ExplorationPlanner lazy(lazy_config, exploration, bounds, camera, res);
+  semexp::ExplorationPlanner exhaustive(all_config, exploration, bounds, camera, res);
   const Eigen::Vector3d starts[5] = {{2.0, 4.0, 1.3}, {2.0, 2.5, 1.0}, {6.0, 4.0, 1.3}, {1.0, 6.5, 1.2}, {5.5, 5.0, 1.0}};
-  std::vector<double> total, sampling, paths, gains, yaw;
-  int reachable = 0, iterations = 0, winners = 0;
-  const int kIterations = 15;
+  std::vector<double> total, sampling, paths, gains, yaw, total_all, paths_all;
+  int planned = 0, planned_all = 0, reachable = 0, identical = 0, winners = 0;
+  const int kIterations = 20;
   for (int it = 0; it < kIterations; ++it) {
     semexp::ExplorationInputs in;
     in.position_W = starts[it % 5];
     in.yaw_rad = 0.5 * it;
     in.frontiers_W = frontiers;
     in.objects = objects;
-    const semexp::IterationResult r = planner.plan(in, prov);
-    if (r.winner < 0) std::fprintf(stderr, "iteration %d: no winner: %s\n", it, r.message.c_str());
-    winners += r.winner >= 0;
+    // Alternate which mode runs first, so that neither always finds warm caches.
+    semexp::IterationResult r, a;
+    if (it % 2) {
+      r = lazy.plan(in, prov);
+      a = exhaustive.plan(in, prov);
+    } else {
+      a = exhaustive.plan(in, prov);
+      r = lazy.plan(in, prov);
+    }
+    if (a.winner < 0) std::fprintf(stderr, "iteration %d: no winner: %s\n", it, a.message.c_str());
+    if (r.winner != a.winner || r.path_W != a.path_W)
+      std::fprintf(stderr, "iteration %d: lazy winner %d, exhaustive winner %d\n", it, r.winner, a.winner);
+    winners += a.winner >= 0;
+    identical += r.winner == a.winner && r.path_W == a.path_W;
     total.push_back(1e3 * r.total_s);
     sampling.push_back(1e3 * r.sampling_s);
     paths.push_back(1e3 * r.path_planning_s);
     gains.push_back(1e3 * r.gains_s);
     yaw.push_back(1e3 * r.yaw_s);
-    reachable += r.candidates_reachable;
-    iterations += 1;
+    total_all.push_back(1e3 * a.total_s);
+    paths_all.push_back(1e3 * a.path_planning_s);
+    planned += r.candidates_planned;
+    planned_all += a.candidates_planned;
+    reachable += a.candidates_reachable;
   }
 
+  const double lazy_ms = semexp_bench::median(total), all_ms = semexp_bench::median(total_all);
+  const double speedup = lazy_ms > 0 ? all_ms / lazy_ms : 0.0;
+  const double share = static_cast<double>(identical) / kIterations;
   std::printf("planner iteration on the background map core (12 x 8 x 3 m, r = 0.04 m), n = %d, %d x %d raycasts, "
-              "%.2f s OMPL budget per candidate, %u hardware threads, %d iterations\n",
-              config.n_candidates, config.raycast_width, config.raycast_height, config.time_budget_s,
-              std::thread::hardware_concurrency(), iterations);
-  std::printf("  %-28s %10s\n", "stage", "median ms");
-  std::printf("  %-28s %10.1f   (paper, Jetson Xavier NX: 2800 ms -- reference value, not measured here)\n",
-              "total", semexp_bench::median(total));
-  std::printf("  %-28s %10.2f\n", "sampling", semexp_bench::median(sampling));
-  std::printf("  %-28s %10.1f\n", "path planning", semexp_bench::median(paths));
-  std::printf("  %-28s %10.1f\n", "gains (entropy+bg raycasts)", semexp_bench::median(gains));
-  std::printf("  %-28s %10.1f\n", "intermediate yaw", semexp_bench::median(yaw));
-  std::printf("  reachable candidates per iteration: %.1f of %d; iterations with a winner: %d of %d\n",
-              static_cast<double>(reachable) / iterations, config.n_candidates, winners, iterations);
+              "OMPL stopped after %d iterations per candidate, %u hardware threads, %d iterations per mode\n",
+              config.n_candidates, config.raycast_width, config.raycast_height, config.ompl_iterations,
+              std::thread::hardware_concurrency(), kIterations);
+  std::printf("  %-34s %12s %12s\n", "", "lazy", "exhaustive");
+  std::printf("  %-34s %12.1f %12.1f   ratio %.1fx (paper, Jetson Xavier NX: 2800 ms -- reference value, not "
+              "measured here)\n",
+              "iteration median, ms", lazy_ms, all_ms, speedup);
+  std::printf("  %-34s %12.1f %12.1f\n", "path planning median, ms", semexp_bench::median(paths),
+              semexp_bench::median(paths_all));
+  std::printf("  %-34s %12.1f %12.1f\n", "candidates planned per iteration", static_cast<double>(planned) / kIterations,
+              static_cast<double>(planned_all) / kIterations);
+  std::printf("  identical winner (candidate and path): %d of %d iterations (%.0f%%); exhaustive: %.1f of %d candidates "
+              "reachable, %d iterations with a winner\n",
+              identical, kIterations, 100.0 * share, static_cast<double>(reachable) / kIterations, config.n_candidates,
+              winners);
+  std::printf("  lazy stages, median ms: sampling %.2f, path planning %.1f, gains (entropy+bg raycasts) %.1f, "
+              "intermediate yaw %.1f\n",
+              semexp_bench::median(sampling), semexp_bench::median(paths), semexp_bench::median(gains),
+              semexp_bench::median(yaw));
 
-  rep.add("planner_iteration_median", semexp_bench::median(total), "ms",
-          "paper Jetson Xavier NX (reference value, not measured)", 2800.0);
+  rep.add("planner.lazy_speedup_vs_exhaustive", speedup, "x");
+  rep.add("planner.identical_winner_share", share, "");
+  rep.add("planner.lazy_candidates_planned_mean", static_cast<double>(planned) / kIterations, "candidates");
+  rep.add("planner.exhaustive_iteration_median", all_ms, "ms");
+  rep.add("planner_iteration_median", lazy_ms, "ms", "paper Jetson Xavier NX (reference value, not measured)",
+          2800.0);
   rep.add("planner_sampling_median", semexp_bench::median(sampling), "ms");
   rep.add("planner_path_planning_median", semexp_bench::median(paths), "ms");
   rep.add("planner_gains_median", semexp_bench::median(gains), "ms");

@@ -273,20 +273,27 @@ TEST_F(ExplorationTest, StartInUnknownSpaceEscapes) {
 }
 
 // Every candidate reachable but nothing to see anywhere: no winner, a failed
-// iteration (counts towards "no_reachable_candidate"), no path.
+// iteration (counts towards "no_reachable_candidate"), no path. Exhaustive
+// planning plans both; lazy planning none (a zero gain cannot win).
 TEST_F(ExplorationTest, NoCandidateWithPositiveGain) {
   providers.gains = [](const std::vector<Eigen::Vector3d>& ps) {
     std::vector<GainSet> out(ps.size());
     for (auto& g : out) g.entropy = GainImage(36, 10, 0.0f);
     return out;
   };
-  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
-  const IterationResult r = planner.plan(inputs(), providers);
-  EXPECT_EQ(r.candidates_reachable, 2);
-  EXPECT_EQ(r.winner, -1);
-  EXPECT_TRUE(r.path_W.empty());
-  EXPECT_EQ(planner.failed_iterations(), 1);
-  EXPECT_EQ(r.message.rfind("2 candidates reachable, none with a positive gain (1 of ", 0), 0u) << r.message;
+  for (const bool lazy : {false, true}) {
+    config.lazy_planning = lazy;
+    ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+    const IterationResult r = planner.plan(inputs(), providers);
+    EXPECT_EQ(r.candidates_planned, lazy ? 0 : 2);
+    EXPECT_EQ(r.candidates_reachable, lazy ? 0 : 2);
+    EXPECT_EQ(r.winner, -1);
+    EXPECT_TRUE(r.path_W.empty());
+    EXPECT_EQ(planner.failed_iterations(), 1);
+    const char* why = lazy ? "none of 2 candidates has a positive gain at its view position (1 of "
+                           : "2 candidates reachable, none with a positive gain (1 of ";
+    EXPECT_EQ(r.message.rfind(why, 0), 0u) << r.message;
+  }
 }
 
 TEST_F(ExplorationTest, ProviderFailureIsReportedNotCounted) {

@@ -5,6 +5,8 @@
 // and the object must still hide it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <opencv2/core.hpp>
 
 #include "semantic_exploration/core/object_map.hpp"
@@ -172,4 +174,32 @@ TEST(ObjectRayLimits, PassThroughAnObjectsBoxButStopAtOtherOccluders) {
   EXPECT_EQ(object_ray_limits_m(Eigen::Vector3d::Zero(), grid, hits, r, {}), object_occlusion_depths_m(hits, r));
   EXPECT_THROW(object_ray_limits_m(Eigen::Vector3d::Zero(), grid, std::vector<float>(3, 1.f), r, {chair}),
                std::invalid_argument);
+}
+
+TEST(ObjectRayLimits, BatchConcatenatesPerPositionAndSkipsWithoutHitDepths) {
+  // The request chaining of the planner: one limit image per position, in
+  // position order; no limits at all when the background sent no hit depths.
+  SphericalGrid grid;
+  grid.width = 36;
+  grid.height = 10;
+  grid.vfov_rad = 0.855;
+  const std::size_t n = 360;
+  ObjectSummary chair;
+  chair.id = 1;
+  chair.bbox_min_W = {1.0, -0.3, -0.3};
+  chair.bbox_max_W = {1.5, 0.3, 0.3};
+  const double r = 0.04;
+  const std::vector<Eigen::Vector3d> ps{{0, 0, 0}, {0, 0, 5}};
+  std::vector<GainImage> hits(2, GainImage(36, 10, 0.7f));
+  hits[1] = GainImage(36, 10, 2.0f);
+  const std::vector<float> all = objectRayLimitsBatch(ps, grid, hits, r, {chair});
+  ASSERT_EQ(all.size(), 2 * n);
+  const auto first = object_ray_limits_m(ps[0], grid, hits[0].values, r, {chair});
+  const auto second = object_ray_limits_m(ps[1], grid, hits[1].values, r, {chair});
+  EXPECT_TRUE(std::equal(first.begin(), first.end(), all.begin()));
+  EXPECT_TRUE(std::equal(second.begin(), second.end(), all.begin() + n));
+  EXPECT_NEAR(all[n], 2.08, 1e-5);  // 2.0 m hit + 2 r
+  hits[1] = GainImage();            // no hit depths for one position: no limits
+  EXPECT_TRUE(objectRayLimitsBatch(ps, grid, hits, r, {chair}).empty());
+  EXPECT_THROW(objectRayLimitsBatch(ps, grid, {GainImage(36, 10)}, r, {chair}), std::invalid_argument);
 }

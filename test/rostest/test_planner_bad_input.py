@@ -45,7 +45,7 @@ from nav_msgs.msg import Path
 from sensor_msgs.msg import PointCloud2
 from std_srvs.srv import Trigger
 
-from semantic_exploration.msg import ExplorationStatus, MapBlocks
+from semantic_exploration.msg import DropCounts, ExplorationStatus, MapBlocks
 from semantic_exploration.srv import (ComputeGains, ComputeGainsResponse, GetHistoryMasks,
                                       GetHistoryMasksResponse, GetMap, GetMapResponse)
 from sensor_msgs.msg import Image
@@ -218,6 +218,30 @@ class PlannerBadInputTest(unittest.TestCase):
         p1 = path.poses[1].pose.position
         self.assertLessEqual(p1.x, 4.0 - CLEARANCE + 1e-3, "the escape does not reach known free space")
         self.assertLess(math.dist(start, (p1.x, p1.y, p1.z)), 1.0)
+
+    def test_3a_malformed_frontier_clouds_are_dropped(self):
+        """A frontier cloud with point_step 0 (an iterator never advances) or with
+        data that is not row_step x height bytes (an iterator reads past the
+        end) is dropped as bad_frontiers; the planner keeps answering and
+        plans from the last good cloud."""
+        drops = {}
+        sub = rospy.Subscriber("/dropped_input", DropCounts,
+                               lambda m: drops.update(dict(zip(m.reasons, m.counts))) if m.node == "/planner" else None)
+        good = cloud([(3.95, y, 1.0) for y in (0.55, 1.05, 1.55, 2.05)])
+        zero_step = cloud([(3.95, 1.0, 1.0)])
+        zero_step.point_step, zero_step.row_step = 0, 0
+        long_data = cloud([(3.95, 1.0, 1.0)])
+        long_data.point_step, long_data.row_step = 12, 12
+        long_data.data = bytes(13)
+        try:
+            for n, bad in enumerate((zero_step, long_data), start=1):
+                self.frontier_pub.publish(bad)
+                self.assertTrue(self.wait_for(lambda: drops.get("bad_frontiers", 0) >= n, 10.0), drops)
+                res = rospy.ServiceProxy("/planner/plan_once", Trigger)()  # answers: not hung
+                self.assertTrue(res.success, res.message)
+        finally:
+            self.frontier_pub.publish(good)
+            sub.unregister()
 
     def test_4_start_in_occupied_space_is_reported_until_termination(self):
         start = (2.1, 1.0, 1.0)  # inside the wall

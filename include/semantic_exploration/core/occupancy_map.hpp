@@ -143,6 +143,20 @@ class OccupancyMap {
                                        const GainSettings& settings,
                                        const std::vector<float>& max_depth_m = {}) const;
 
+  /// Occupied voxels (the observed surface) and how many of them were
+  /// updated from <= d_m: the share of the background observed from close
+  /// by (paper Section IV-D's termination condition with d_m = d_bg).
+  struct SurfaceObservation {
+    std::size_t occupied_voxels = 0;  ///< occupied finest-level voxels (a uniform cell counts all of its voxels)
+    std::size_t within_voxels = 0;    ///< of those, updated from <= d_m
+    /// within / occupied; 1 for a map without surface (nothing left to see closer).
+    double share() const {
+      return occupied_voxels == 0 ? 1.0 : static_cast<double>(within_voxels) / static_cast<double>(occupied_voxels);
+    }
+  };
+  /// Counts the surface observed from <= d_m; one pass over the occupied blocks.
+  SurfaceObservation surfaceObservedWithin(double d_m) const;
+
   double freeVolume() const;      ///< m^3
   double occupiedVolume() const;  ///< m^3
   double exploredVolume() const { return freeVolume() + occupiedVolume(); }

@@ -52,6 +52,20 @@ struct PlannerConfig {
   int planning_threads = 0;               ///< threads planning candidates in parallel; 0 = all hardware threads
   int stall_iterations = 20;              ///< stop ("no_progress") when the explored volume grew less than stall_volume_m3 over this many iterations; 0 = off
   double stall_volume_m3 = 0.1;           ///< see stall_iterations, m^3
+  /// What ends one candidate's OMPL solve besides reaching the cost threshold
+  /// or converging: "time" (time_budget_s of wall time) or "iterations"
+  /// (ompl_iterations RRT* iterations, and simplification without a time
+  /// limit). With "iterations" a solve depends on its inputs and seed only,
+  /// so a run is reproducible whatever the machine load.
+  std::string ompl_termination = "time";
+  int ompl_iterations = 1000;             ///< RRT* iterations per candidate when ompl_termination is "iterations"
+  /// Plan paths only until no unplanned candidate can beat the best utility
+  /// found (candidates in decreasing order of the bound g / t_min); picks the
+  /// same winner as planning every candidate (false).
+  bool lazy_planning = true;
+
+  /// Whether OMPL solves end on an iteration count (reproducible) rather than wall time.
+  bool ompl_by_iterations() const { return ompl_termination == "iterations"; }
 
   /// Radius of the sphere that must be free along paths and at view points, m.
   double clearance_radius_m() const { return mav_radius_m + clearance_margin_m; }
@@ -87,6 +101,9 @@ struct PlannerConfig {
     require(stall_iterations >= 0, ns + "stall_iterations", "must be >= 0 (0 = off)");
     require(std::isfinite(stall_volume_m3) && stall_volume_m3 >= 0, ns + "stall_volume_m3", "must be >= 0 m^3");
     require(planning_threads >= 0, ns + "planning_threads", "must be >= 0 (0 = all hardware threads)");
+    require(ompl_termination == "time" || ompl_termination == "iterations", ns + "ompl_termination",
+            "must be \"time\" or \"iterations\" (is \"" + ompl_termination + "\")");
+    require(ompl_iterations > 0, ns + "ompl_iterations", "must be > 0");
   }
 };
 

@@ -41,6 +41,13 @@ struct TfSettings {
   double max_gap_s = 0.2;  ///< `max_tf_gap_s`: refuse a pose interpolated across a wider gap (TfGapGuard), s; 0 = off
 };
 
+/// Settings of the planner node itself (not of the core planner).
+struct PlannerNodeConfig {
+  double service_timeout_s = 5.0;    ///< `planner/service_timeout_s`: longest a service call may take, finding it included, wall s
+  double retry_period_s = 1.0;       ///< `planner/retry_period_s`: pause after an iteration without a path, wall s
+  double goal_timeout_factor = 3.0;  ///< `planner/goal_timeout_factor`: replan if the goal is not reached in factor x path time + 10 s
+};
+
 /// Reads typed values out of a parameter tree (the node's private namespace).
 class ParamReader {
  public:
@@ -87,5 +94,6 @@ semexp::PlannerConfig loadPlanner(const ParamReader& p);              ///< `plan
 semexp::DetectorConfig loadDetector(const ParamReader& p, const semexp::ClassTable& classes);
 FrameNames loadFrames(const ParamReader& p);                          ///< `frames/*`
 TfSettings loadTf(const ParamReader& p);                              ///< `tf_timeout_s`, `max_tf_gap_s`
+PlannerNodeConfig loadPlannerNode(const ParamReader& p);  ///< `planner/{service_timeout_s,retry_period_s,goal_timeout_factor}`
 
 }  // namespace semexp_ros

@@ -25,14 +25,13 @@
 /// `planner/goal_timeout_factor` (replan if the goal is not reached within
 /// factor * estimated path time + 10 s).
 ///
-/// Every service call runs on its own worker thread with its own
-/// non-persistent client and is given up after service_timeout_s: the
-/// iteration reports "service X timed out after N s" in its status (and
-/// counts it in ExplorationStatus::service_timeouts), goes on without an
+/// Service calls are bounded in time (PlannerServices, ServiceCaller): a call given up after
+/// service_timeout_s is reported in the iteration's status (and counted in
+/// ExplorationStatus::service_timeouts), the iteration goes on without an
 /// optional service or ends without a path if background gains are missing,
-/// and the next iteration calls again. An abandoned call keeps its own copy
-/// of request and response, so its late answer is dropped with it; at most
-/// kMaxPendingCalls abandoned calls per service are kept waiting.
+/// and the next iteration calls again. Message conversions live in
+/// conversions.hpp, the markers in planner_markers.hpp, the final path check
+/// in the core (path_check.hpp).
 
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
@@ -41,9 +40,7 @@
 #include <std_srvs/Trigger.h>
 
 #include <memory>
-#include <map>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "semantic_exploration/MapBlocks.h"
@@ -53,40 +50,15 @@
 #include "semantic_exploration/core/planning/map_replica.hpp"
 #include "semantic_exploration/ros/node_common.hpp"
 #include "semantic_exploration/ros/params.hpp"
+#include "semantic_exploration/ros/planner_services.hpp"
 
 namespace semexp_ros {
 
 class PlannerNode {
  public:
   PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
-  /// Joins abandoned service calls (they end once roscpp has shut down and dropped their connections).
-  ~PlannerNode();
-
-  /// Abandoned calls per service still waited for; beyond it the service is not called again until one ends.
-  static constexpr int kMaxPendingCalls = 4;
 
  private:
-  /// How a bounded service call ended.
-  enum class CallResult { kOk, kUnavailable, kFailed, kTimedOut, kBusy };
-  struct CallState;
-  /// A call given up after service_timeout_s whose worker has not ended yet.
-  struct PendingCall {
-    std::string service;
-    std::shared_ptr<CallState> state;
-    std::thread worker;
-  };
-
-  /// Calls `service` (relative to the node namespace) with at most
-  /// service_timeout_s for finding it and its answer. On kOk srv.response
-  /// holds the answer; otherwise `why` says what happened (also logged and
-  /// counted).
-  template <class Srv>
-  CallResult callService(const std::string& service, Srv& srv, std::string& why);
-  /// Joins the workers of abandoned calls that have ended.
-  void reapCalls();
-  /// Records a failure of an optional service for this iteration's status message (once).
-  void addServiceNote(const std::string& note);
-
   void mapUpdateCallback(const semantic_exploration::MapBlocksConstPtr& msg);
   void frontiersCallback(const sensor_msgs::PointCloud2ConstPtr& msg);
   void objectsCallback(const semantic_exploration::ObjectArrayConstPtr& msg);
@@ -97,24 +69,24 @@ class PlannerNode {
   bool planOnce(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   void publishStatus(uint8_t state, const std::string& message);
 
+  /// Applies one MapBlocks message to the replica; `gap` is set when a resync is needed.
   bool applyBlocks(const semantic_exploration::MapBlocks& msg, bool& gap);
   bool resync();
   /// One planning iteration; true if a path was published. `message` says what happened.
   bool iterate(std::string& message);
-  std::vector<semexp::GainSet> computeGains(const std::vector<Eigen::Vector3d>& positions_W);
-  std::vector<std::vector<std::uint8_t>> historyMasks(const std::vector<Eigen::Vector3d>& positions_W);
+  /// Publishes the path of a winner that passed the final clearance check and logs why it won.
+  void publishWinner(const semexp::IterationResult& r, const ros::Time& now);
   void publishResult(const semexp::IterationResult& r, const ros::Time& stamp, double current_yaw);
-  bool pathSafe(const std::vector<Eigen::Vector3d>& path_W, bool escaped, std::string& why) const;
 
   semexp::PlannerConfig config_;
   semexp::ExplorationConfig exploration_;
   semexp::PinholeCamera camera_;
   semexp::Bounds bounds_;
   FrameNames frames_;
+  PlannerNodeConfig node_config_;
   std::unique_ptr<PoseSource> poses_;  ///< the MAV pose (tf2, latest)
-  double service_timeout_s_ = 5.0;
-  double retry_period_s_ = 1.0;
-  double goal_timeout_factor_ = 3.0;
+  DropCounter drops_;
+  std::unique_ptr<PlannerServices> services_;
 
   semexp::MapReplica replica_;
   std::unique_ptr<semexp::ExplorationPlanner> planner_;
@@ -136,14 +108,8 @@ class PlannerNode {
   ros::Publisher path_pub_, candidates_pub_, markers_pub_, status_pub_;
   ros::Publisher gain_pubs_[4];
   ros::ServiceServer plan_srv_;
-  ros::NodeHandle nh_;
-  std::vector<PendingCall> pending_calls_;
-  /// Services that timed out in the current iteration (-> why): not called again in it.
-  std::map<std::string, std::string> timed_out_now_;
-  std::vector<std::string> service_notes_;  ///< failures of optional services in the current iteration, for the status
   ros::Timer timer_;
   uint32_t iteration_ = 0;
-  DropCounter drops_;
 };
 
 }  // namespace semexp_ros

@@ -1,5 +1,6 @@
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <stdexcept>
@@ -15,6 +16,58 @@ std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
   char buf[256];
   std::snprintf(buf, sizeof(buf), f, a, b, c);
   return buf;
+}
+
+/// One view position's gain images, G (Eq. 2) and best yaw window.
+struct ViewGains {
+  GainSet gains;
+  GainImage combined;
+  YawWindow window;
+};
+
+/// Gains at `ps` (one batched call to each provider), combined and windowed.
+/// On a provider failure or bad images: reports it in r, returns false.
+bool evaluate_views(const std::vector<Eigen::Vector3d>& ps, const ExplorationProviders& prov,
+                    const PlannerConfig& cfg, int window_columns, std::vector<ViewGains>& out, IterationResult& r) {
+  std::vector<GainSet> gains;
+  std::vector<std::vector<std::uint8_t>> masks;
+  try {
+    gains = prov.gains(ps);
+    if (prov.history) masks = prov.history(ps);
+    if (gains.size() != ps.size())
+      throw std::runtime_error("gain provider returned " + std::to_string(gains.size()) + " results for " +
+                               std::to_string(ps.size()) + " positions");
+    if (!masks.empty() && masks.size() != ps.size())
+      throw std::runtime_error("history provider returned a wrong number of masks");
+  } catch (const std::exception& e) {
+    r.provider_error = true;
+    r.message = std::string("gain evaluation failed: ") + e.what();
+    return false;
+  }
+  const GainWeights weights{cfg.a_ent, cfg.a_bg, cfg.a_obj};
+  out.assign(ps.size(), ViewGains());
+  try {
+    for (std::size_t k = 0; k < ps.size(); ++k) {
+      out[k].combined = combine_gains(weights, gains[k], masks.empty() ? std::vector<std::uint8_t>{} : masks[k],
+                                      cfg.raycast_width, cfg.raycast_height);
+      out[k].window = best_yaw(out[k].combined, window_columns);
+      out[k].gains = std::move(gains[k]);
+    }
+  } catch (const std::exception& e) {
+    r.provider_error = true;
+    r.message = std::string("bad gain images: ") + e.what();
+    return false;
+  }
+  return true;
+}
+
+void set_gains(EvaluatedCandidate& c, const ViewGains& g) {
+  const YawWindow& w = g.window;
+  c.yaw_rad = w.yaw_rad;
+  c.gain = w.gain;
+  c.gain_entropy = window_mean(g.gains.entropy, w.first_column, w.columns);
+  c.gain_bg = window_mean(g.gains.background, w.first_column, w.columns);
+  c.gain_obj = window_mean(g.gains.object, w.first_column, w.columns);
 }
 
 }  // namespace
@@ -85,97 +138,148 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
 
   // 1. Sampling.
   auto t0 = Clock::now();
+  const std::uint64_t iteration = sampling_iterations_++;
   const std::vector<CandidateSample> samples = sampler_.sample(in.frontiers_W, in.objects, prov.is_free);
   r.sampling_s = seconds_since(t0);
   if (samples.empty()) {
     fail(r, "nothing to sample (no frontiers and no object left to observe)");
     return finish();
   }
+  const std::size_t n = samples.size();
+  r.candidates.resize(n);
+  for (std::size_t i = 0; i < n; ++i) r.candidates[i].sample = samples[i];
 
-  // 2. Paths, in parallel.
+  // 2. View positions: where each path ends if it reaches its goal (a
+  // frontier goal moves to free space next to it), known before planning.
   t0 = Clock::now();
   const PathPlanner paths(planner_, bounds_, map_resolution_m_, prov.is_free, prov.not_occupied);
-  std::vector<Eigen::Vector3d> goals;
-  for (const auto& s : samples) goals.push_back(s.position_W);
-  std::vector<PlannedPath> planned = paths.plan_all(in.position_W, goals);
+  const PlanningStart from = paths.planning_start(in.position_W);
+  if (!from.ok) {
+    for (EvaluatedCandidate& c : r.candidates) {
+      c.position_W = c.sample.position_W;
+      c.plan.status = PlannedPath::Status::kStartInvalid;
+    }
+    r.path_planning_s = seconds_since(t0);
+    fail(r, "the current position is not in free space and no escape was found");
+    return finish();
+  }
+  std::vector<Eigen::Vector3d> views;
+  for (const CandidateSample& s : samples) views.push_back(s.position_W);
+  const std::vector<ResolvedGoal> goals = paths.resolve_goals(from, views);
+  for (std::size_t i = 0; i < n; ++i) {
+    views[i] = goals[i].goal_W;
+    r.candidates[i].position_W = r.candidates[i].view_W = views[i];
+  }
   r.path_planning_s = seconds_since(t0);
 
-  r.candidates.resize(samples.size());
-  std::vector<Eigen::Vector3d> view_positions;
-  std::vector<std::size_t> reachable_idx;
-  bool start_invalid = false;
-  for (std::size_t i = 0; i < samples.size(); ++i) {
+  // 3. Gains at the view positions (one batched call), Eq. 2, sliding
+  // window, and each candidate's utility bound.
+  t0 = Clock::now();
+  std::vector<ViewGains> view_gains;
+  const bool gains_ok = evaluate_views(views, prov, planner_, window_columns_, view_gains, r);
+  r.gains_s = seconds_since(t0);
+  if (!gains_ok) return finish();
+  for (std::size_t i = 0; i < n; ++i) {
     EvaluatedCandidate& c = r.candidates[i];
-    c.sample = samples[i];
-    c.plan = std::move(planned[i]);
-    c.reachable = c.plan.ok();
-    c.position_W = c.reachable ? c.plan.path_W.back() : c.sample.position_W;
-    start_invalid = start_invalid || c.plan.status == PlannedPath::Status::kStartInvalid;
-    if (c.reachable) {
-      reachable_idx.push_back(i);
-      view_positions.push_back(c.position_W);
-    }
-  }
-  r.candidates_reachable = static_cast<int>(reachable_idx.size());
-  if (reachable_idx.empty()) {
-    fail(r, start_invalid ? "the current position is not in free space and no escape was found"
-                          : "no candidate reachable");
-    return finish();
+    set_gains(c, view_gains[i]);
+    // No path is shorter than the straight line, and path_time_s of the
+    // straight path {start, view} is exactly this time.
+    const double t_min_s = std::max((views[i] - in.position_W).norm() / planner_.v_max_mps,
+                                    yaw_difference_rad(in.yaw_rad, c.yaw_rad) / planner_.omega_max_radps);
+    c.utility_bound = utility(c.gain, t_min_s, planner_.min_path_time_s);
   }
 
-  // 3-5. Gains (one batched call each), Eq. 2, sliding window, utility.
-  t0 = Clock::now();
-  std::vector<GainSet> gains;
-  std::vector<std::vector<std::uint8_t>> masks;
-  try {
-    gains = prov.gains(view_positions);
-    if (prov.history) masks = prov.history(view_positions);
-    if (gains.size() != view_positions.size())
-      throw std::runtime_error("gain provider returned " + std::to_string(gains.size()) + " results for " +
-                               std::to_string(view_positions.size()) + " positions");
-    if (!masks.empty() && masks.size() != view_positions.size())
-      throw std::runtime_error("history provider returned a wrong number of masks");
-  } catch (const std::exception& e) {
-    r.provider_error = true;
-    r.message = std::string("gain evaluation failed: ") + e.what();
-    r.gains_s = seconds_since(t0);
-    return finish();
-  }
-  const GainWeights weights{planner_.a_ent, planner_.a_bg, planner_.a_obj};
-  const int w = planner_.raycast_width, h = planner_.raycast_height;
-  std::vector<GainImage> combined(reachable_idx.size());
-  double best_utility = 0.0;
-  try {
-    for (std::size_t k = 0; k < reachable_idx.size(); ++k) {
-      EvaluatedCandidate& c = r.candidates[reachable_idx[k]];
-      combined[k] = combine_gains(weights, gains[k], masks.empty() ? std::vector<std::uint8_t>{} : masks[k], w, h);
-      const YawWindow win = best_yaw(combined[k], window_columns_);
-      c.yaw_rad = win.yaw_rad;
-      c.gain = win.gain;
-      c.gain_entropy = window_mean(gains[k].entropy, win.first_column, win.columns);
-      c.gain_bg = window_mean(gains[k].background, win.first_column, win.columns);
-      c.gain_obj = window_mean(gains[k].object, win.first_column, win.columns);
-      c.path_time_s = path_time_s(c.plan.path_W, in.yaw_rad, c.yaw_rad, planner_.v_max_mps, planner_.omega_max_radps);
-      c.utility = utility(c.gain, c.path_time_s, planner_.min_path_time_s);
-      if (c.utility > best_utility) {
-        best_utility = c.utility;
-        r.winner = static_cast<int>(reachable_idx[k]);
-        r.winner_gains = gains[k];
-        r.winner_combined = combined[k];
+  // 4. Paths, best bound first. Exhaustive: all at once. Lazy: a batch of
+  // `threads` at a time, until no unplanned candidate can beat the best:
+  // utilities never exceed their bounds, and ties go to the lower index, as
+  // in the exhaustive scan.
+  const bool lazy = planner_.lazy_planning;
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!lazy || r.candidates[i].gain > 0) order.push_back(i);
+  std::sort(order.begin(), order.end(), [&r](std::size_t a, std::size_t b) {
+    const double ua = r.candidates[a].utility_bound, ub = r.candidates[b].utility_bound;
+    return ua > ub || (ua == ub && a < b);
+  });
+  const auto beats = [&r](std::size_t a, double utility_a, std::size_t b) {
+    const double ub = r.candidates[b].utility;
+    return utility_a > ub || (utility_a == ub && a < b);
+  };
+  const std::size_t batch = lazy ? static_cast<std::size_t>(paths.threads()) : std::max<std::size_t>(1, n);
+  std::vector<ViewGains> end_gains(n);  // for paths that end away from their view position
+  int best = -1;
+  for (std::size_t k = 0; k < order.size();) {
+    if (lazy && best >= 0 && !beats(order[k], r.candidates[order[k]].utility_bound, static_cast<std::size_t>(best)))
+      break;
+    const std::vector<std::size_t> ids(order.begin() + static_cast<std::ptrdiff_t>(k),
+                                       order.begin() + static_cast<std::ptrdiff_t>(std::min(order.size(), k + batch)));
+    k += ids.size();
+    t0 = Clock::now();
+    std::vector<ResolvedGoal> batch_goals;
+    std::vector<std::uint32_t> seeds;
+    for (std::size_t i : ids) {
+      batch_goals.push_back(goals[i]);
+      seeds.push_back(path_seed(planner_.seed, iteration, i));
+    }
+    std::vector<PlannedPath> planned = paths.plan_all(from, batch_goals, seeds);
+    r.path_planning_s += seconds_since(t0);
+    std::vector<std::size_t> moved;
+    std::vector<Eigen::Vector3d> ends;
+    for (std::size_t j = 0; j < ids.size(); ++j) {
+      EvaluatedCandidate& c = r.candidates[ids[j]];
+      c.plan = std::move(planned[j]);
+      c.planned = true;
+      c.reachable = c.plan.ok();
+      ++r.candidates_planned;
+      r.candidates_reachable += c.reachable ? 1 : 0;
+      if (c.reachable && c.plan.path_W.back() != views[ids[j]]) {
+        // Approximate: the view is taken where the path ends.
+        moved.push_back(ids[j]);
+        ends.push_back(c.plan.path_W.back());
       }
     }
-  } catch (const std::exception& e) {
-    r.provider_error = true;
-    r.winner = -1;
-    r.message = std::string("bad gain images: ") + e.what();
-    r.gains_s = seconds_since(t0);
-    return finish();
+    if (!moved.empty()) {
+      t0 = Clock::now();
+      std::vector<ViewGains> g;
+      const bool ok = evaluate_views(ends, prov, planner_, window_columns_, g, r);
+      r.gains_s += seconds_since(t0);
+      if (!ok) return finish();
+      for (std::size_t j = 0; j < moved.size(); ++j) {
+        end_gains[moved[j]] = std::move(g[j]);
+        r.candidates[moved[j]].position_W = ends[j];
+        set_gains(r.candidates[moved[j]], end_gains[moved[j]]);
+      }
+    }
+    for (std::size_t i : ids) {
+      EvaluatedCandidate& c = r.candidates[i];
+      if (!c.reachable) continue;
+      c.path_time_s = path_time_s(c.plan.path_W, in.yaw_rad, c.yaw_rad, planner_.v_max_mps, planner_.omega_max_radps);
+      // Capped at the bound: equal to the uncapped value whenever the path
+      // reaches its view (up to rounding); an approximate path is never
+      // worth more than reaching its view could have been.
+      c.utility = std::min(utility(c.gain, c.path_time_s, planner_.min_path_time_s), c.utility_bound);
+      if (c.utility > 0 && (best < 0 || beats(i, c.utility, static_cast<std::size_t>(best))))
+        best = static_cast<int>(i);
+    }
   }
-  r.gains_s = seconds_since(t0);
+  r.winner = best;
+
+  // 5. The winner.
   if (r.winner < 0) {
-    fail(r, std::to_string(reachable_idx.size()) + " candidates reachable, none with a positive gain");
+    if (r.candidates_planned == 0)
+      fail(r, "none of " + std::to_string(n) + " candidates has a positive gain at its view position");
+    else if (r.candidates_reachable == 0)
+      fail(r, "no candidate reachable");
+    else
+      fail(r, std::to_string(r.candidates_reachable) + " candidates reachable, none with a positive gain");
     return finish();
   }
+  const std::size_t wi = static_cast<std::size_t>(r.winner);
+  const ViewGains& wg = r.candidates[wi].position_W == views[wi] ? view_gains[wi] : end_gains[wi];
+  r.winner_gains = wg.gains;
+  r.winner_combined = wg.combined;
+  const GainWeights weights{planner_.a_ent, planner_.a_bg, planner_.a_obj};
+  const int w = planner_.raycast_width, h = planner_.raycast_height;
 
   // Yaw of the winner's path vertices: first keeps the current yaw, last the
   // candidate's, intermediate ones their own best yaw (one batched call).
@@ -206,8 +310,8 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   failed_iterations_ = 0;
   r.message += fmt("winner %.0f: utility %.3f 1/s, gain %.3f", r.winner, win.utility, win.gain) +
                fmt(", path %.2f m ", path_length_m(r.path_W)) + PlannedPath::name(win.plan.status) +
-               fmt("; %.0f of %.0f candidates reachable", r.candidates_reachable,
-                   static_cast<double>(r.candidates.size()));
+               fmt("; %.0f of %.0f candidates planned, %.0f reachable", r.candidates_planned,
+                   static_cast<double>(r.candidates.size()), r.candidates_reachable);
   return finish();
 }
 

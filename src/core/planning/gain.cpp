@@ -90,6 +90,24 @@ std::vector<float> object_ray_limits_m(const Eigen::Vector3d& position_W, const 
   return out;
 }
 
+std::vector<float> objectRayLimitsBatch(const std::vector<Eigen::Vector3d>& positions_W, const SphericalGrid& grid,
+                                        const std::vector<GainImage>& hit_depths_m, double background_resolution_m,
+                                        const std::vector<ObjectSummary>& objects) {
+  if (hit_depths_m.size() != positions_W.size())
+    throw std::invalid_argument("objectRayLimitsBatch: " + std::to_string(hit_depths_m.size()) +
+                                " hit depth images for " + std::to_string(positions_W.size()) + " positions");
+  for (const auto& d : hit_depths_m)
+    if (d.empty()) return {};
+  std::vector<float> out;
+  out.reserve(positions_W.size() * static_cast<std::size_t>(grid.width) * grid.height);
+  for (std::size_t i = 0; i < positions_W.size(); ++i) {
+    const std::vector<float> limits =
+        object_ray_limits_m(positions_W[i], grid, hit_depths_m[i].values, background_resolution_m, objects);
+    out.insert(out.end(), limits.begin(), limits.end());
+  }
+  return out;
+}
+
 int window_columns(double hfov_rad, int width) {
   const int k = static_cast<int>(std::lround(hfov_rad / (2.0 * M_PI) * width));
   return std::clamp(k, 1, std::max(1, width));

@@ -13,10 +13,12 @@
 #include <ompl/base/objectives/PathLengthOptimizationObjective.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/base/terminationconditions/CostConvergenceTerminationCondition.h>
+#include <ompl/base/terminationconditions/IterationTerminationCondition.h>
 #include <ompl/geometric/PathGeometric.h>
 #include <ompl/geometric/PathSimplifier.h>
-#include <ompl/geometric/planners/rrt/InformedRRTstar.h>
 #include <ompl/util/Console.h>
+
+#include "seeded_ompl.hpp"
 
 namespace ob = ompl::base;
 namespace og = ompl::geometric;
@@ -134,74 +136,127 @@ bool PathPlanner::nearest_valid(const Eigen::Vector3d& p, double radius, Eigen::
   return false;
 }
 
-PlannedPath PathPlanner::plan(const Eigen::Vector3d& start, const Eigen::Vector3d& goal) const {
+std::uint32_t path_seed(std::uint32_t seed, std::uint64_t iteration, std::uint64_t candidate) {
+  return ompl_seeded::mix(ompl_seeded::mix(seed, iteration), candidate);
+}
+
+template <typename Job>
+void PathPlanner::parallel_for(std::size_t n, const Job& job) const {
+  std::atomic<std::size_t> next{0};
+  auto worker = [&]() {
+    for (std::size_t i = next++; i < n; i = next++) job(i);
+  };
+  const int k = std::min<int>(threads(), static_cast<int>(n));
+  std::vector<std::thread> pool;
+  for (int t = 1; t < k; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+}
+
+PlanningStart PathPlanner::planning_start(const Eigen::Vector3d& start) const {
+  PlanningStart out;
+  out.start_W = out.from_W = start;
+  if (valid(start)) {
+    out.ok = true;
+    return out;
+  }
+  // Escape: nearest valid point whose straight segment keeps R/2 from
+  // occupied voxels. Only half the radius: the MAV is already there, and a
+  // surface seen from a new angle may have grown into its sphere; the escape
+  // moves it away from that surface.
+  Eigen::Vector3d esc;
+  if (!not_occupied_ || !nearest_valid(start, escape_radius_m_, esc)) return out;
+  const double len = (esc - start).norm();
+  const int n = std::max(1, static_cast<int>(std::ceil(len / resolution_m_)));
+  for (int i = 0; i <= n; ++i) {
+    const Eigen::Vector3d q = start + (esc - start) * (static_cast<double>(i) / n);
+    if (!bounds_.contains(q) || !not_occupied_(q, 0.5 * config_.mav_radius_m)) return out;
+  }
+  out.from_W = esc;
+  out.escaped = out.ok = true;
+  return out;
+}
+
+ResolvedGoal PathPlanner::resolve_goal(const PlanningStart& from, const Eigen::Vector3d& goal_in) const {
+  ResolvedGoal out;
+  out.requested_W = goal_in;
+  // Goals outside the state bounds are pulled in; invalid goals moved to the
+  // nearest valid point near them (a frontier voxel always touches unknown).
+  Eigen::Vector3d goal = goal_in;
+  for (int i = 0; i < 3; ++i) goal[i] = std::clamp(goal[i], state_bounds_.min_m[i], state_bounds_.max_m[i]);
+  out.goal_W = goal;
+  Eigen::Vector3d projected;
+  if (nearest_valid(goal, 2.0 * config_.mav_radius_m + 2.0 * resolution_m_, projected)) {
+    out.goal_W = projected;
+    out.valid = true;
+    return out;
+  }
+  // Deep in unknown or occupied space: take the first valid point on the
+  // line back towards the start. An exact solve to it ends early (cost
+  // threshold / convergence), where an approximate solve always spends the
+  // whole budget; the RRT* approximation remains the fallback.
+  const Eigen::Vector3d start = from.from_W;
+  const double len = (start - goal).norm();
+  const int n = static_cast<int>(std::ceil(len / resolution_m_));
+  for (int k = 1; k < n; ++k) {
+    const Eigen::Vector3d q = goal + (start - goal) * (static_cast<double>(k) / n);
+    if (valid(q)) {
+      out.goal_W = q;
+      out.valid = out.moved_far = true;
+      break;
+    }
+  }
+  return out;
+}
+
+std::vector<ResolvedGoal> PathPlanner::resolve_goals(const PlanningStart& from,
+                                                     const std::vector<Eigen::Vector3d>& goals) const {
+  std::vector<ResolvedGoal> out(goals.size());
+  parallel_for(goals.size(), [&](std::size_t i) { out[i] = resolve_goal(from, goals[i]); });
+  return out;
+}
+
+PlannedPath PathPlanner::plan(const Eigen::Vector3d& start, const Eigen::Vector3d& goal, std::uint32_t seed) const {
+  const PlanningStart from = planning_start(start);
+  if (!from.ok) {
+    PlannedPath out;
+    out.status = PlannedPath::Status::kStartInvalid;
+    out.distance_to_goal_m = (goal - start).norm();
+    return out;
+  }
+  return plan(from, resolve_goal(from, goal), seed);
+}
+
+PlannedPath PathPlanner::plan(const PlanningStart& from, const ResolvedGoal& goal, std::uint32_t seed) const {
   const auto t0 = Clock::now();
   PlannedPath out;
-  if (valid(start)) {
-    out = plan_from_valid_start(start, goal);
+  if (!from.ok) {
+    out.status = PlannedPath::Status::kStartInvalid;
+    out.distance_to_goal_m = (goal.requested_W - from.start_W).norm();
+  } else if (!from.escaped) {
+    out = plan_from_valid_start(from.from_W, goal, seed);
   } else {
-    // Escape: nearest valid point whose straight segment keeps R/2 from
-    // occupied voxels. Only half the radius: the MAV is already there, and a
-    // surface seen from a new angle may have grown into its sphere; the
-    // escape moves it away from that surface.
-    Eigen::Vector3d esc;
-    bool found = false;
-    if (not_occupied_ && nearest_valid(start, escape_radius_m_, esc)) {
-      const double len = (esc - start).norm();
-      const int n = std::max(1, static_cast<int>(std::ceil(len / resolution_m_)));
-      found = true;
-      for (int i = 0; i <= n && found; ++i) {
-        const Eigen::Vector3d q = start + (esc - start) * (static_cast<double>(i) / n);
-        found = bounds_.contains(q) && not_occupied_(q, 0.5 * config_.mav_radius_m);
-      }
-    }
-    if (!found) {
-      out.status = PlannedPath::Status::kStartInvalid;
-      out.distance_to_goal_m = (goal - start).norm();
-    } else {
-      out = plan_from_valid_start(esc, goal);
-      out.escaped = true;
-      if (out.ok())
-        out.path_W.insert(out.path_W.begin(), start);
-      else
-        out.path_W = {start, esc};  // at least get out of the invalid spot
-      if (out.status == PlannedPath::Status::kFailed) out.status = PlannedPath::Status::kApproximate;
-      out.distance_to_goal_m = (goal - out.path_W.back()).norm();
-    }
+    out = plan_from_valid_start(from.from_W, goal, seed);
+    out.escaped = true;
+    if (out.ok())
+      out.path_W.insert(out.path_W.begin(), from.start_W);
+    else
+      out.path_W = {from.start_W, from.from_W};  // at least get out of the invalid spot
+    if (out.status == PlannedPath::Status::kFailed) out.status = PlannedPath::Status::kApproximate;
+    out.distance_to_goal_m = (goal.requested_W - out.path_W.back()).norm();
   }
   out.time_s = seconds_since(t0);
   return out;
 }
 
-PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, const Eigen::Vector3d& goal_in) const {
+PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, const ResolvedGoal& resolved,
+                                               std::uint32_t seed) const {
   PlannedPath out;
-  // Goals outside the state bounds are pulled in; invalid goals moved to the
-  // nearest valid point near them (a frontier voxel always touches unknown).
-  Eigen::Vector3d goal = goal_in;
-  for (int i = 0; i < 3; ++i) goal[i] = std::clamp(goal[i], state_bounds_.min_m[i], state_bounds_.max_m[i]);
-  Eigen::Vector3d projected;
-  bool goal_valid = nearest_valid(goal, 2.0 * config_.mav_radius_m + 2.0 * resolution_m_, projected);
-  bool moved_far = false;
-  if (goal_valid) {
-    goal = projected;
-  } else {
-    // Deep in unknown or occupied space: take the first valid point on the
-    // line back towards the start. An exact solve to it ends early (cost
-    // threshold / convergence), where an approximate solve always spends the
-    // whole budget; the RRT* approximation below remains the fallback.
-    const double len = (start - goal).norm();
-    const int n = static_cast<int>(std::ceil(len / resolution_m_));
-    for (int k = 1; k < n; ++k) {
-      const Eigen::Vector3d q = goal + (start - goal) * (static_cast<double>(k) / n);
-      if (valid(q)) {
-        goal = q;
-        goal_valid = moved_far = true;
-        break;
-      }
-    }
-  }
+  const Eigen::Vector3d& goal_in = resolved.requested_W;
+  const Eigen::Vector3d goal = resolved.goal_W;
+  const bool moved_far = resolved.moved_far;
 
-  if (goal_valid && segment_valid(start, goal)) {
+  if (resolved.valid && segment_valid(start, goal)) {
     out.status = moved_far ? PlannedPath::Status::kApproximate : PlannedPath::Status::kStraight;
     out.path_W = {start, goal};
     out.distance_to_goal_m = (goal_in - goal).norm();
@@ -227,16 +282,21 @@ PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, con
   }
   auto pdef = std::make_shared<ob::ProblemDefinition>(si);
   pdef->setStartAndGoalStates(s, g, 0.5 * resolution_m_);
-  auto objective = std::make_shared<ob::PathLengthOptimizationObjective>(si);
+  // Three engines, three streams of the one seed.
+  auto objective = std::make_shared<ompl_seeded::PathLengthObjective>(si, ompl_seeded::mix(seed, 1));
   objective->setCostThreshold(ob::Cost(config_.cost_threshold_factor * (goal - start).norm()));
   pdef->setOptimizationObjective(objective);
 
-  auto planner = std::make_shared<og::InformedRRTstar>(si);
+  auto planner = std::make_shared<ompl_seeded::InformedRRTstar>(si, ompl_seeded::mix(seed, 2));
   planner->setProblemDefinition(pdef);
   planner->setup();
-  // Stop at the time budget, or earlier once the solution cost has converged
-  // (a detour can never reach the straight-line cost threshold).
-  ob::PlannerTerminationCondition ptc = ob::timedPlannerTerminationCondition(config_.time_budget_s);
+  // Stop at the budget (wall time or iterations), or earlier once the
+  // solution cost has converged (a detour can never reach the straight-line
+  // cost threshold).
+  const bool by_iterations = config_.ompl_by_iterations();
+  ob::IterationTerminationCondition iterations(static_cast<unsigned int>(config_.ompl_iterations));
+  ob::PlannerTerminationCondition ptc = by_iterations ? ob::PlannerTerminationCondition(iterations)
+                                                      : ob::timedPlannerTerminationCondition(config_.time_budget_s);
   if (config_.convergence_solutions > 0) {
     ob::ProblemDefinitionPtr pdef_base = pdef;
     ptc = ob::plannerOrTerminationCondition(
@@ -255,10 +315,11 @@ PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, con
 
   og::PathGeometric simplified(*geo);
   if (config_.simplify_time_s > 0) {
-    og::PathSimplifier simplifier(si);
-    const auto ptc = ob::timedPlannerTerminationCondition(config_.simplify_time_s);
+    ompl_seeded::PathSimplifier simplifier(si, ompl_seeded::mix(seed, 3));
+    // By iterations: no wall-time cut, the simplification is part of the result.
+    const auto simplify_ptc = ob::timedPlannerTerminationCondition(config_.simplify_time_s);
     simplifier.reduceVertices(simplified);
-    if (!ptc()) simplifier.shortcutPath(simplified);
+    if (by_iterations || !simplify_ptc()) simplifier.shortcutPath(simplified);
   }
   std::vector<Eigen::Vector3d> path;
   for (const ob::State* st_i : simplified.getStates()) path.push_back(to_eigen(st_i));
@@ -270,32 +331,48 @@ PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, con
     return out;
   }
   path.front() = start;  // OMPL copies the start exactly; make it bit-exact anyway
+  const bool exact = st == ob::PlannerStatus::EXACT_SOLUTION;
+  // An exact solution ends within the goal tolerance; end it at the goal
+  // itself, so that the view is taken where the candidate was evaluated.
+  if (exact && path.back() != goal && resolved.valid) {
+    if (path.size() >= 2 && segment_valid(path[path.size() - 2], goal))
+      path.back() = goal;
+    else if (segment_valid(path.back(), goal))
+      path.push_back(goal);
+  }
   out.path_W = std::move(path);
-  out.status = (st == ob::PlannerStatus::EXACT_SOLUTION && !moved_far) ? PlannedPath::Status::kExact
-                                                                       : PlannedPath::Status::kApproximate;
+  out.status = (exact && !moved_far) ? PlannedPath::Status::kExact : PlannedPath::Status::kApproximate;
   out.distance_to_goal_m = (goal_in - out.path_W.back()).norm();
   return out;
 }
 
-std::vector<PlannedPath> PathPlanner::plan_all(const Eigen::Vector3d& start,
-                                               const std::vector<Eigen::Vector3d>& goals) const {
+std::vector<PlannedPath> PathPlanner::plan_all(const PlanningStart& from, const std::vector<ResolvedGoal>& goals,
+                                               const std::vector<std::uint32_t>& seeds) const {
+  if (seeds.size() != goals.size()) throw std::invalid_argument("PathPlanner::plan_all: one seed per goal");
   std::vector<PlannedPath> out(goals.size());
-  std::atomic<std::size_t> next{0};
-  auto worker = [&]() {
-    for (std::size_t i = next++; i < goals.size(); i = next++) {
-      try {
-        out[i] = plan(start, goals[i]);
-      } catch (const std::exception&) {
-        out[i] = PlannedPath();  // kFailed: one bad goal must not end the iteration
-      }
+  parallel_for(goals.size(), [&](std::size_t i) {
+    try {
+      out[i] = plan(from, goals[i], seeds[i]);
+    } catch (const std::exception&) {
+      out[i] = PlannedPath();  // kFailed: one bad goal must not end the iteration
     }
-  };
-  const int n = std::min<int>(threads(), static_cast<int>(goals.size()));
-  std::vector<std::thread> pool;
-  for (int t = 1; t < n; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
+  });
   return out;
+}
+
+std::vector<PlannedPath> PathPlanner::plan_all(const Eigen::Vector3d& start, const std::vector<Eigen::Vector3d>& goals,
+                                               std::uint32_t seed) const {
+  const PlanningStart from = planning_start(start);
+  std::vector<ResolvedGoal> resolved;
+  if (from.ok) {
+    resolved = resolve_goals(from, goals);
+  } else {
+    resolved.resize(goals.size());
+    for (std::size_t i = 0; i < goals.size(); ++i) resolved[i].requested_W = resolved[i].goal_W = goals[i];
+  }
+  std::vector<std::uint32_t> seeds(goals.size());
+  for (std::size_t i = 0; i < goals.size(); ++i) seeds[i] = path_seed(seed, 0, i);
+  return plan_all(from, resolved, seeds);
 }
 
 }  // namespace semexp

@@ -1,15 +1,18 @@
 #pragma once
 /// @file exploration_planner.hpp
 /// One next-best-view planning iteration (paper Section IV-D, DESIGN Section
-/// 5): sample candidates, plan paths to them in parallel, evaluate their gains
-/// in one batched call, choose the highest utility, give the winner's path
-/// vertices their yaw, and decide when exploration is over: "explored" (no
+/// 5): sample candidates, evaluate their gains at their view positions in one
+/// batched call, plan paths to them in parallel (lazily: only until no other
+/// candidate can win, see PlannerConfig::lazy_planning), choose the highest
+/// utility, give the winner's path vertices their yaw, and decide when
+/// exploration is over: "explored" (no
 /// frontier left, every object observed from <= d_obj), "time_limit",
 /// "no_progress" (explored volume stalled, see PlannerConfig::stall_*) or
 /// "no_reachable_candidate" (max_failed_iterations in a row without a
 /// reachable candidate of positive utility).
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -60,7 +63,13 @@ struct EvaluatedCandidate {
   double gain_entropy = 0.0, gain_bg = 0.0, gain_obj = 0.0;  ///< window means of the three images
   double gain = 0.0;         ///< window mean of the combined image G (Eq. 2)
   double path_time_s = 0.0;  ///< estimated flight time, s
-  double utility = 0.0;      ///< gain / path time, 1/s
+  double utility = 0.0;      ///< gain / path time, 1/s (capped at utility_bound); 0 if not planned
+  /// Upper bound of the utility before any path is planned: the gain at the
+  /// view position over the least time any path there takes (straight-line
+  /// length / v_max, yaw change / omega_max, min_path_time_s), 1/s.
+  double utility_bound = 0.0;
+  Eigen::Vector3d view_W = Eigen::Vector3d::Zero();  ///< where the path aims and the bound's gain was taken, m
+  bool planned = false;  ///< a path was planned (lazy planning skips candidates that cannot win)
 };
 
 struct IterationResult {
@@ -74,7 +83,8 @@ struct IterationResult {
   std::string termination_reason;        ///< "explored", "time_limit", "no_progress", "no_reachable_candidate" or ""
   bool provider_error = false;           ///< a gain/history provider failed (e.g. a service timed out)
   std::string message;                   ///< what happened, human readable
-  int candidates_reachable = 0;
+  int candidates_reachable = 0;          ///< of the planned candidates
+  int candidates_planned = 0;            ///< candidates a path was planned for
   double sampling_s = 0.0, path_planning_s = 0.0, gains_s = 0.0, yaw_s = 0.0, total_s = 0.0;  ///< wall times
 };
 
@@ -105,6 +115,7 @@ class ExplorationPlanner {
   int window_columns_;
   int failed_iterations_ = 0;
   std::vector<double> explored_volumes_m3_;  ///< per iteration with a known volume
+  std::uint64_t sampling_iterations_ = 0;   ///< iterations that sampled candidates; seeds their paths
 };
 
 }  // namespace semexp

@@ -78,6 +78,16 @@ std::vector<float> object_ray_limits_m(const Eigen::Vector3d& position_W, const 
                                        const std::vector<float>& background_hit_depth_m,
                                        double background_resolution_m, const std::vector<ObjectSummary>& objects);
 
+/// object_ray_limits_m for a batch of positions, concatenated in position
+/// order (the layout of ComputeGains.max_depth_m): the request that chains
+/// the object raycast to the background's. `hit_depths_m` holds one image per
+/// position. Returns an empty vector (no occlusion limits) if any of them is
+/// empty, i.e. the background map did not report hit depths.
+/// Throws std::invalid_argument if the counts or image sizes disagree.
+std::vector<float> objectRayLimitsBatch(const std::vector<Eigen::Vector3d>& positions_W, const SphericalGrid& grid,
+                                        const std::vector<GainImage>& hit_depths_m, double background_resolution_m,
+                                        const std::vector<ObjectSummary>& objects);
+
 /// Result of the sliding window over a 360-degree image.
 struct YawWindow {
   double yaw_rad = 0.0;  ///< azimuth of the window centre, world frame, (-pi, pi]

@@ -5,6 +5,7 @@
 /// within the bounds, a state being valid when a sphere around it is free.
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,31 @@ struct PlannedPath {
   static const char* name(Status s);
 };
 
+/// Where planning starts from: the MAV's position, or an escape point next
+/// to it when its own sphere is not free (see PathPlanner).
+struct PlanningStart {
+  Eigen::Vector3d start_W = Eigen::Vector3d::Zero();  ///< the MAV's position, m
+  Eigen::Vector3d from_W = Eigen::Vector3d::Zero();   ///< where the planner starts: start_W or the escape point, m
+  bool escaped = false;                               ///< from_W is an escape point
+  bool ok = false;                                    ///< false: start invalid and no escape
+};
+
+/// The point a path to a requested goal aims for, known before any planning:
+/// the requested goal clamped into the bounds and moved to the nearest valid
+/// state near it, or to the first valid point on the line back to the start.
+/// A path that reaches its goal ends exactly at goal_W.
+struct ResolvedGoal {
+  Eigen::Vector3d requested_W = Eigen::Vector3d::Zero();  ///< as asked, m
+  Eigen::Vector3d goal_W = Eigen::Vector3d::Zero();       ///< where the path aims, m
+  bool valid = false;      ///< goal_W is a valid state (else the planner only gets as close as it can)
+  bool moved_far = false;  ///< goal_W comes from the line back to the start (then the path counts as approximate)
+};
+
+/// Seed of candidate `candidate`'s path solve in planning iteration
+/// `iteration` under the planner seed `seed`: the same triple always gives
+/// the same path, whichever thread plans it and in whatever order.
+std::uint32_t path_seed(std::uint32_t seed, std::uint64_t iteration, std::uint64_t candidate);
+
 /// Plans collision-free paths for a sphere of radius R (config.mav_radius_m).
 ///
 /// Validity: inside the bounds shrunk by R, and `is_free(p, R_c)` with
@@ -53,10 +79,17 @@ struct PlannedPath {
 /// result counts as approximate); (3) InformedRRTstar with the path
 /// length objective and a cost threshold of cost_threshold_factor times the
 /// straight-line distance (so a solve stops early once near-optimal), within
-/// time_budget_s; approximate solutions are accepted; (4) the path is
-/// simplified (vertex reduction and shortcutting, collision-checked by OMPL)
-/// and re-checked densely here; a simplified path failing that check is
-/// replaced by the raw solution.
+/// time_budget_s (or ompl_iterations iterations, see
+/// PlannerConfig::ompl_termination); approximate solutions are accepted; (4)
+/// the path is simplified (vertex reduction and shortcutting, collision-checked
+/// by OMPL) and re-checked densely here; a simplified path failing that check
+/// is replaced by the raw solution; an exact solution, which OMPL may end
+/// within 0.5 resolution of the goal, is made to end exactly at it where the
+/// last segment allows.
+///
+/// Every random engine of a solve is seeded from the seed passed in (see
+/// seeded_ompl.hpp), so with ompl_termination "iterations" a path depends only
+/// on (start, goal, seed, map).
 ///
 /// Invalid start: if `not_occupied` is given (sphere holds no occupied voxel,
 /// unknown allowed), the nearest valid point within escape_radius_m whose
@@ -73,8 +106,24 @@ class PathPlanner {
   PathPlanner(const PlannerConfig& config, const Bounds& bounds, double resolution_m, CollisionQuery is_free,
               CollisionQuery not_occupied = {}, double escape_radius_m = 1.0);
 
-  PlannedPath plan(const Eigen::Vector3d& start_W, const Eigen::Vector3d& goal_W) const;
-  std::vector<PlannedPath> plan_all(const Eigen::Vector3d& start_W, const std::vector<Eigen::Vector3d>& goals_W) const;
+  /// Escape from an invalid start, if needed and possible.
+  PlanningStart planning_start(const Eigen::Vector3d& start_W) const;
+  /// Goal projection (step 2 above); needs from.ok.
+  ResolvedGoal resolve_goal(const PlanningStart& from, const Eigen::Vector3d& goal_W) const;
+  /// resolve_goal for several goals in parallel.
+  std::vector<ResolvedGoal> resolve_goals(const PlanningStart& from, const std::vector<Eigen::Vector3d>& goals_W) const;
+
+  /// One path from `from` to a resolved goal, OMPL seeded with `seed`.
+  PlannedPath plan(const PlanningStart& from, const ResolvedGoal& goal, std::uint32_t seed) const;
+  /// Several in parallel; seeds[i] for goals[i].
+  std::vector<PlannedPath> plan_all(const PlanningStart& from, const std::vector<ResolvedGoal>& goals,
+                                    const std::vector<std::uint32_t>& seeds) const;
+
+  /// planning_start + resolve_goal + plan in one.
+  PlannedPath plan(const Eigen::Vector3d& start_W, const Eigen::Vector3d& goal_W, std::uint32_t seed = 0) const;
+  /// The same for several goals in parallel, goal i seeded with path_seed(seed, 0, i).
+  std::vector<PlannedPath> plan_all(const Eigen::Vector3d& start_W, const std::vector<Eigen::Vector3d>& goals_W,
+                                    std::uint32_t seed = 0) const;
 
   /// State validity as used by the planner (bounds + inflated sphere).
   bool valid(const Eigen::Vector3d& p_W) const;
@@ -90,7 +139,10 @@ class PathPlanner {
   int threads() const;
 
  private:
-  PlannedPath plan_from_valid_start(const Eigen::Vector3d& start_W, const Eigen::Vector3d& goal_W) const;
+  PlannedPath plan_from_valid_start(const Eigen::Vector3d& start_W, const ResolvedGoal& goal, std::uint32_t seed) const;
+  /// Runs job(i) for i in [0, n) on threads() threads.
+  template <typename Job>
+  void parallel_for(std::size_t n, const Job& job) const;
 
   PlannerConfig config_;
   Bounds bounds_;

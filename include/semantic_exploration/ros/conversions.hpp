@@ -1,0 +1,83 @@
+#pragma once
+/// @file conversions.hpp
+/// Message <-> core conversions: points, poses and paths for every node, and
+/// what the planner reads and sends (gain images, MapBlocks for the map
+/// replica, object summaries, the frontier cloud, history masks, candidates,
+/// status). Each function that reads a message validates it and says why it
+/// refused it, so a node can count the drop and go on.
+
+#include <geometry_msgs/Point.h>
+#include <geometry_msgs/Quaternion.h>
+#include <nav_msgs/Path.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/PointCloud2.h>
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "semantic_exploration/CandidateViewArray.h"
+#include "semantic_exploration/ComputeGains.h"
+#include "semantic_exploration/ExplorationStatus.h"
+#include "semantic_exploration/MapBlocks.h"
+#include "semantic_exploration/ObjectArray.h"
+#include "semantic_exploration/core/planning/exploration_planner.hpp"
+#include "semantic_exploration/core/planning/interfaces.hpp"
+#include "semantic_exploration/core/planning/map_replica.hpp"
+
+namespace semexp_ros {
+
+geometry_msgs::Point toPoint(const Eigen::Vector3d& p);
+/// Rotation about z by yaw_rad.
+geometry_msgs::Quaternion yawQuaternion(double yaw_rad);
+
+/// Path with one pose per vertex; vertex i gets yaw_rad[i], or the last yaw
+/// where yaw_rad is shorter (0 if it is empty).
+nav_msgs::Path toPath(const std::vector<Eigen::Vector3d>& path_W, const std::vector<double>& yaw_rad,
+                      const std::string& frame, const ros::Time& stamp);
+
+/// 32FC1 image -> GainImage of w x h. A 0 x 0 image is "no such gain" (an
+/// empty GainImage). Throws std::runtime_error naming `what` on any other
+/// size, encoding or a short buffer.
+semexp::GainImage toGainImage(const sensor_msgs::Image& img, int w, int h, const char* what);
+
+/// The entropy and background gain images of a background_map/compute_gains
+/// answer, one GainSet per position (object images left empty). Throws
+/// std::runtime_error if it holds another number of images than `positions`
+/// or an image is not w x h 32FC1.
+std::vector<semexp::GainSet> toBackgroundGains(const semantic_exploration::ComputeGains::Response& r,
+                                               std::size_t positions, int w, int h);
+
+/// History masks (mono8/8UC1, 1 = valid) as w x h row-major bytes; a mask of
+/// the wrong size becomes an empty one (all valid) and is counted in `bad`.
+std::vector<std::vector<std::uint8_t>> toHistoryMasks(const std::vector<sensor_msgs::Image>& masks, int w, int h,
+                                                      std::size_t& bad);
+
+/// A MapBlocks message as a replica update; the update points into `msg`,
+/// which must outlive it. Returns "" or why the message cannot be read.
+std::string toMapUpdate(const semantic_exploration::MapBlocks& msg, semexp::MapReplica::Update& update);
+
+/// The objects of the object map as the planner sees them; objects with a
+/// non-finite box or centroid are left out and counted in `dropped`.
+std::vector<semexp::ObjectSummary> toObjectSummaries(const semantic_exploration::ObjectArray& msg,
+                                                     std::size_t& dropped);
+
+/// The finite points of a frontier cloud (float32 x, y, z). Returns "" or why
+/// the cloud is malformed (missing fields, a point_step that does not hold
+/// them, 0 included, row_step < width x point_step, or data other than
+/// row_step x height bytes), in which case `points_W` is untouched.
+std::string frontiersFromCloud(const sensor_msgs::PointCloud2& msg, std::vector<Eigen::Vector3d>& points_W);
+
+/// The candidates of an iteration, with their paths; the winner's path
+/// carries the winner's per-vertex yaws, the others start at current_yaw_rad
+/// and keep their candidate's yaw.
+semantic_exploration::CandidateViewArray toCandidateViewArray(const semexp::IterationResult& r,
+                                                              const std::string& frame, const ros::Time& stamp,
+                                                              double current_yaw_rad);
+
+/// The status of a finished iteration (the planner's state and iteration count come from the node).
+semantic_exploration::ExplorationStatus toExplorationStatus(const semexp::IterationResult& r, uint8_t state,
+                                                            uint32_t iteration, const std::string& frame,
+                                                            const ros::Time& stamp);
+
+}  // namespace semexp_ros

@@ -1,0 +1,209 @@
+#include "semantic_exploration/ros/conversions.hpp"
+
+#include <sensor_msgs/image_encodings.h>
+
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+namespace semexp_ros {
+
+geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
+  geometry_msgs::Point m;
+  m.x = p.x();
+  m.y = p.y();
+  m.z = p.z();
+  return m;
+}
+
+geometry_msgs::Quaternion yawQuaternion(double yaw_rad) {
+  geometry_msgs::Quaternion q;
+  q.w = std::cos(0.5 * yaw_rad);
+  q.z = std::sin(0.5 * yaw_rad);
+  return q;
+}
+
+nav_msgs::Path toPath(const std::vector<Eigen::Vector3d>& path_W, const std::vector<double>& yaw_rad,
+                      const std::string& frame, const ros::Time& stamp) {
+  nav_msgs::Path out;
+  out.header.frame_id = frame;
+  out.header.stamp = stamp;
+  for (std::size_t i = 0; i < path_W.size(); ++i) {
+    geometry_msgs::PoseStamped ps;
+    ps.header = out.header;
+    ps.pose.position = toPoint(path_W[i]);
+    ps.pose.orientation = yawQuaternion(i < yaw_rad.size() ? yaw_rad[i] : (yaw_rad.empty() ? 0.0 : yaw_rad.back()));
+    out.poses.push_back(ps);
+  }
+  return out;
+}
+
+semexp::GainImage toGainImage(const sensor_msgs::Image& img, int w, int h, const char* what) {
+  if (img.width == 0 && img.height == 0) return semexp::GainImage();
+  if (img.encoding != sensor_msgs::image_encodings::TYPE_32FC1 || static_cast<int>(img.width) != w ||
+      static_cast<int>(img.height) != h || img.step < img.width * 4 ||
+      img.data.size() < static_cast<std::size_t>(img.step) * img.height || img.is_bigendian)
+    throw std::runtime_error(std::string(what) + " image is not a " + std::to_string(w) + "x" + std::to_string(h) +
+                             " 32FC1 image (got " + std::to_string(img.width) + "x" + std::to_string(img.height) +
+                             " " + img.encoding + ")");
+  semexp::GainImage out(w, h);
+  for (int v = 0; v < h; ++v)
+    std::memcpy(&out.values[static_cast<std::size_t>(v) * w], &img.data[static_cast<std::size_t>(v) * img.step],
+                static_cast<std::size_t>(w) * sizeof(float));
+  return out;
+}
+
+std::vector<semexp::GainSet> toBackgroundGains(const semantic_exploration::ComputeGains::Response& r,
+                                               std::size_t positions, int w, int h) {
+  if (r.entropy_gain.size() != positions || r.distance_gain.size() != positions)
+    throw std::runtime_error("background_map/compute_gains returned " + std::to_string(r.entropy_gain.size()) +
+                             " images for " + std::to_string(positions) + " positions");
+  std::vector<semexp::GainSet> out(positions);
+  for (std::size_t i = 0; i < positions; ++i) {
+    out[i].entropy = toGainImage(r.entropy_gain[i], w, h, "entropy gain");
+    out[i].background = toGainImage(r.distance_gain[i], w, h, "background gain");
+  }
+  return out;
+}
+
+std::vector<std::vector<std::uint8_t>> toHistoryMasks(const std::vector<sensor_msgs::Image>& masks, int w, int h,
+                                                      std::size_t& bad) {
+  bad = 0;
+  std::vector<std::vector<std::uint8_t>> out(masks.size());
+  for (std::size_t i = 0; i < masks.size(); ++i) {
+    const auto& m = masks[i];
+    if (static_cast<int>(m.width) != w || static_cast<int>(m.height) != h || m.step < m.width ||
+        m.data.size() < static_cast<std::size_t>(m.step) * m.height) {
+      ++bad;
+      continue;
+    }
+    out[i].resize(static_cast<std::size_t>(w) * h);
+    for (int v = 0; v < h; ++v)
+      std::memcpy(&out[i][static_cast<std::size_t>(v) * w], &m.data[static_cast<std::size_t>(v) * m.step],
+                  static_cast<std::size_t>(w));
+  }
+  return out;
+}
+
+std::string toMapUpdate(const semantic_exploration::MapBlocks& msg, semexp::MapReplica::Update& u) {
+  if (msg.encoding != semantic_exploration::MapBlocks::ENCODING_LOG_ODDS_I8)
+    return "MapBlocks encoding " + std::to_string(msg.encoding) + " unsupported";
+  u.sequence = msg.sequence;
+  u.full = msg.full;
+  u.resolution_m = msg.resolution_m;
+  u.block_size = msg.block_size;
+  u.origin_W = {msg.origin.x, msg.origin.y, msg.origin.z};
+  u.coords = msg.coords.data();
+  u.coord_count = msg.coords.size();
+  u.payload = msg.payload.data();
+  u.payload_size = msg.payload.size();
+  return "";
+}
+
+std::vector<semexp::ObjectSummary> toObjectSummaries(const semantic_exploration::ObjectArray& msg,
+                                                     std::size_t& dropped) {
+  std::vector<semexp::ObjectSummary> out;
+  dropped = 0;
+  for (const auto& o : msg.objects) {
+    semexp::ObjectSummary s;
+    s.id = o.id;
+    s.bbox_min_W = {o.bbox_min.x, o.bbox_min.y, o.bbox_min.z};
+    s.bbox_max_W = {o.bbox_max.x, o.bbox_max.y, o.bbox_max.z};
+    s.centroid_W = {o.centroid.x, o.centroid.y, o.centroid.z};
+    s.observed_fraction = o.observed_fraction;
+    if (s.bbox_min_W.allFinite() && s.bbox_max_W.allFinite() && s.centroid_W.allFinite())
+      out.push_back(s);
+    else
+      ++dropped;
+  }
+  return out;
+}
+
+std::string frontiersFromCloud(const sensor_msgs::PointCloud2& msg, std::vector<Eigen::Vector3d>& points_W) {
+  // Offsets of float32 x, y, z; -1 where missing.
+  long offset[3] = {-1, -1, -1};
+  const char* names[3] = {"x", "y", "z"};
+  for (const auto& f : msg.fields)
+    for (int k = 0; k < 3; ++k)
+      if (f.name == names[k] && f.datatype == sensor_msgs::PointField::FLOAT32) offset[k] = f.offset;
+  if (offset[0] < 0 || offset[1] < 0 || offset[2] < 0) return "frontier cloud without float32 x, y and z fields";
+  if (msg.is_bigendian) return "frontier cloud is big-endian";
+  const std::size_t step = msg.point_step;
+  for (long o : offset)
+    if (static_cast<std::size_t>(o) + sizeof(float) > step)
+      return "frontier cloud point_step " + std::to_string(step) + " does not hold its x, y, z fields";
+  const std::size_t row = static_cast<std::size_t>(msg.width) * step;
+  if (msg.row_step < row)
+    return "frontier cloud row_step " + std::to_string(msg.row_step) + " < width x point_step " + std::to_string(row);
+  // PointCloud2 defines data as exactly row_step x height bytes; anything
+  // else is a message cut short or padded by a broken publisher.
+  const std::size_t needed = static_cast<std::size_t>(msg.row_step) * msg.height;
+  if (msg.data.size() != needed)
+    return "frontier cloud data holds " + std::to_string(msg.data.size()) + " bytes, not row_step x height = " +
+           std::to_string(needed);
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(static_cast<std::size_t>(msg.width) * msg.height);
+  for (std::size_t r = 0; r < msg.height; ++r)
+    for (std::size_t i = 0; i < msg.width; ++i) {
+      const std::uint8_t* pt = &msg.data[r * msg.row_step + i * step];
+      float xyz[3];
+      for (int k = 0; k < 3; ++k) std::memcpy(&xyz[k], pt + offset[k], sizeof(float));
+      const Eigen::Vector3d p(xyz[0], xyz[1], xyz[2]);
+      if (p.allFinite()) out.push_back(p);
+    }
+  points_W = std::move(out);
+  return "";
+}
+
+semantic_exploration::CandidateViewArray toCandidateViewArray(const semexp::IterationResult& r,
+                                                              const std::string& frame, const ros::Time& stamp,
+                                                              double current_yaw_rad) {
+  semantic_exploration::CandidateViewArray arr;
+  arr.header.stamp = stamp;
+  arr.header.frame_id = frame;
+  arr.winner = r.winner;
+  for (std::size_t i = 0; i < r.candidates.size(); ++i) {
+    const auto& c = r.candidates[i];
+    semantic_exploration::CandidateView v;
+    v.position = toPoint(c.position_W);
+    v.yaw_rad = static_cast<float>(c.yaw_rad);
+    v.gain_entropy = static_cast<float>(c.gain_entropy);
+    v.gain_bg = static_cast<float>(c.gain_bg);
+    v.gain_obj = static_cast<float>(c.gain_obj);
+    v.gain = static_cast<float>(c.gain);
+    v.path_time_s = static_cast<float>(c.path_time_s);
+    v.utility = static_cast<float>(c.utility);
+    v.source = c.sample.source == semexp::CandidateSource::kObject ? semantic_exploration::CandidateView::SOURCE_OBJECT
+                                                                   : semantic_exploration::CandidateView::SOURCE_FRONTIER;
+    v.object_id = c.sample.object_id;
+    v.reachable = c.reachable;
+    std::vector<double> yaws(c.plan.path_W.size(), c.yaw_rad);
+    if (!yaws.empty()) yaws.front() = current_yaw_rad;
+    if (static_cast<int>(i) == r.winner) yaws = r.path_yaw_rad;
+    v.path = toPath(c.plan.path_W, yaws, frame, stamp);
+    arr.candidates.push_back(v);
+  }
+  return arr;
+}
+
+semantic_exploration::ExplorationStatus toExplorationStatus(const semexp::IterationResult& r, uint8_t state,
+                                                            uint32_t iteration, const std::string& frame,
+                                                            const ros::Time& stamp) {
+  semantic_exploration::ExplorationStatus s;
+  s.header.stamp = stamp;
+  s.header.frame_id = frame;
+  s.state = state;
+  s.iteration = iteration;
+  s.termination_reason = r.termination_reason;
+  s.message = r.message;
+  s.candidates_sampled = static_cast<uint32_t>(r.candidates.size());
+  s.candidates_reachable = static_cast<uint32_t>(r.candidates_reachable);
+  s.planning_time_s = static_cast<float>(r.total_s);
+  s.sampling_time_s = static_cast<float>(r.sampling_s);
+  s.path_planning_time_s = static_cast<float>(r.path_planning_s);
+  s.gains_time_s = static_cast<float>(r.gains_s);
+  s.yaw_time_s = static_cast<float>(r.yaw_s);
+  return s;
+}
+
+}  // namespace semexp_ros

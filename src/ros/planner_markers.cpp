@@ -1,0 +1,81 @@
+#include "semantic_exploration/ros/planner_markers.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "semantic_exploration/ros/conversions.hpp"
+
+namespace semexp_ros {
+
+namespace {
+
+std_msgs::ColorRGBA colour(float r, float g, float b, float a) {
+  std_msgs::ColorRGBA c;
+  c.r = r;
+  c.g = g;
+  c.b = b;
+  c.a = a;
+  return c;
+}
+
+}  // namespace
+
+visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& r, const std_msgs::Header& header) {
+  double max_u = 0.0;
+  for (const auto& c : r.candidates) max_u = std::max(max_u, c.utility);
+  visualization_msgs::MarkerArray markers;
+  visualization_msgs::Marker clear;
+  clear.header = header;
+  clear.action = visualization_msgs::Marker::DELETEALL;
+  markers.markers.push_back(clear);
+  int id = 0;
+  for (std::size_t i = 0; i < r.candidates.size(); ++i) {
+    const auto& c = r.candidates[i];
+    const float f = max_u > 0 ? static_cast<float>(c.utility / max_u) : 0.f;
+    visualization_msgs::Marker m;
+    m.header = header;
+    m.ns = "candidates";
+    m.id = id++;
+    m.type = visualization_msgs::Marker::SPHERE;
+    m.pose.position = toPoint(c.position_W);
+    m.pose.orientation.w = 1.0;
+    m.scale.x = m.scale.y = m.scale.z = static_cast<int>(i) == r.winner ? 0.3 : 0.15;
+    m.color = c.reachable ? colour(1.f - f, f, 0.f, 0.9f) : colour(0.5f, 0.5f, 0.5f, 0.5f);
+    markers.markers.push_back(m);
+    if (!c.reachable) continue;
+    visualization_msgs::Marker a = m;
+    a.ns = "candidate_yaw";
+    a.id = id++;
+    a.type = visualization_msgs::Marker::ARROW;
+    a.pose.orientation = yawQuaternion(c.yaw_rad);
+    a.scale.x = 0.4;
+    a.scale.y = a.scale.z = 0.04;
+    markers.markers.push_back(a);
+    visualization_msgs::Marker t = m;
+    t.ns = "candidate_utility";
+    t.id = id++;
+    t.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
+    t.pose.position.z += 0.25;
+    t.scale.x = t.scale.y = t.scale.z = 0.15;
+    t.color = colour(1.f, 1.f, 1.f, 1.f);
+    char buf[32];
+    std::snprintf(buf, sizeof(buf), "%.3f", c.utility);
+    t.text = buf;
+    markers.markers.push_back(t);
+  }
+  if (r.winner >= 0) {
+    visualization_msgs::Marker line;
+    line.header = header;
+    line.ns = "winner_path";
+    line.id = id++;
+    line.type = visualization_msgs::Marker::LINE_STRIP;
+    line.pose.orientation.w = 1.0;
+    line.scale.x = 0.04;
+    line.color = colour(0.2f, 0.4f, 1.f, 1.f);
+    for (const auto& p : r.path_W) line.points.push_back(toPoint(p));
+    markers.markers.push_back(line);
+  }
+  return markers;
+}
+
+}  // namespace semexp_ros

@@ -1,0 +1,87 @@
+// The share of the background surface observed from <= d (the background half
+// of the paper's termination condition, Section IV-D), on two walls seen from
+// known distances.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "occupancy_test_scene.hpp"
+#include "semantic_exploration/core/occupancy_map.hpp"
+
+using namespace semexp;
+using semexp_test::BoxRoom;
+using semexp_test::lookPose;
+
+namespace {
+
+// Walls facing the origin at x = 2.013 m and x = -4.013 m; floor, ceiling and
+// side walls far enough to stay outside both views.
+BoxRoom twoWalls() {
+  BoxRoom s;
+  s.room = {{-4.013, -6.0, -4.0}, {2.013, 6.0, 4.0}};
+  return s;
+}
+
+Bounds twoWallBounds() {
+  Bounds b;
+  b.min_m = {-4.5, -3.0, -2.5};
+  b.max_m = {2.5, 3.0, 2.5};
+  return b;
+}
+
+// Occupied voxels counted through the public queries: (all, on the +x wall, within d_m).
+struct Counts {
+  std::size_t all = 0, near_wall = 0, within = 0;
+};
+Counts bruteForce(const OccupancyMap& map, double d_m) {
+  Counts c;
+  map.forEachOccupied([&](const Eigen::Vector3d& p, double size_m, const std::uint8_t*) {
+    const std::size_t n = static_cast<std::size_t>(std::lround(std::pow(size_m / map.resolution(), 3)));
+    c.all += n;
+    if (p.x() > 0) c.near_wall += n;
+    if (map.minObservedDistance(p) <= d_m + 5e-4) c.within += n;  // distances are kept in whole mm
+  });
+  return c;
+}
+
+}  // namespace
+
+TEST(SurfaceObservation, AWallSeenFrom2mAndAnotherFrom4m) {
+  BackgroundMapConfig cfg;
+  PinholeCamera cam;  // 320 x 240, f 262.5: the 2 m view's corner rays are 2.0 x 1.23 = 2.47 m long
+  const BoxRoom scene = twoWalls();
+  OccupancyMap map(cfg, twoWallBounds());
+  EXPECT_EQ(map.surfaceObservedWithin(3.0).occupied_voxels, 0u);
+  EXPECT_DOUBLE_EQ(map.surfaceObservedWithin(3.0).share(), 1.0);  // no surface: nothing left to see closer
+
+  const Eigen::Isometry3d T_near = lookPose({0.0, 0.0, 0.0}, 0.0, 0.0);   // the +x wall from 2 m
+  const Eigen::Isometry3d T_far = lookPose({0.0, 0.0, 0.0}, M_PI, 0.0);   // the -x wall from 4 m
+  map.integrate(scene.render(cam, T_near).data(), nullptr, cam, T_near);
+  map.integrate(scene.render(cam, T_far).data(), nullptr, cam, T_far);
+
+  const Counts c = bruteForce(map, 3.0);
+  ASSERT_GT(c.near_wall, 1000u);
+  ASSERT_GT(c.all - c.near_wall, 1000u);
+  // Every voxel of the near wall lies within 2.47 m, every voxel of the far wall beyond 4 m.
+  const OccupancyMap::SurfaceObservation s = map.surfaceObservedWithin(3.0);
+  EXPECT_EQ(s.occupied_voxels, c.all);
+  EXPECT_EQ(s.within_voxels, c.near_wall);
+  EXPECT_DOUBLE_EQ(s.share(), static_cast<double>(c.near_wall) / static_cast<double>(c.all));
+  // The far wall's view covers 4x the near one's area: the share is about 1/5.
+  EXPECT_NEAR(s.share(), 0.2, 0.03);
+  // Everything is within 5.1 m (the far view's corner rays: 4.013 x 1.2585 = 5.05 m); nothing within 1.9 m.
+  EXPECT_LT(map.surfaceObservedWithin(5.0).share(), 1.0);
+  EXPECT_DOUBLE_EQ(map.surfaceObservedWithin(5.1).share(), 1.0);
+  EXPECT_EQ(map.surfaceObservedWithin(1.9).within_voxels, 0u);
+  // A threshold through the near wall's view (2.2 m) splits it as the per-voxel distances do.
+  EXPECT_EQ(map.surfaceObservedWithin(2.2).within_voxels, bruteForce(map, 2.2).within);
+  EXPECT_GT(map.surfaceObservedWithin(2.2).within_voxels, 0u);
+  EXPECT_LT(map.surfaceObservedWithin(2.2).within_voxels, c.near_wall);
+
+  // Flying to 1 m from the far wall and looking again makes its centre count.
+  const Eigen::Isometry3d T_close = lookPose({-3.0, 0.0, 0.0}, M_PI, 0.0);
+  map.integrate(scene.render(cam, T_close).data(), nullptr, cam, T_close);
+  const OccupancyMap::SurfaceObservation after = map.surfaceObservedWithin(3.0);
+  EXPECT_GT(after.within_voxels, s.within_voxels);
+  EXPECT_EQ(after.within_voxels, bruteForce(map, 3.0).within);
+}
