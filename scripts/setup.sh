@@ -22,7 +22,8 @@ DEBIAN_PKGS=(
   python3-rosparam rosbash libtf2-ros-dev python3-tf2-ros libtf2-eigen-dev libtf2-msgs-dev
   libtf2-geometry-msgs-dev libmessage-filters-dev libcv-bridge-dev
   python3-cv-bridge libimage-transport-dev liboctomap-dev libompl-dev
-  libpcl-dev libpcl-conversions-dev libopencv-dev libeigen3-dev libgtest-dev
+  libopencv-dev libopencv-dnn-dev libeigen3-dev libgtest-dev
+  python3-onnx
   colcon python3-colcon-ros python3-colcon-cmake python3-colcon-bash
   python3-std-msgs python3-sensor-msgs python3-geometry-msgs
   python3-nav-msgs python3-visualization-msgs python3-std-srvs
@@ -36,10 +37,10 @@ NOETIC_PKGS=(
   ros-noetic-ros-base ros-noetic-rostest ros-noetic-tf2-ros
   ros-noetic-tf2-eigen ros-noetic-tf2-geometry-msgs ros-noetic-tf2-msgs ros-noetic-cv-bridge
   ros-noetic-image-transport ros-noetic-message-filters
-  ros-noetic-pcl-conversions ros-noetic-pcl-ros ros-noetic-octomap
+  ros-noetic-octomap
   ros-noetic-ompl ros-noetic-sensor-msgs ros-noetic-nav-msgs
   ros-noetic-visualization-msgs ros-noetic-std-srvs ros-noetic-rosbag
-  libeigen3-dev libopencv-dev libpcl-dev libgtest-dev
+  libeigen3-dev libopencv-dev libopencv-dnn-dev libgtest-dev
   python3-colcon-common-extensions python3-numpy python3-yaml python3-scipy
   python3-matplotlib
   ros-noetic-rviz xvfb xauth imagemagick libgl1-mesa-dri
@@ -95,5 +96,11 @@ if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
   echo "$want" > "$stamp"
 else
   log "venv: requirements present"
+fi
+# The detector's tests build their ONNX model with the onnx package: python3-onnx on Debian; Ubuntu 20.04
+# has no such package, so there it goes into the venv (which the tests use when SEMEXP_VENV is set).
+if [ "${ID}" = ubuntu ] && ! "$VENV/bin/python" -c "import onnx" 2>/dev/null; then
+  log "installing onnx into $VENV (Ubuntu 20.04 has no python3-onnx)"
+  "$VENV/bin/python" -m pip install -q --disable-pip-version-check "onnx>=1.12,<1.17"
 fi
 log "done"

@@ -272,6 +272,41 @@ semexp::PlannerConfig loadPlanner(const ParamReader& p) {
   return c;
 }
 
+semexp::DetectorConfig loadDetector(const ParamReader& p, const semexp::ClassTable& classes) {
+  semexp::DetectorConfig c;
+  const std::string n = "detector/";
+  p.get(n + "model_path", c.model_path);
+  std::vector<double> size;
+  p.get(n + "input_size", size);
+  if (!size.empty()) {
+    if (size.size() != 2 || size[0] != std::floor(size[0]) || size[1] != std::floor(size[1]))
+      throw ConfigError(n + "input_size", "must be [width, height] in whole px");
+    c.input_size = {{static_cast<int>(size[0]), static_cast<int>(size[1])}};
+  }
+  p.get(n + "conf_threshold", c.conf_threshold);
+  p.get(n + "nms_iou", c.nms_iou);
+  p.get(n + "mask_threshold", c.mask_threshold);
+  p.get(n + "model_classes", c.model_classes);
+  if (const auto* v = p.find(n + "class_map")) {
+    if (v->getType() != XmlRpcValue::TypeStruct)
+      throw ConfigError(n + "class_map", "must be a map model class name -> project class name");
+    c.class_map.clear();
+    XmlRpcValue& m = const_cast<XmlRpcValue&>(*v);
+    for (auto it = m.begin(); it != m.end(); ++it) {
+      std::string project;
+      p.get(n + "class_map/" + it->first, project);
+      c.class_map[it->first] = project;
+    }
+  }
+  p.get(n + "backend", c.backend);
+  p.get(n + "target", c.target);
+  c.validate(n);
+  for (const auto& kv : c.class_map)
+    if (!classes.id(kv.second))
+      throw ConfigError(n + "class_map", "maps '" + kv.first + "' to '" + kv.second + "', which is not in classes/names");
+  return c;
+}
+
 FrameNames loadFrames(const ParamReader& p) {
   FrameNames f;
   p.get("frames/world", f.world);

@@ -36,15 +36,23 @@ def test_onboard_launch():
     assert nodes("onboard.launch") == MAPPING | {"/planner", "/T_BC"}
     assert nodes("onboard.launch", "pose_topic:=/vicon/pose", "publish_T_BC:=false") == \
         MAPPING | {"/planner", "/pose_to_tf"}
+    assert nodes("onboard.launch", "detector:=true", "detector_model:=/tmp/m.onnx") == \
+        MAPPING | {"/planner", "/T_BC", "/detector"}
+
+
+def test_detector_launch():
+    assert nodes("detector.launch", "model:=/tmp/m.onnx") == {"/detector"}
 
 
 def test_replay_and_record_launch():
     assert nodes("replay.launch", "bag:=/tmp/x.bag") == MAPPING | {"/play"}
+    assert nodes("replay.launch", "bag:=/tmp/x.bag", "detector:=true", "detector_model:=/tmp/m.onnx") == \
+        MAPPING | {"/play", "/detector"}
     assert nodes("record.launch") == {"/record"}
 
 
 def test_every_launch_file_is_covered():
     launches = sorted(f for f in os.listdir(os.path.join(ROOT, "launch")) if f.endswith(".launch"))
-    assert launches == ["exploration.launch", "onboard.launch", "record.launch", "replay.launch", "sim.launch",
+    assert launches == ["detector.launch", "exploration.launch", "onboard.launch", "record.launch", "replay.launch", "sim.launch",
                         "sim_only.launch"]
     assert nodes("sim_only.launch") == {"/mav_sim"}

@@ -124,3 +124,43 @@ TEST(Params, AtLeastNamesTheParameterAndKeepsTheDefault) {
   r.getAtLeast("absent", d, 1.0, "");
   EXPECT_DOUBLE_EQ(d, 3.0);
 }
+
+TEST(Params, DetectorSectionLoadsAndChecksTheClassMap) {
+  const semexp::ClassTable classes;  // chair, table, sofa, ...
+  XmlRpcValue root;
+  root["detector"]["model_path"] = std::string("/m.onnx");
+  root["detector"]["input_size"][0] = 640;
+  root["detector"]["input_size"][1] = 480;
+  root["detector"]["conf_threshold"] = 0.4;
+  root["detector"]["class_map"]["couch"] = std::string("sofa");
+  root["detector"]["class_map"]["dining_table"] = std::string("table");
+  root["detector"]["backend"] = std::string("opencv");
+  const auto c = semexp_ros::loadDetector(ParamReader(root), classes);
+  EXPECT_EQ(c.model_path, "/m.onnx");
+  EXPECT_EQ(c.input_size[0], 640);
+  EXPECT_EQ(c.input_size[1], 480);
+  EXPECT_DOUBLE_EQ(c.conf_threshold, 0.4);
+  EXPECT_DOUBLE_EQ(c.nms_iou, 0.45);  // default kept
+  ASSERT_EQ(c.class_map.size(), 2u);  // replaces the default map
+  EXPECT_EQ(c.class_map.at("couch"), "sofa");
+  EXPECT_EQ(c.model_classes.size(), 80u);
+
+  XmlRpcValue bad = root;
+  bad["detector"]["class_map"]["couch"] = std::string("settee");  // not in classes/names
+  EXPECT_EQ(rejected([&] { semexp_ros::loadDetector(ParamReader(bad), classes); }), "detector/class_map");
+  bad = root;
+  bad["detector"]["input_size"][2] = 3;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadDetector(ParamReader(bad), classes); }), "detector/input_size");
+  bad = root;
+  bad["detector"]["input_size"][0] = 640.5;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadDetector(ParamReader(bad), classes); }), "detector/input_size");
+  bad = root;
+  bad["detector"]["class_map"] = std::string("chair");
+  EXPECT_EQ(rejected([&] { semexp_ros::loadDetector(ParamReader(bad), classes); }), "detector/class_map");
+  bad = root;
+  bad["detector"]["model_path"] = std::string("");
+  EXPECT_EQ(rejected([&] { semexp_ros::loadDetector(ParamReader(bad), classes); }), "detector/model_path");
+  bad = root;
+  bad["detector"]["target"] = std::string("cuda");  // with backend opencv
+  EXPECT_EQ(rejected([&] { semexp_ros::loadDetector(ParamReader(bad), classes); }), "detector/target");
+}

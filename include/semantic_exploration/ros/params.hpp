@@ -17,6 +17,7 @@
 #include "semantic_exploration/core/bounds.hpp"
 #include "semantic_exploration/core/camera.hpp"
 #include "semantic_exploration/core/class_table.hpp"
+#include "semantic_exploration/core/detector/detector_config.hpp"
 #include "semantic_exploration/core/exploration_config.hpp"
 #include "semantic_exploration/core/object_map_config.hpp"
 #include "semantic_exploration/core/planner_config.hpp"
@@ -91,6 +92,8 @@ semexp::ObjectMapConfig loadObjectMap(const ParamReader& p);          ///< `obje
 semexp::MatchingConfig loadMatching(const ParamReader& p);            ///< `matching/*`
 semexp::DepthHistoryConfig loadDepthHistory(const ParamReader& p);    ///< `depth_history/*`
 semexp::PlannerConfig loadPlanner(const ParamReader& p);              ///< `planner/*`
+/// `detector/*`; also checks that every class_map value is one of `classes`' names.
+semexp::DetectorConfig loadDetector(const ParamReader& p, const semexp::ClassTable& classes);
 FrameNames loadFrames(const ParamReader& p);                          ///< `frames/*`
 TfSettings loadTf(const ParamReader& p);                              ///< `tf_timeout_s`, `max_tf_gap_s`
 PlannerNodeConfig loadPlannerNode(const ParamReader& p);
