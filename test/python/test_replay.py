@@ -219,15 +219,7 @@ def replay_phase(work, bag):
         rospy.Subscriber("/background_map/stats", MapStats, lambda m: latest.__setitem__("s", m), queue_size=100)
         master = _wait_master(env, launch)
         deadline = time.time() + 150.0
-        _wait_subscribed(master, "/clock", "/background_map", timeout_s=60.0)
-        while not any(n.startswith("/play") for n in _nodes(master)):
-            assert time.time() < deadline, "rosbag play did not start"
-            time.sleep(0.2)
-        while any(n.startswith("/play") for n in _nodes(master)):  # rosbag play runs until the bag ends
-            assert launch.poll() is None, "replay.launch stopped (see %s)" % os.path.join(work, "replay.log")
-            assert time.time() < deadline, "the replay did not finish"
-            time.sleep(0.5)
-        time.sleep(2.0)  # last frames and stats
+        _wait_replay_done(master, launch, os.path.join(work, "replay.log"), deadline)
         mission.call_save("/background_map/save", os.path.join(work, "replay_map"))
         saved = mission.call_save("/object_map/save", os.path.join(work, "replay_objects"))
         assert saved["success"], saved
@@ -237,6 +229,20 @@ def replay_phase(work, bag):
                                                   "frames_integrated") + DROP_FIELDS}, f)
     finally:
         rs._stop(launch, grace_s=20.0)
+
+
+def _wait_replay_done(master, launch, log, deadline):
+    """Waits until replay.launch's rosbag play has started and ended (it runs
+    until the bag ends), then 2 s for the last frames and stats."""
+    _wait_subscribed(master, "/clock", "/background_map", timeout_s=60.0)
+    while not any(n.startswith("/play") for n in _nodes(master)):
+        assert time.time() < deadline, "rosbag play did not start"
+        time.sleep(0.2)
+    while any(n.startswith("/play") for n in _nodes(master)):
+        assert launch.poll() is None, "replay.launch stopped (see %s)" % log
+        assert time.time() < deadline, "the replay did not finish"
+        time.sleep(0.5)
+    time.sleep(2.0)
 
 
 def _nodes(master):

@@ -144,7 +144,7 @@ def replay_phase(work, bag):
     RealSense topics and the detector; writes replay.json."""
     import rviz_screenshot as rs
     import run_mission as mission
-    from test_replay import _nodes, _ros_env, _start, _wait_master, _wait_subscribed
+    from test_replay import _ros_env, _start, _wait_master, _wait_replay_done
     model = os.path.join(work, "scene.onnx")
     subprocess.check_call([sys.executable, MAKE_MODEL, model, "--variant", "scene"])
     config = os.path.join(work, "detector.yaml")
@@ -168,15 +168,7 @@ def replay_phase(work, bag):
         rospy.Subscriber("/background_map/stats", MapStats, lambda m: latest.__setitem__("s", m), queue_size=100)
         rospy.Subscriber("/detector/detections", Detections, dets.append, queue_size=100)
         deadline = time.time() + 180.0
-        _wait_subscribed(master, "/clock", "/background_map", timeout_s=60.0)
-        while not any(n.startswith("/play") for n in _nodes(master)):
-            assert time.time() < deadline, "rosbag play did not start"
-            time.sleep(0.2)
-        while any(n.startswith("/play") for n in _nodes(master)):  # rosbag play runs until the bag ends
-            assert launch.poll() is None, "replay.launch stopped (see %s)" % os.path.join(work, "replay.log")
-            assert time.time() < deadline, "the replay did not finish"
-            time.sleep(0.5)
-        time.sleep(2.0)  # last frames and stats
+        _wait_replay_done(master, launch, os.path.join(work, "replay.log"), deadline)
         saved = mission.call_save("/background_map/save", os.path.join(work, "replay_map"))
         assert saved["success"], saved
         s = latest["s"]
