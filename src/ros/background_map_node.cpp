@@ -74,7 +74,7 @@ BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) 
 
 void BackgroundMapNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
   semexp::PinholeCamera c;
-  const auto err = cameraFromInfo(*msg, camera_.d_min_m, camera_.d_max_m, c);
+  const auto err = camera_input_.accept(*msg, camera_.d_min_m, camera_.d_max_m, c);
   if (!err.empty()) {
     drops_.drop("bad_camera_info", err);
     return;
@@ -152,6 +152,7 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
   cv::Mat depth_m;
   auto err = depthToMeters(*msg, depth_m);
   if (!err.empty()) return fail("bad_encoding", err);
+  camera_input_.depthFrame(depth_m.cols, depth_m.rows);
   if (!have_info_) return fail("no_camera_info", "depth received before any camera_info");
   if (depth_m.cols != camera_.width || depth_m.rows != camera_.height)
     return fail("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +

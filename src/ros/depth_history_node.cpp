@@ -26,15 +26,15 @@ DepthHistoryNode::DepthHistoryNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
 }
 
 void DepthHistoryNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
-  if (history_) return;  // the layout is fixed for the run
   semexp::PinholeCamera c;
-  const auto err = cameraFromInfo(*msg, camera_.d_min_m, camera_.d_max_m, c);
+  const auto err = camera_input_.accept(*msg, camera_.d_min_m, camera_.d_max_m, c);
   if (!err.empty()) {
     drops_.drop("bad_camera_info", err);
     return;
   }
-  camera_ = c;
-  history_ = std::make_unique<semexp::DepthHistory>(config_, bounds_, camera_);
+  if (history_) return;  // the layout is fixed for the run
+  camera_ = c;  // the history is built at the first depth frame of this size
+  have_info_ = true;
 }
 
 void DepthHistoryNode::reportFrame(const std_msgs::Header& header, bool integrated, double time_ms) {
@@ -55,9 +55,16 @@ void DepthHistoryNode::depthCallback(const sensor_msgs::ImageConstPtr& msg) {
     reportFrame(msg->header, false, 0.0);
     return;
   }
+  camera_input_.depthFrame(depth_m.cols, depth_m.rows);
   if (!history_) {
+    // Built from the camera whose size the depth stream confirms (its per-pixel rays are sized from it).
     if (depth_m.cols != camera_.width || depth_m.rows != camera_.height) {
-      drops_.drop("no_camera_info", "depth before any camera_info and not of the configured camera size");
+      if (have_info_)
+        drops_.drop("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +
+                                         " but camera_info " + std::to_string(camera_.width) + "x" +
+                                         std::to_string(camera_.height));
+      else
+        drops_.drop("no_camera_info", "depth before any camera_info and not of the configured camera size");
       reportFrame(msg->header, false, 0.0);
       return;
     }

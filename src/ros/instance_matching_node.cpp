@@ -51,7 +51,7 @@ InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle&
 
 void InstanceMatchingNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
   semexp::PinholeCamera c;
-  const auto err = cameraFromInfo(*msg, camera_.d_min_m, camera_.d_max_m, c);
+  const auto err = camera_input_.accept(*msg, camera_.d_min_m, camera_.d_max_m, c);
   if (!err.empty()) {
     drops_.drop("bad_camera_info", err);
     return;
@@ -74,31 +74,36 @@ bool InstanceMatchingNode::callRender(semantic_exploration::RenderInstances& srv
   return false;
 }
 
-void InstanceMatchingNode::publishEmpty(const std_msgs::Header& header) {
+void InstanceMatchingNode::publishEmpty(const std_msgs::Header& header, int width_px, int height_px) {
   // The frame still reaches object_map (visible objects are updated as
   // undetected and lockstep sees the frame handled).
   semantic_exploration::MatchedDetections empty;
   empty.header = header;
   empty.instance_image.header = header;
-  empty.instance_image.width = static_cast<uint32_t>(camera_.width);
-  empty.instance_image.height = static_cast<uint32_t>(camera_.height);
+  empty.instance_image.width = static_cast<uint32_t>(width_px);
+  empty.instance_image.height = static_cast<uint32_t>(height_px);
   empty.instance_image.encoding = enc::TYPE_16UC1;
-  empty.instance_image.step = static_cast<uint32_t>(camera_.width * 2);
-  empty.instance_image.data.assign(static_cast<size_t>(camera_.width) * camera_.height * 2, 0);
+  empty.instance_image.step = static_cast<uint32_t>(width_px * 2);
+  empty.instance_image.data.assign(static_cast<size_t>(width_px) * height_px * 2, 0);
   matched_pub_.publish(empty);
 }
 
 void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsConstPtr& msg,
                                          const sensor_msgs::ImageConstPtr& depth_msg) {
+  // The empty answer of a failed frame has the depth frame's size once it decoded (the camera's before).
+  int empty_w = camera_.width, empty_h = camera_.height;
   const auto fail = [&](const std::string& reason, const std::string& detail) {
     drops_.drop(reason, detail);
-    publishEmpty(msg->header);
+    publishEmpty(msg->header, empty_w, empty_h);
   };
   // Frames missing from the detector's stream, or whose depth never came (they never pair).
   countFrameGaps(frame_gaps_, drops_, msg->header.stamp, "detection");
   cv::Mat depth_m, instances;
   std::string err = depthToMeters(*depth_msg, depth_m);
   if (!err.empty()) return fail("bad_depth", err);
+  empty_w = depth_m.cols;
+  empty_h = depth_m.rows;
+  camera_input_.depthFrame(depth_m.cols, depth_m.rows);
   if (depth_m.cols != camera_.width || depth_m.rows != camera_.height)
     return fail("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +
                                      " but camera " + std::to_string(camera_.width) + "x" +

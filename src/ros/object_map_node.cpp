@@ -97,7 +97,7 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
 
 void ObjectMapNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
   semexp::PinholeCamera c;
-  const auto err = cameraFromInfo(*msg, camera_.d_min_m, camera_.d_max_m, c);
+  const auto err = camera_input_.accept(*msg, camera_.d_min_m, camera_.d_max_m, c);
   if (!err.empty()) {
     drops_.drop("bad_camera_info", err);
     return;
@@ -125,6 +125,7 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
   cv::Mat depth_m, rgb, instances;
   std::string err = depthToMeters(*depth_msg, depth_m);
   if (!err.empty()) return fail("bad_depth", err);
+  camera_input_.depthFrame(depth_m.cols, depth_m.rows);
   err = colourToRgb(*rgb_msg, rgb);
   if (!err.empty()) return fail("bad_rgb", err);
   if (depth_m.cols != camera_.width || depth_m.rows != camera_.height)

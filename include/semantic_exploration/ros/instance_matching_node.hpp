@@ -39,7 +39,8 @@ class InstanceMatchingNode {
 
   void infoCallback(const sensor_msgs::CameraInfoConstPtr& msg);
   void frameCallback(const semantic_exploration::DetectionsConstPtr& msg, const sensor_msgs::ImageConstPtr& depth);
-  void publishEmpty(const std_msgs::Header& header);
+  /// Publishes the frame without detections (an all-zero instance image of width_px x height_px).
+  void publishEmpty(const std_msgs::Header& header, int width_px, int height_px);
   /// Calls object_map/render_instances; on a failure reconnects and tries once more.
   bool callRender(semantic_exploration::RenderInstances& srv);
 
@@ -49,6 +50,7 @@ class InstanceMatchingNode {
   semexp::PinholeCamera camera_;
   sensor_msgs::CameraInfo camera_info_;
   bool have_info_ = false;
+  CameraInfoInput camera_input_;  ///< validates camera_info against the cap and the depth frames
   FrameNames frames_;
   std::unique_ptr<PoseSource> poses_;  ///< T_WC at image stamps (tf2, gap-guarded)
   message_filters::Subscriber<semantic_exploration::Detections> detections_sub_;

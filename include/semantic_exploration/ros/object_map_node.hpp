@@ -55,6 +55,7 @@ class ObjectMapNode {
   semexp::ClassTable classes_;
   semexp::ExplorationConfig exploration_;
   semexp::PinholeCamera camera_;
+  CameraInfoInput camera_input_;  ///< validates camera_info against the cap and the depth frames
   FrameNames frames_;
   std::unique_ptr<PoseSource> poses_;  ///< T_WC at image stamps (tf2, gap-guarded)
   std::unique_ptr<semexp::ObjectMap> map_;
