@@ -340,6 +340,9 @@ void ObjectMap::render(const PinholeCamera& camera, const Eigen::Isometry3d& T_W
 void ObjectMap::computeGains(const std::vector<Eigen::Vector3d>& positions_W, const SphericalGrid& grid,
                              const std::vector<float>& max_depth_m, double d_obj_m, double d_max_m,
                              std::vector<cv::Mat>& gains, std::vector<cv::Mat>& hit_depth_m) const {
+  if (const std::string why = SphericalGrid::checkRequest(static_cast<long>(positions_W.size()), grid.width,
+                                                         grid.height); !why.empty())
+    throw std::invalid_argument("ObjectMap::computeGains: " + why);
   const size_t per_position = static_cast<size_t>(grid.width) * grid.height;
   if (!max_depth_m.empty() && max_depth_m.size() != per_position * positions_W.size())
     throw std::invalid_argument("ObjectMap::computeGains: max_depth_m must hold width * height values per position");

@@ -302,8 +302,9 @@ void BackgroundMapNode::occupiedConnected(const ros::SingleSubscriberPublisher&)
 bool BackgroundMapNode::computeGains(semantic_exploration::ComputeGains::Request& req,
                                      semantic_exploration::ComputeGains::Response& res) {
   const int w = req.width, h = req.height;
-  if (w <= 0 || h <= 0) {
-    drops_.drop("bad_gain_request", "compute_gains needs width and height > 0");
+  const std::string why = semexp::SphericalGrid::checkRequest(static_cast<long>(req.positions.size()), w, h);
+  if (!why.empty()) {
+    drops_.drop(w > 0 && h > 0 ? "request_too_large" : "bad_gain_request", "compute_gains: " + why);
     return false;
   }
   const std::size_t n = req.positions.size(), per = static_cast<std::size_t>(w) * h;
@@ -323,7 +324,13 @@ bool BackgroundMapNode::computeGains(semantic_exploration::ComputeGains::Request
   gs.d_min_m = camera_.d_min_m;
   gs.d_max_m = camera_.d_max_m;
   gs.d_desired_m = exploration_.d_bg_m;
-  const auto gains = map_->computeGains(pos, grid, gs, req.max_depth_m);
+  std::vector<semexp::GainImages> gains;
+  try {
+    gains = map_->computeGains(pos, grid, gs, req.max_depth_m);
+  } catch (const std::exception& e) {
+    drops_.drop("bad_gain_request", e.what());
+    return false;
+  }
   std_msgs::Header header;
   header.stamp = ros::Time::now();
   header.frame_id = frames_.world;

@@ -132,6 +132,11 @@ bool DepthHistoryNode::getMasks(semantic_exploration::GetHistoryMasks::Request& 
                       config_.width, config_.height);
     return false;
   }
+  if (const std::string why = semexp::SphericalGrid::checkRequest(static_cast<long>(req.positions.size()),
+                                                                  config_.width, config_.height); !why.empty()) {
+    drops_.drop("request_too_large", "get_masks: " + why);
+    return false;
+  }
   std::vector<Eigen::Vector3d> ps;
   ps.reserve(req.positions.size());
   for (const auto& p : req.positions) ps.emplace_back(p.x, p.y, p.z);

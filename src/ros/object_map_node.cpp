@@ -259,6 +259,12 @@ void ObjectMapNode::publishObjects(const ros::Time& stamp) {
 
 bool ObjectMapNode::renderInstances(semantic_exploration::RenderInstances::Request& req,
                                     semantic_exploration::RenderInstances::Response& res) {
+  // Refused before anything is sized from it: the render and its answer take w x h per-pixel buffers.
+  if (const std::string big = semexp::PinholeCamera::checkSize(req.camera_info.width, req.camera_info.height);
+      !big.empty()) {
+    drops_.drop("request_too_large", "render_instances: camera_info " + big);
+    return false;
+  }
   semexp::PinholeCamera cam;
   std::string err = cameraFromInfo(req.camera_info, camera_.d_min_m, camera_.d_max_m, cam);
   if (!err.empty()) {
@@ -302,14 +308,16 @@ bool ObjectMapNode::renderInstances(semantic_exploration::RenderInstances::Reque
 
 bool ObjectMapNode::computeGains(semantic_exploration::ComputeGains::Request& req,
                                  semantic_exploration::ComputeGains::Response& res) {
+  const std::string why = semexp::SphericalGrid::checkRequest(static_cast<long>(req.positions.size()), req.width,
+                                                              req.height);
+  if (!why.empty()) {
+    drops_.drop(req.width > 0 && req.height > 0 ? "request_too_large" : "bad_gain_request", "compute_gains: " + why);
+    return false;
+  }
   semexp::SphericalGrid grid;
   grid.width = req.width;
   grid.height = req.height;
   grid.vfov_rad = camera_.vfov_rad();
-  if (grid.width <= 0 || grid.height <= 0) {
-    drops_.drop("bad_gain_request", "width and height must be > 0");
-    return false;
-  }
   std::vector<Eigen::Vector3d> positions;
   for (const auto& p : req.positions) positions.emplace_back(p.x, p.y, p.z);
   std::vector<cv::Mat> gains, hits;
