@@ -23,14 +23,15 @@ ObjectMap::ObjectMap(const ObjectMapConfig& config, const ClassTable& classes) :
 
 std::uint32_t ObjectMap::createObject(int class_id) {
   const std::string name = classes_.name(class_id);
-  if (name.empty() || next_id_ > 65535) return 0;
+  if (name.empty()) return 0;
+  const std::uint32_t id = ids_.acquire(version_);
+  if (id == 0) return 0;
   TsdfParams p;
   p.resolution_m = classes_.resolution(class_id);
   p.truncation_m = config_.truncation_voxels * p.resolution_m;
   p.behind_surface_m = config_.behind_surface_voxels * p.resolution_m;
   p.block_size = config_.block_size;
   p.max_weight = config_.max_weight;
-  const std::uint32_t id = next_id_++;
   objects_.emplace(id, std::make_unique<MappedObject>(id, class_id, name, p));
   return id;
 }
@@ -41,14 +42,15 @@ const MappedObject* ObjectMap::object(std::uint32_t id) const {
 }
 
 std::vector<std::uint32_t> ObjectMap::visibleIds(const cv::Mat& object_ids) {
-  std::vector<bool> seen(65536, false);
+  // Runs of one id along a row are collected once; no pass over all 65535 possible ids per call.
+  std::vector<std::uint32_t> ids;
   for (int v = 0; v < object_ids.rows; ++v) {
     const std::uint16_t* row = object_ids.ptr<std::uint16_t>(v);
-    for (int u = 0; u < object_ids.cols; ++u) seen[row[u]] = true;
+    for (int u = 0; u < object_ids.cols; ++u)
+      if (row[u] && (ids.empty() || ids.back() != row[u])) ids.push_back(row[u]);
   }
-  std::vector<std::uint32_t> ids;
-  for (std::uint32_t i = 1; i < 65536; ++i)
-    if (seen[i]) ids.push_back(i);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   return ids;
 }
 
@@ -164,6 +166,7 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
       into.detection_count += from.detection_count;
       into.undetected_count += from.undetected_count;
       objects_.erase(m.first);
+      ids_.release(m.first, version_);
       result.merged.emplace_back(m.first, m.second);
     }
   }
@@ -192,6 +195,7 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
       // Too little of the detection was left (a rim round known objects, or no depth), or not enough to hold
       // one surface voxel: no object (such a piece would never be rendered, updated or merged again).
       objects_.erase(kv.first);
+      ids_.releaseUnpublished(kv.first);  // created and erased in this frame: nobody saw the id
       result.created.erase(std::find(result.created.begin(), result.created.end(), kv.first));
       ++result.dropped_empty;
       continue;

@@ -161,7 +161,9 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
   if (r.dropped_unknown_class) drops_.drop("unknown_class", std::to_string(r.dropped_unknown_class) + " detection(s)");
   if (r.dropped_unknown_object)
     drops_.drop("unknown_object", std::to_string(r.dropped_unknown_object) + " detection(s) matched to no known object");
-  if (r.dropped_full) drops_.drop("too_many_objects", "all 65535 object ids are used");
+  if (r.dropped_full)
+    drops_.drop("too_many_objects", "no free object id: 65535 objects exist or were merged in the last " +
+                                         std::to_string(semexp::ObjectIdPool::kReuseAfterFrames) + " frames");
   for (const auto id : r.created)
     ROS_INFO("object_map: new object %u (%s)", id, map_->object(id)->class_name.c_str());
   for (const auto& m : r.merged) ROS_INFO("object_map: object %u is part of object %u: merged", m.first, m.second);
