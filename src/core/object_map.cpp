@@ -1,11 +1,14 @@
 #include "semantic_exploration/core/object_map.hpp"
 
+#include "semantic_exploration/core/atomic_file.hpp"
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <opencv2/imgproc.hpp>
+#include <regex>
 #include <stdexcept>
 
 namespace semexp {
@@ -421,8 +424,9 @@ std::vector<std::string> ObjectMap::save(const std::string& directory, double d_
     const MappedObject& o = *kv.second;
     const std::string name = "object_" + std::to_string(o.id) + "_" + o.class_name + ".ply";
     const std::string path = (dir / name).string();
-    if (!writePly(o.tsdf.extractMesh(), path)) {
-      if (error) *error = "cannot write " + path;
+    std::string why;
+    if (!writePly(o.tsdf.extractMesh(), path, &why)) {
+      if (error) *error = why;
       return files;
     }
     files.push_back(path);
@@ -443,13 +447,23 @@ std::vector<std::string> ObjectMap::save(const std::string& directory, double d_
   std::snprintf(tail, sizeof(tail), "\n], \"d_obj_m\": %.3f}\n", d_obj_m);
   json += tail;
   const std::string index = (dir / "objects.json").string();
-  std::ofstream f(index);
-  f << json;
-  if (!f) {
-    if (error) *error = "cannot write " + index;
+  try {
+    writeFileAtomically(index, [&json](std::ostream& f) { f << json; });
+  } catch (const std::exception& e) {
+    if (error) *error = e.what();
     return files;
   }
   files.push_back(index);
+  // Meshes of objects merged away since an earlier save into this directory would read as objects still
+  // there: once the new index is in place, they go.
+  const std::regex mesh_name("object_[0-9]+_.*\\.ply");
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (!std::regex_match(name, mesh_name) || !entry.is_regular_file(ec)) continue;
+    if (std::find(files.begin(), files.end(), entry.path().string()) != files.end()) continue;
+    std::error_code rm;
+    if (!fs::remove(entry.path(), rm) && error) *error = "cannot remove the stale " + entry.path().string();
+  }
   return files;
 }
 

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "semantic_exploration/core/atomic_file.hpp"
 #include "semantic_exploration/core/marching_cubes.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 
@@ -31,11 +32,11 @@ inline std::int16_t decodeL(std::int8_t q) {
 }
 
 template <class T>
-void put(std::ofstream& f, const T& v) {
+void put(std::ostream& f, const T& v) {
   f.write(reinterpret_cast<const char*>(&v), sizeof(T));
 }
 template <class T>
-void putVec(std::ofstream& f, const T* p, std::size_t n) {
+void putVec(std::ostream& f, const T* p, std::size_t n) {
   f.write(reinterpret_cast<const char*>(p), static_cast<std::streamsize>(n * sizeof(T)));
 }
 template <class T>
@@ -168,8 +169,10 @@ bool OccupancyMap::applyBlocks(const MapBlocksData& m) {
 // ---------------------------------------------------------- own format
 
 void OccupancyMap::save(const std::string& path) const {
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  if (!f) throw std::runtime_error("cannot write " + path);
+  writeFileAtomically(path, [this](std::ostream& f) { saveTo(f); });
+}
+
+void OccupancyMap::saveTo(std::ostream& f) const {
   f.write(kMagic, sizeof(kMagic));
   put(f, kVersion);
   put(f, cfg_.resolution_m);
@@ -214,7 +217,6 @@ void OccupancyMap::save(const std::string& path) const {
   putVec(f, fb.data(), fb.size());
   put(f, static_cast<std::uint64_t>(fc.size()));
   putVec(f, fc.data(), fc.size());
-  if (!f) throw std::runtime_error("error writing " + path);
 }
 
 OccupancyMap OccupancyMap::load(const std::string& path) {
@@ -301,7 +303,9 @@ void OccupancyMap::exportOctomap(const std::string& path) const {
         }
   }
   tree.updateInnerOccupancy();
-  if (!tree.writeBinary(path)) throw std::runtime_error("cannot write " + path);
+  writeFileAtomically(path, [&tree](std::ostream& f) {
+    if (!tree.writeBinary(f)) throw std::runtime_error("OctoMap could not write the tree");
+  });
 }
 
 void OccupancyMap::exportOccupiedPly(const std::string& path) const {
@@ -310,7 +314,8 @@ void OccupancyMap::exportOccupiedPly(const std::string& path) const {
     cloud.vertices_W.push_back(c.cast<float>());
     cloud.colours.push_back({rgb[0], rgb[1], rgb[2]});
   });
-  if (!writePly(cloud, path)) throw std::runtime_error("cannot write " + path);
+  std::string error;
+  if (!writePly(cloud, path, &error)) throw std::runtime_error(error);
 }
 
 }  // namespace semexp

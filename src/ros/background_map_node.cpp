@@ -348,9 +348,15 @@ bool BackgroundMapNode::getMap(semantic_exploration::GetMap::Request&, semantic_
 }
 
 bool BackgroundMapNode::save(semantic_exploration::SaveMap::Request& req, semantic_exploration::SaveMap::Response& res) {
+  if (const std::string why = checkSaveDirectory(req.directory); !why.empty()) {
+    res.success = false;
+    res.message = "background_map: save refused: " + why;
+    ROS_ERROR("%s", res.message.c_str());
+    return true;
+  }
   try {
     namespace fs = std::filesystem;
-    const fs::path dir = fs::absolute(req.directory.empty() ? fs::path(".") : fs::path(req.directory));
+    const fs::path dir(req.directory);
     fs::create_directories(dir);
     const std::string bt = (dir / "background_map.bt").string();
     const std::string own = (dir / "background_map.semexpmap").string();
@@ -364,6 +370,7 @@ bool BackgroundMapNode::save(semantic_exploration::SaveMap::Request& req, semant
   } catch (const std::exception& e) {
     res.success = false;
     res.message = std::string("background_map: save failed: ") + e.what();
+    ROS_ERROR("%s", res.message.c_str());
   }
   return true;
 }

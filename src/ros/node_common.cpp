@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <iterator>
 #include <stdexcept>
 #include <opencv2/imgproc.hpp>
@@ -114,6 +115,16 @@ std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, 
     return e.what();
   }
   camera = c;
+  return "";
+}
+
+std::string checkSaveDirectory(const std::string& directory) {
+  namespace fs = std::filesystem;
+  const fs::path dir(directory);
+  if (directory.empty() || !dir.is_absolute())
+    return "directory '" + directory + "' must be an absolute path";
+  for (const auto& part : dir)
+    if (part == "..") return "directory '" + directory + "' must not contain '..'";
   return "";
 }
 

@@ -340,6 +340,12 @@ bool ObjectMapNode::computeGains(semantic_exploration::ComputeGains::Request& re
 }
 
 bool ObjectMapNode::save(semantic_exploration::SaveMap::Request& req, semantic_exploration::SaveMap::Response& res) {
+  if (const std::string why = checkSaveDirectory(req.directory); !why.empty()) {
+    res.success = false;
+    res.message = "object_map: save refused: " + why;
+    ROS_ERROR("%s", res.message.c_str());
+    return true;
+  }
   std::string error;
   res.files = map_->save(req.directory, exploration_.d_obj_m, &error);
   res.success = error.empty();

@@ -199,3 +199,12 @@ TEST(CameraInfoInput, WarnsOnceAboutIgnoredDistortion) {
   for (int k = 0; k < 3; ++k) EXPECT_EQ(in.accept(ci, 0.1, 10.0, cam), "");  // used: K only
   EXPECT_EQ(in.distortion_warnings(), 1);
 }
+
+TEST(CheckSaveDirectory, OnlyAbsolutePathsWithoutDotDot) {
+  EXPECT_EQ(semexp_ros::checkSaveDirectory("/tmp/run1/map"), "");
+  EXPECT_EQ(semexp_ros::checkSaveDirectory("/tmp/run1/./map/"), "");
+  EXPECT_EQ(semexp_ros::checkSaveDirectory("map"), "directory 'map' must be an absolute path");
+  EXPECT_EQ(semexp_ros::checkSaveDirectory(""), "directory '' must be an absolute path");
+  EXPECT_EQ(semexp_ros::checkSaveDirectory("/tmp/run1/../../etc"), "directory '/tmp/run1/../../etc' must not contain '..'");
+  EXPECT_EQ(semexp_ros::checkSaveDirectory("/tmp/a..b"), "");  // a name with dots is fine
+}

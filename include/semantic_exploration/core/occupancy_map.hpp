@@ -22,6 +22,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <functional>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -177,7 +178,9 @@ class OccupancyMap {
   /// false (and changes nothing) if geometry or encoding does not match.
   bool applyBlocks(const MapBlocksData& blocks);
 
-  /// Own binary format; load(save(m)) saves to identical bytes.
+  /// Own binary format; load(save(m)) saves to identical bytes. The three
+  /// writers below replace `path` atomically (writeFileAtomically) and throw
+  /// std::runtime_error saying why if they cannot; the previous file stays.
   void save(const std::string& path) const;
   static OccupancyMap load(const std::string& path);
   /// OctoMap binary tree (.bt) with every known voxel, via liboctomap.
@@ -205,6 +208,7 @@ class OccupancyMap {
   static constexpr std::uint8_t kVisited = 64;        ///< scratch of updateFrontiers()
 
  private:
+  void saveTo(std::ostream& f) const;  ///< the own format's bytes (save())
   struct FrameCtx;
   struct Level {
     Eigen::Vector3i dims;

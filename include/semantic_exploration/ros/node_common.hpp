@@ -49,6 +49,12 @@ sensor_msgs::Image floatImageMsg(const std_msgs::Header& header, const std::vect
 std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, double d_max_m,
                            semexp::PinholeCamera& camera);
 
+/// "" if `directory` may be saved into (SaveMap), else why not: it must be an
+/// absolute path without ".." components, so that a save never lands
+/// relative to a node's working directory (~/.ros under roslaunch) or
+/// outside the directory it names.
+std::string checkSaveDirectory(const std::string& directory);
+
 /// Describes the lens distortion in `info` that the nodes ignore (they take
 /// images as rectified and use K only): "" when D is empty or all zero, else
 /// e.g. "distortion_model 'plumb_bob' with D = [0.1, -0.2, 0, 0, 0]".
