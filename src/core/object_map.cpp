@@ -24,6 +24,19 @@ ObjectMap::ObjectMap(const ObjectMapConfig& config, const ClassTable& classes) :
   classes_.validate();
 }
 
+std::string ObjectMap::checkBounds(const Bounds& bounds, double range_m) const {
+  const double extent_m = std::max(bounds.min_m.cwiseAbs().maxCoeff(), bounds.max_m.cwiseAbs().maxCoeff()) + range_m;
+  for (const std::string& name : classes_.of_interest) {
+    TsdfParams p;
+    p.resolution_m = classes_.resolution(classes_.id(name));
+    if (extent_m >= p.maxCoordinate_m())
+      return "the bounds reach " + std::to_string(extent_m) + " m from the origin (with " + std::to_string(range_m) +
+             " m of sensor range); the " + name + " map at " + std::to_string(p.resolution_m) +
+             " m holds at most " + std::to_string(p.maxCoordinate_m()) + " m (TsdfParams::kMaxVoxelIndex)";
+  }
+  return "";
+}
+
 std::uint32_t ObjectMap::createObject(int class_id) {
   const std::string name = classes_.name(class_id);
   if (name.empty()) return 0;

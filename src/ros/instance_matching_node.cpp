@@ -32,6 +32,7 @@ InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle&
   config_ = loadMatching(p);
   classes_ = loadClasses(p);
   camera_ = loadCamera(p);
+  bounds_ = loadBounds(p);
   frames_ = loadFrames(p);
   poses_ = std::make_unique<PoseSource>(loadTf(p));
   matched_pub_ = nh.advertise<semantic_exploration::MatchedDetections>("matched_detections", 10);
@@ -145,6 +146,7 @@ void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsC
   Eigen::Isometry3d T_WC;
   err = poses_->cameraPose(frames_, msg->header, T_WC);
   if (!err.empty()) return fail("no_tf", err);
+  if (!bounds_.contains(T_WC.translation())) return fail("out_of_bounds", outOfBounds("camera", T_WC.translation()));
 
   semantic_exploration::RenderInstances srv;
   const Eigen::Quaterniond q(T_WC.linear());

@@ -118,6 +118,12 @@ std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, 
   return "";
 }
 
+std::string outOfBounds(const std::string& what, const Eigen::Vector3d& p_W) {
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), " at (%.3f, %.3f, %.3f) lies outside the map bounds", p_W.x(), p_W.y(), p_W.z());
+  return what + buf;
+}
+
 std::string checkSaveDirectory(const std::string& directory) {
   namespace fs = std::filesystem;
   const fs::path dir(directory);

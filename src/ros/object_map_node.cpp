@@ -67,9 +67,13 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   classes_ = loadClasses(p);
   exploration_ = loadExploration(p);
   camera_ = loadCamera(p);
+  bounds_ = loadBounds(p);
   frames_ = loadFrames(p);
   poses_ = std::make_unique<PoseSource>(loadTf(p));
   map_ = std::make_unique<semexp::ObjectMap>(config_, classes_);
+  // The maps must hold what a camera inside the bounds sees (it is refused outside them).
+  if (const std::string why = map_->checkBounds(bounds_, camera_.d_max_m); !why.empty())
+    throw semexp::ConfigError("bounds/max_m", why);
 
   objects_pub_ = pnh.advertise<semantic_exploration::ObjectArray>("objects", 1, true);
   meshes_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("meshes", 1, true);
@@ -145,6 +149,7 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
   Eigen::Isometry3d T_WC;
   err = poses_->cameraPose(frames_, matched->header, T_WC);
   if (!err.empty()) return fail("no_tf", err);
+  if (!bounds_.contains(T_WC.translation())) return fail("out_of_bounds", outOfBounds("camera", T_WC.translation()));
 
   std::vector<semexp::ObjectDetection> detections;
   for (const auto& d : matched->detections)
@@ -283,6 +288,10 @@ bool ObjectMapNode::renderInstances(semantic_exploration::RenderInstances::Reque
   }
   T_WC.linear() = quat.normalized().toRotationMatrix();
   T_WC.translation() = Eigen::Vector3d(t.x, t.y, t.z);
+  if (!bounds_.contains(T_WC.translation())) {
+    drops_.drop("out_of_bounds", "render_instances: " + outOfBounds("camera", T_WC.translation()));
+    return false;
+  }
   cv::Mat depth_m;
   if (!req.depth.data.empty()) {
     err = depthToMeters(req.depth, depth_m);
@@ -321,7 +330,13 @@ bool ObjectMapNode::computeGains(semantic_exploration::ComputeGains::Request& re
   grid.height = req.height;
   grid.vfov_rad = camera_.vfov_rad();
   std::vector<Eigen::Vector3d> positions;
-  for (const auto& p : req.positions) positions.emplace_back(p.x, p.y, p.z);
+  for (const auto& p : req.positions) {
+    positions.emplace_back(p.x, p.y, p.z);
+    if (!bounds_.contains(positions.back())) {
+      drops_.drop("out_of_bounds", "compute_gains: " + outOfBounds("position", positions.back()));
+      return false;
+    }
+  }
   std::vector<cv::Mat> gains, hits;
   try {
     map_->computeGains(positions, grid, req.max_depth_m, exploration_.d_obj_m, camera_.d_max_m, gains, hits);

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "semantic_exploration/core/bounds.hpp"
 #include "semantic_exploration/core/camera.hpp"
 #include "semantic_exploration/core/class_table.hpp"
 #include "semantic_exploration/core/object_id_pool.hpp"
@@ -73,6 +74,12 @@ class ObjectMap {
 
   const ObjectMapConfig& config() const { return config_; }
   const ClassTable& classes() const { return classes_; }
+
+  /// "" if every class's object map can hold all surfaces seen from inside
+  /// `bounds` up to `range_m` away (TsdfParams::maxCoordinate_m at the class's
+  /// resolution), else why not. Camera poses outside the bounds must then be
+  /// refused by the caller.
+  std::string checkBounds(const Bounds& bounds, double range_m) const;
 
   /// New empty object of class `class_id` at the class's resolution; 0 if
   /// the class is unknown or no 16-bit id is free (see ObjectIdPool).

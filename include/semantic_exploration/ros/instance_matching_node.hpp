@@ -9,8 +9,8 @@
 /// core/instance_matching.hpp); publishes `matched_detections`
 /// (MatchedDetections) with masks under min_mask_pixels removed. Detections
 /// of classes without object maps are left out; bad input (sizes, encodings,
-/// unknown class ids, masks of unlisted instance ids, missing tf, render
-/// service down) is dropped with a counter and a throttled log line, and the
+/// unknown class ids, masks of unlisted instance ids, missing tf, a camera
+/// outside `bounds`, render service down) is dropped with a counter and a throttled log line, and the
 /// frame goes on without detections (so object_map still handles it).
 
 #include <message_filters/subscriber.h>
@@ -48,6 +48,7 @@ class InstanceMatchingNode {
   semexp::MatchingConfig config_;
   semexp::ClassTable classes_;
   semexp::PinholeCamera camera_;
+  semexp::Bounds bounds_;  ///< camera poses outside are refused ("out_of_bounds")
   sensor_msgs::CameraInfo camera_info_;
   bool have_info_ = false;
   CameraInfoInput camera_input_;  ///< validates camera_info against the cap and the depth frames

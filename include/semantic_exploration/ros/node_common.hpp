@@ -49,6 +49,9 @@ sensor_msgs::Image floatImageMsg(const std_msgs::Header& header, const std::vect
 std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, double d_max_m,
                            semexp::PinholeCamera& camera);
 
+/// "<what> at (x, y, z) lies outside the map bounds", for out_of_bounds drops.
+std::string outOfBounds(const std::string& what, const Eigen::Vector3d& p_W);
+
 /// "" if `directory` may be saved into (SaveMap), else why not: it must be an
 /// absolute path without ".." components, so that a save never lands
 /// relative to a node's working directory (~/.ros under roslaunch) or
