@@ -34,6 +34,9 @@ semantic_exploration::MapBlocks toMsg(const semexp::MapBlocksData& d, const ros:
   m.coords = d.coords;
   m.payload.resize(d.payload.size());
   if (!d.payload.empty()) std::memcpy(m.payload.data(), d.payload.data(), d.payload.size());
+  m.uniform_coords = d.uniform_coords;
+  m.uniform_values.resize(d.uniform_values.size());
+  if (!d.uniform_values.empty()) std::memcpy(m.uniform_values.data(), d.uniform_values.data(), d.uniform_values.size());
   return m;
 }
 
@@ -342,8 +345,8 @@ bool BackgroundMapNode::computeGains(semantic_exploration::ComputeGains::Request
   return true;
 }
 
-bool BackgroundMapNode::getMap(semantic_exploration::GetMap::Request&, semantic_exploration::GetMap::Response& res) {
-  res.map = toMsg(map_->snapshot(), last_header_.stamp, frames_.world);
+bool BackgroundMapNode::getMap(semantic_exploration::GetMap::Request& req, semantic_exploration::GetMap::Response& res) {
+  res.map = toMsg(map_->snapshot(req.compact), last_header_.stamp, frames_.world);
   return true;
 }
 
