@@ -9,9 +9,32 @@
 
 namespace semexp_ros {
 
+namespace {
+
+// The planner asks get_masks for its raycast images, and get_masks answers only its own size: a mismatch would
+// fail every planning iteration, so it fails here (every node loads the whole YAML, planner section included).
+void checkPlannerImageSize(const ParamReader& p, const semexp::DepthHistoryConfig& config) {
+  if (!p.has("planner")) return;  // no planner configured alongside
+  semexp::PlannerConfig planner;
+  p.get("planner/raycast_width", planner.raycast_width);
+  p.get("planner/raycast_height", planner.raycast_height);
+  if (config.width != planner.raycast_width)
+    throw semexp::ConfigError("depth_history/width", "is " + std::to_string(config.width) +
+                                                         " but planner/raycast_width is " +
+                                                         std::to_string(planner.raycast_width) + "; they must be equal");
+  if (config.height != planner.raycast_height)
+    throw semexp::ConfigError("depth_history/height", "is " + std::to_string(config.height) +
+                                                          " but planner/raycast_height is " +
+                                                          std::to_string(planner.raycast_height) +
+                                                          "; they must be equal");
+}
+
+}  // namespace
+
 DepthHistoryNode::DepthHistoryNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   const auto p = ParamReader::fromNodeHandle(pnh);
   config_ = loadDepthHistory(p);
+  checkPlannerImageSize(p, config_);
   camera_ = loadCamera(p);
   bounds_ = loadBounds(p);
   frames_ = loadFrames(p);

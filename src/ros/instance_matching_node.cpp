@@ -125,6 +125,12 @@ void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsC
       drops_.drop("unknown_class", "class id " + std::to_string(d.class_id) + " ('" + d.class_name +
                                        "') is not in the class table");
       excluded.insert(d.instance_id);
+    } else if (!d.class_name.empty() && d.class_name != classes_.name(d.class_id)) {
+      // The detector and this node disagree on the class table: neither the id nor the name can be trusted.
+      drops_.drop("class_mismatch", "instance " + std::to_string(d.instance_id) + ": class id " +
+                                        std::to_string(d.class_id) + " is '" + classes_.name(d.class_id) +
+                                        "' in the class table, but the detection names it '" + d.class_name + "'");
+      excluded.insert(d.instance_id);
     } else if (!classes_.isOfInterest(d.class_id)) {
       excluded.insert(d.instance_id);
     } else {

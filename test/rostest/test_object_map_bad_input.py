@@ -109,9 +109,11 @@ class BadInput(unittest.TestCase):
         det.header.stamp = stamp
         det.header.frame_id = "camera"
         det.instance_image = image(instances.astype(np.uint16), "16UC1", stamp)
-        for iid, cid in detections:
+        for det_ in detections:
+            iid, cid = det_[:2]
+            name = det_[2] if len(det_) > 2 else ("chair" if cid == CHAIR else "?")
             d = Detection()
-            d.instance_id, d.class_id, d.class_name, d.confidence = iid, cid, "chair" if cid == CHAIR else "?", 0.9
+            d.instance_id, d.class_id, d.class_name, d.confidence = iid, cid, name, 0.9
             det.detections.append(d)
         self.pub_depth.publish(image(depth, "32FC1", stamp))
         self.pub_rgb.publish(image(rgb, "rgb8", stamp))
@@ -196,6 +198,25 @@ class BadInput(unittest.TestCase):
             objects = self.objects
         # No object was made from that frame (test methods run in name order: the chair of the first is there).
         self.assertTrue(objects is None or all(abs(o.centroid.x) < 100 for o in objects.objects))
+
+    def test_class_name_must_match_class_id(self):
+        # Class id 1 is "chair" here; a detector with another class table names it "table".
+        matched, done = self.send(self.chair_mask(), [(1, CHAIR, "table")])
+        self.assertIsNotNone(matched)
+        self.assertEqual(len(matched.detections), 0)
+        self.assertFalse(np.frombuffer(matched.instance_image.data, np.uint16).any())  # its pixels cleared
+        self.assertTrue(done.integrated)
+        end = time.monotonic() + 3
+        while time.monotonic() < end:
+            with self.lock:
+                n = self.drops.get("instance_matching", {}).get("class_mismatch", 0)
+            if n:
+                break
+            time.sleep(0.05)
+        self.assertEqual(n, 1)
+        # An empty class_name is not checked (the id alone names the class).
+        matched, done = self.send(self.chair_mask(), [(1, CHAIR, "")])
+        self.assertEqual(len(matched.detections), 1)
 
 
 if __name__ == "__main__":

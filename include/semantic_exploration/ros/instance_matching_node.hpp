@@ -9,7 +9,7 @@
 /// core/instance_matching.hpp); publishes `matched_detections`
 /// (MatchedDetections) with masks under min_mask_pixels removed. Detections
 /// of classes without object maps are left out; bad input (sizes, encodings,
-/// unknown class ids, masks of unlisted instance ids, missing tf, a camera
+/// unknown class ids, a class_name that is not class_id's, masks of unlisted instance ids, missing tf, a camera
 /// outside `bounds`, render service down) is dropped with a counter and a throttled log line, and the
 /// frame goes on without detections (so object_map still handles it).
 
