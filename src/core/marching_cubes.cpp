@@ -1,5 +1,7 @@
 #include "semantic_exploration/core/marching_cubes.hpp"
 
+#include "semantic_exploration/core/atomic_file.hpp"
+
 #include <algorithm>
 #include <cstring>
 #include <fstream>
@@ -84,9 +86,9 @@ const MarchingCubesTable& MarchingCubesTable::get() {
   return table;
 }
 
-bool writePly(const Mesh& mesh, const std::string& path) {
-  std::ofstream f(path, std::ios::binary);
-  if (!f) return false;
+namespace {
+
+void writePlyTo(const Mesh& mesh, std::ostream& f) {
   f << "ply\nformat binary_little_endian 1.0\ncomment semantic_exploration object mesh\n"
     << "element vertex " << mesh.vertices_W.size() << "\n"
     << "property float x\nproperty float y\nproperty float z\n"
@@ -114,7 +116,18 @@ bool writePly(const Mesh& mesh, const std::string& path) {
     for (int k = 0; k < 3; ++k) put32(t[k]);
   }
   f.write(buf.data(), static_cast<std::streamsize>(buf.size()));
-  return static_cast<bool>(f);
+}
+
+}  // namespace
+
+bool writePly(const Mesh& mesh, const std::string& path, std::string* error) {
+  try {
+    writeFileAtomically(path, [&mesh](std::ostream& f) { writePlyTo(mesh, f); });
+  } catch (const std::exception& e) {
+    if (error) *error = e.what();
+    return false;
+  }
+  return true;
 }
 
 bool readPly(const std::string& path, Mesh& mesh) {

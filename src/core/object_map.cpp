@@ -1,11 +1,14 @@
 #include "semantic_exploration/core/object_map.hpp"
 
+#include "semantic_exploration/core/atomic_file.hpp"
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <opencv2/imgproc.hpp>
+#include <regex>
 #include <stdexcept>
 
 namespace semexp {
@@ -21,16 +24,30 @@ ObjectMap::ObjectMap(const ObjectMapConfig& config, const ClassTable& classes) :
   classes_.validate();
 }
 
+std::string ObjectMap::checkBounds(const Bounds& bounds, double range_m) const {
+  const double extent_m = std::max(bounds.min_m.cwiseAbs().maxCoeff(), bounds.max_m.cwiseAbs().maxCoeff()) + range_m;
+  for (const std::string& name : classes_.of_interest) {
+    TsdfParams p;
+    p.resolution_m = classes_.resolution(classes_.id(name));
+    if (extent_m >= p.maxCoordinate_m())
+      return "the bounds reach " + std::to_string(extent_m) + " m from the origin (with " + std::to_string(range_m) +
+             " m of sensor range); the " + name + " map at " + std::to_string(p.resolution_m) +
+             " m holds at most " + std::to_string(p.maxCoordinate_m()) + " m (TsdfParams::kMaxVoxelIndex)";
+  }
+  return "";
+}
+
 std::uint32_t ObjectMap::createObject(int class_id) {
   const std::string name = classes_.name(class_id);
-  if (name.empty() || next_id_ > 65535) return 0;
+  if (name.empty()) return 0;
+  const std::uint32_t id = ids_.acquire(version_);
+  if (id == 0) return 0;
   TsdfParams p;
   p.resolution_m = classes_.resolution(class_id);
   p.truncation_m = config_.truncation_voxels * p.resolution_m;
   p.behind_surface_m = config_.behind_surface_voxels * p.resolution_m;
   p.block_size = config_.block_size;
   p.max_weight = config_.max_weight;
-  const std::uint32_t id = next_id_++;
   objects_.emplace(id, std::make_unique<MappedObject>(id, class_id, name, p));
   return id;
 }
@@ -41,14 +58,15 @@ const MappedObject* ObjectMap::object(std::uint32_t id) const {
 }
 
 std::vector<std::uint32_t> ObjectMap::visibleIds(const cv::Mat& object_ids) {
-  std::vector<bool> seen(65536, false);
+  // Runs of one id along a row are collected once; no pass over all 65535 possible ids per call.
+  std::vector<std::uint32_t> ids;
   for (int v = 0; v < object_ids.rows; ++v) {
     const std::uint16_t* row = object_ids.ptr<std::uint16_t>(v);
-    for (int u = 0; u < object_ids.cols; ++u) seen[row[u]] = true;
+    for (int u = 0; u < object_ids.cols; ++u)
+      if (row[u] && (ids.empty() || ids.back() != row[u])) ids.push_back(row[u]);
   }
-  std::vector<std::uint32_t> ids;
-  for (std::uint32_t i = 1; i < 65536; ++i)
-    if (seen[i]) ids.push_back(i);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   return ids;
 }
 
@@ -164,6 +182,7 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
       into.detection_count += from.detection_count;
       into.undetected_count += from.undetected_count;
       objects_.erase(m.first);
+      ids_.release(m.first, version_);
       result.merged.emplace_back(m.first, m.second);
     }
   }
@@ -192,6 +211,7 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
       // Too little of the detection was left (a rim round known objects, or no depth), or not enough to hold
       // one surface voxel: no object (such a piece would never be rendered, updated or merged again).
       objects_.erase(kv.first);
+      ids_.releaseUnpublished(kv.first);  // created and erased in this frame: nobody saw the id
       result.created.erase(std::find(result.created.begin(), result.created.end(), kv.first));
       ++result.dropped_empty;
       continue;
@@ -340,6 +360,9 @@ void ObjectMap::render(const PinholeCamera& camera, const Eigen::Isometry3d& T_W
 void ObjectMap::computeGains(const std::vector<Eigen::Vector3d>& positions_W, const SphericalGrid& grid,
                              const std::vector<float>& max_depth_m, double d_obj_m, double d_max_m,
                              std::vector<cv::Mat>& gains, std::vector<cv::Mat>& hit_depth_m) const {
+  if (const std::string why = SphericalGrid::checkRequest(static_cast<long>(positions_W.size()), grid.width,
+                                                         grid.height); !why.empty())
+    throw std::invalid_argument("ObjectMap::computeGains: " + why);
   const size_t per_position = static_cast<size_t>(grid.width) * grid.height;
   if (!max_depth_m.empty() && max_depth_m.size() != per_position * positions_W.size())
     throw std::invalid_argument("ObjectMap::computeGains: max_depth_m must hold width * height values per position");
@@ -414,8 +437,9 @@ std::vector<std::string> ObjectMap::save(const std::string& directory, double d_
     const MappedObject& o = *kv.second;
     const std::string name = "object_" + std::to_string(o.id) + "_" + o.class_name + ".ply";
     const std::string path = (dir / name).string();
-    if (!writePly(o.tsdf.extractMesh(), path)) {
-      if (error) *error = "cannot write " + path;
+    std::string why;
+    if (!writePly(o.tsdf.extractMesh(), path, &why)) {
+      if (error) *error = why;
       return files;
     }
     files.push_back(path);
@@ -436,13 +460,23 @@ std::vector<std::string> ObjectMap::save(const std::string& directory, double d_
   std::snprintf(tail, sizeof(tail), "\n], \"d_obj_m\": %.3f}\n", d_obj_m);
   json += tail;
   const std::string index = (dir / "objects.json").string();
-  std::ofstream f(index);
-  f << json;
-  if (!f) {
-    if (error) *error = "cannot write " + index;
+  try {
+    writeFileAtomically(index, [&json](std::ostream& f) { f << json; });
+  } catch (const std::exception& e) {
+    if (error) *error = e.what();
     return files;
   }
   files.push_back(index);
+  // Meshes of objects merged away since an earlier save into this directory would read as objects still
+  // there: once the new index is in place, they go.
+  const std::regex mesh_name("object_[0-9]+_.*\\.ply");
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (!std::regex_match(name, mesh_name) || !entry.is_regular_file(ec)) continue;
+    if (std::find(files.begin(), files.end(), entry.path().string()) != files.end()) continue;
+    std::error_code rm;
+    if (!fs::remove(entry.path(), rm) && error) *error = "cannot remove the stale " + entry.path().string();
+  }
   return files;
 }
 

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "semantic_exploration/core/atomic_file.hpp"
 #include "semantic_exploration/core/marching_cubes.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 
@@ -31,11 +32,11 @@ inline std::int16_t decodeL(std::int8_t q) {
 }
 
 template <class T>
-void put(std::ofstream& f, const T& v) {
+void put(std::ostream& f, const T& v) {
   f.write(reinterpret_cast<const char*>(&v), sizeof(T));
 }
 template <class T>
-void putVec(std::ofstream& f, const T* p, std::size_t n) {
+void putVec(std::ostream& f, const T* p, std::size_t n) {
   f.write(reinterpret_cast<const char*>(p), static_cast<std::streamsize>(n * sizeof(T)));
 }
 template <class T>
@@ -85,7 +86,7 @@ MapBlocksData OccupancyMap::takeUpdate() {
   return m;
 }
 
-MapBlocksData OccupancyMap::snapshot() const {
+MapBlocksData OccupancyMap::snapshot(bool uniform_as_values) const {
   MapBlocksData m;
   m.sequence = sequence_;
   m.full = true;
@@ -94,16 +95,23 @@ MapBlocksData OccupancyMap::snapshot() const {
   m.origin_m = origin_;
   std::size_t n = 0;
   for (std::size_t c = 0; c < cell_block_.size(); ++c) n += levels_[0].s[c].known_any;
-  m.coords.reserve(3 * n);
-  m.payload.resize(n * static_cast<std::size_t>(bs3_));
-  std::size_t j = 0;
+  if (!uniform_as_values) {
+    m.coords.reserve(3 * n);
+    m.payload.reserve(n * static_cast<std::size_t>(bs3_));
+  }
+  std::vector<std::int8_t> block(static_cast<std::size_t>(bs3_));
   for (int cell = 0; cell < static_cast<int>(cell_block_.size()); ++cell) {
     if (!levels_[0].s[cell].known_any) continue;
-    m.coords.push_back(cell % nb_.x());
-    m.coords.push_back((cell / nb_.x()) % nb_.y());
-    m.coords.push_back(cell / (nb_.x() * nb_.y()));
-    encodeCell(cell, m.payload.data() + j * bs3_);
-    ++j;
+    const std::int32_t c[3] = {cell % nb_.x(), (cell / nb_.x()) % nb_.y(), cell / (nb_.x() * nb_.y())};
+    encodeCell(cell, block.data());
+    // A voxel block may hold one value too (its voxels converged to the clamp): checked on the encoded values.
+    if (uniform_as_values && std::all_of(block.begin(), block.end(), [&](std::int8_t q) { return q == block[0]; })) {
+      m.uniform_coords.insert(m.uniform_coords.end(), c, c + 3);
+      m.uniform_values.push_back(block[0]);
+    } else {
+      m.coords.insert(m.coords.end(), c, c + 3);
+      m.payload.insert(m.payload.end(), block.begin(), block.end());
+    }
   }
   return m;
 }
@@ -134,17 +142,22 @@ void OccupancyMap::clearAll() {
 bool OccupancyMap::applyBlocks(const MapBlocksData& m) {
   if (m.encoding != MapBlocksData::kEncodingLogOddsI8 || m.block_size != bs_ ||
       std::abs(m.resolution_m - res_) > 1e-6 * res_ || (m.origin_m - origin_).cwiseAbs().maxCoeff() > 1e-3 * res_ ||
-      m.coords.size() % 3 != 0 || m.payload.size() != m.blockCount() * static_cast<std::size_t>(bs3_))
+      m.coords.size() % 3 != 0 || m.payload.size() != m.blockCount() * static_cast<std::size_t>(bs3_) ||
+      m.uniform_coords.size() != 3 * m.uniform_values.size())
     return false;
   if (m.full) clearAll();
   std::vector<int> changed;
-  changed.reserve(m.blockCount());
-  for (std::size_t j = 0; j < m.blockCount(); ++j) {
-    const int x = m.coords[3 * j], y = m.coords[3 * j + 1], z = m.coords[3 * j + 2];
+  const std::size_t n_detailed = m.blockCount();
+  changed.reserve(n_detailed + m.uniform_values.size());
+  for (std::size_t j = 0; j < n_detailed + m.uniform_values.size(); ++j) {
+    // Detailed blocks first, then the uniform ones (one value each).
+    const bool listed_uniform = j >= n_detailed;
+    const std::int32_t* c = listed_uniform ? &m.uniform_coords[3 * (j - n_detailed)] : &m.coords[3 * j];
+    const int x = c[0], y = c[1], z = c[2];
     if (x < 0 || y < 0 || z < 0 || x >= nb_.x() || y >= nb_.y() || z >= nb_.z()) continue;
     const int cell = cellIndex(x, y, z);
-    const std::int8_t* q = m.payload.data() + j * bs3_;
-    const bool uniform = std::all_of(q, q + bs3_, [&](std::int8_t a) { return a == q[0]; });
+    const std::int8_t* q = listed_uniform ? &m.uniform_values[j - n_detailed] : m.payload.data() + j * bs3_;
+    const bool uniform = listed_uniform || std::all_of(q, q + bs3_, [&](std::int8_t a) { return a == q[0]; });
     cell_dist_[cell] = kNoDist;
     if (uniform) {
       releaseBlock(cell);
@@ -168,8 +181,10 @@ bool OccupancyMap::applyBlocks(const MapBlocksData& m) {
 // ---------------------------------------------------------- own format
 
 void OccupancyMap::save(const std::string& path) const {
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  if (!f) throw std::runtime_error("cannot write " + path);
+  writeFileAtomically(path, [this](std::ostream& f) { saveTo(f); });
+}
+
+void OccupancyMap::saveTo(std::ostream& f) const {
   f.write(kMagic, sizeof(kMagic));
   put(f, kVersion);
   put(f, cfg_.resolution_m);
@@ -214,7 +229,6 @@ void OccupancyMap::save(const std::string& path) const {
   putVec(f, fb.data(), fb.size());
   put(f, static_cast<std::uint64_t>(fc.size()));
   putVec(f, fc.data(), fc.size());
-  if (!f) throw std::runtime_error("error writing " + path);
 }
 
 OccupancyMap OccupancyMap::load(const std::string& path) {
@@ -301,7 +315,9 @@ void OccupancyMap::exportOctomap(const std::string& path) const {
         }
   }
   tree.updateInnerOccupancy();
-  if (!tree.writeBinary(path)) throw std::runtime_error("cannot write " + path);
+  writeFileAtomically(path, [&tree](std::ostream& f) {
+    if (!tree.writeBinary(f)) throw std::runtime_error("OctoMap could not write the tree");
+  });
 }
 
 void OccupancyMap::exportOccupiedPly(const std::string& path) const {
@@ -310,7 +326,8 @@ void OccupancyMap::exportOccupiedPly(const std::string& path) const {
     cloud.vertices_W.push_back(c.cast<float>());
     cloud.colours.push_back({rgb[0], rgb[1], rgb[2]});
   });
-  if (!writePly(cloud, path)) throw std::runtime_error("cannot write " + path);
+  std::string error;
+  if (!writePly(cloud, path, &error)) throw std::runtime_error(error);
 }
 
 }  // namespace semexp

@@ -2,6 +2,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 #include "semantic_exploration/core/gains.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
@@ -266,8 +268,11 @@ RaycastHit OccupancyMap::raycast(const Eigen::Vector3d& origin_W, const Eigen::V
 std::vector<GainImages> OccupancyMap::computeGains(const std::vector<Eigen::Vector3d>& positions_W,
                                                    const SphericalGrid& grid, const GainSettings& st,
                                                    const std::vector<float>& max_depth_m) const {
+  if (const std::string why = SphericalGrid::checkRequest(static_cast<long>(positions_W.size()), grid.width,
+                                                         grid.height); !why.empty())
+    throw std::invalid_argument("OccupancyMap::computeGains: " + why);
   const std::vector<float>& H = entropy_lut_;
-  const int W = grid.width, Hh = grid.height, n = W * Hh;
+  const int W = grid.width, Hh = grid.height, n = W * Hh;  // <= SphericalGrid::kMaxPixels: no overflow
   const bool have_max = max_depth_m.size() == positions_W.size() * static_cast<std::size_t>(n) && n > 0;
   const double norm = st.d_max_m - st.d_min_m;
   std::vector<Eigen::Vector3d> dirs(static_cast<std::size_t>(n));

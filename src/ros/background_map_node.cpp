@@ -34,6 +34,9 @@ semantic_exploration::MapBlocks toMsg(const semexp::MapBlocksData& d, const ros:
   m.coords = d.coords;
   m.payload.resize(d.payload.size());
   if (!d.payload.empty()) std::memcpy(m.payload.data(), d.payload.data(), d.payload.size());
+  m.uniform_coords = d.uniform_coords;
+  m.uniform_values.resize(d.uniform_values.size());
+  if (!d.uniform_values.empty()) std::memcpy(m.uniform_values.data(), d.uniform_values.data(), d.uniform_values.size());
   return m;
 }
 
@@ -74,7 +77,7 @@ BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) 
 
 void BackgroundMapNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
   semexp::PinholeCamera c;
-  const auto err = cameraFromInfo(*msg, camera_.d_min_m, camera_.d_max_m, c);
+  const auto err = camera_input_.accept(*msg, camera_.d_min_m, camera_.d_max_m, c);
   if (!err.empty()) {
     drops_.drop("bad_camera_info", err);
     return;
@@ -152,6 +155,7 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
   cv::Mat depth_m;
   auto err = depthToMeters(*msg, depth_m);
   if (!err.empty()) return fail("bad_encoding", err);
+  camera_input_.depthFrame(depth_m.cols, depth_m.rows);
   if (!have_info_) return fail("no_camera_info", "depth received before any camera_info");
   if (depth_m.cols != camera_.width || depth_m.rows != camera_.height)
     return fail("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +
@@ -305,8 +309,9 @@ void BackgroundMapNode::occupiedConnected(const ros::SingleSubscriberPublisher&)
 bool BackgroundMapNode::computeGains(semantic_exploration::ComputeGains::Request& req,
                                      semantic_exploration::ComputeGains::Response& res) {
   const int w = req.width, h = req.height;
-  if (w <= 0 || h <= 0) {
-    drops_.drop("bad_gain_request", "compute_gains needs width and height > 0");
+  const std::string why = semexp::SphericalGrid::checkRequest(static_cast<long>(req.positions.size()), w, h);
+  if (!why.empty()) {
+    drops_.drop(w > 0 && h > 0 ? "request_too_large" : "bad_gain_request", "compute_gains: " + why);
     return false;
   }
   const std::size_t n = req.positions.size(), per = static_cast<std::size_t>(w) * h;
@@ -326,7 +331,13 @@ bool BackgroundMapNode::computeGains(semantic_exploration::ComputeGains::Request
   gs.d_min_m = camera_.d_min_m;
   gs.d_max_m = camera_.d_max_m;
   gs.d_desired_m = exploration_.d_bg_m;
-  const auto gains = map_->computeGains(pos, grid, gs, req.max_depth_m);
+  std::vector<semexp::GainImages> gains;
+  try {
+    gains = map_->computeGains(pos, grid, gs, req.max_depth_m);
+  } catch (const std::exception& e) {
+    drops_.drop("bad_gain_request", e.what());
+    return false;
+  }
   std_msgs::Header header;
   header.stamp = ros::Time::now();
   header.frame_id = frames_.world;
@@ -338,15 +349,21 @@ bool BackgroundMapNode::computeGains(semantic_exploration::ComputeGains::Request
   return true;
 }
 
-bool BackgroundMapNode::getMap(semantic_exploration::GetMap::Request&, semantic_exploration::GetMap::Response& res) {
-  res.map = toMsg(map_->snapshot(), last_header_.stamp, frames_.world);
+bool BackgroundMapNode::getMap(semantic_exploration::GetMap::Request& req, semantic_exploration::GetMap::Response& res) {
+  res.map = toMsg(map_->snapshot(req.compact), last_header_.stamp, frames_.world);
   return true;
 }
 
 bool BackgroundMapNode::save(semantic_exploration::SaveMap::Request& req, semantic_exploration::SaveMap::Response& res) {
+  if (const std::string why = checkSaveDirectory(req.directory); !why.empty()) {
+    res.success = false;
+    res.message = "background_map: save refused: " + why;
+    ROS_ERROR("%s", res.message.c_str());
+    return true;
+  }
   try {
     namespace fs = std::filesystem;
-    const fs::path dir = fs::absolute(req.directory.empty() ? fs::path(".") : fs::path(req.directory));
+    const fs::path dir(req.directory);
     fs::create_directories(dir);
     const std::string bt = (dir / "background_map.bt").string();
     const std::string own = (dir / "background_map.semexpmap").string();
@@ -360,6 +377,7 @@ bool BackgroundMapNode::save(semantic_exploration::SaveMap::Request& req, semant
   } catch (const std::exception& e) {
     res.success = false;
     res.message = std::string("background_map: save failed: ") + e.what();
+    ROS_ERROR("%s", res.message.c_str());
   }
   return true;
 }

@@ -9,9 +9,32 @@
 
 namespace semexp_ros {
 
+namespace {
+
+// The planner asks get_masks for its raycast images, and get_masks answers only its own size: a mismatch would
+// fail every planning iteration, so it fails here (every node loads the whole YAML, planner section included).
+void checkPlannerImageSize(const ParamReader& p, const semexp::DepthHistoryConfig& config) {
+  if (!p.has("planner")) return;  // no planner configured alongside
+  semexp::PlannerConfig planner;
+  p.get("planner/raycast_width", planner.raycast_width);
+  p.get("planner/raycast_height", planner.raycast_height);
+  if (config.width != planner.raycast_width)
+    throw semexp::ConfigError("depth_history/width", "is " + std::to_string(config.width) +
+                                                         " but planner/raycast_width is " +
+                                                         std::to_string(planner.raycast_width) + "; they must be equal");
+  if (config.height != planner.raycast_height)
+    throw semexp::ConfigError("depth_history/height", "is " + std::to_string(config.height) +
+                                                          " but planner/raycast_height is " +
+                                                          std::to_string(planner.raycast_height) +
+                                                          "; they must be equal");
+}
+
+}  // namespace
+
 DepthHistoryNode::DepthHistoryNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   const auto p = ParamReader::fromNodeHandle(pnh);
   config_ = loadDepthHistory(p);
+  checkPlannerImageSize(p, config_);
   camera_ = loadCamera(p);
   bounds_ = loadBounds(p);
   frames_ = loadFrames(p);
@@ -26,15 +49,15 @@ DepthHistoryNode::DepthHistoryNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
 }
 
 void DepthHistoryNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
-  if (history_) return;  // the layout is fixed for the run
   semexp::PinholeCamera c;
-  const auto err = cameraFromInfo(*msg, camera_.d_min_m, camera_.d_max_m, c);
+  const auto err = camera_input_.accept(*msg, camera_.d_min_m, camera_.d_max_m, c);
   if (!err.empty()) {
     drops_.drop("bad_camera_info", err);
     return;
   }
-  camera_ = c;
-  history_ = std::make_unique<semexp::DepthHistory>(config_, bounds_, camera_);
+  if (history_) return;  // the layout is fixed for the run
+  camera_ = c;  // the history is built at the first depth frame of this size
+  have_info_ = true;
 }
 
 void DepthHistoryNode::reportFrame(const std_msgs::Header& header, bool integrated, double time_ms) {
@@ -55,9 +78,16 @@ void DepthHistoryNode::depthCallback(const sensor_msgs::ImageConstPtr& msg) {
     reportFrame(msg->header, false, 0.0);
     return;
   }
+  camera_input_.depthFrame(depth_m.cols, depth_m.rows);
   if (!history_) {
+    // Built from the camera whose size the depth stream confirms (its per-pixel rays are sized from it).
     if (depth_m.cols != camera_.width || depth_m.rows != camera_.height) {
-      drops_.drop("no_camera_info", "depth before any camera_info and not of the configured camera size");
+      if (have_info_)
+        drops_.drop("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +
+                                         " but camera_info " + std::to_string(camera_.width) + "x" +
+                                         std::to_string(camera_.height));
+      else
+        drops_.drop("no_camera_info", "depth before any camera_info and not of the configured camera size");
       reportFrame(msg->header, false, 0.0);
       return;
     }
@@ -123,6 +153,11 @@ bool DepthHistoryNode::getMasks(semantic_exploration::GetHistoryMasks::Request& 
   if (req.width != config_.width || req.height != config_.height) {
     ROS_WARN_THROTTLE(5.0, "depth_history: get_masks asked for %ux%u, the history is %dx%d", req.width, req.height,
                       config_.width, config_.height);
+    return false;
+  }
+  if (const std::string why = semexp::SphericalGrid::checkRequest(static_cast<long>(req.positions.size()),
+                                                                  config_.width, config_.height); !why.empty()) {
+    drops_.drop("request_too_large", "get_masks: " + why);
     return false;
   }
   std::vector<Eigen::Vector3d> ps;

@@ -32,6 +32,7 @@ InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle&
   config_ = loadMatching(p);
   classes_ = loadClasses(p);
   camera_ = loadCamera(p);
+  bounds_ = loadBounds(p);
   frames_ = loadFrames(p);
   poses_ = std::make_unique<PoseSource>(loadTf(p));
   matched_pub_ = nh.advertise<semantic_exploration::MatchedDetections>("matched_detections", 10);
@@ -51,7 +52,7 @@ InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle&
 
 void InstanceMatchingNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
   semexp::PinholeCamera c;
-  const auto err = cameraFromInfo(*msg, camera_.d_min_m, camera_.d_max_m, c);
+  const auto err = camera_input_.accept(*msg, camera_.d_min_m, camera_.d_max_m, c);
   if (!err.empty()) {
     drops_.drop("bad_camera_info", err);
     return;
@@ -74,31 +75,36 @@ bool InstanceMatchingNode::callRender(semantic_exploration::RenderInstances& srv
   return false;
 }
 
-void InstanceMatchingNode::publishEmpty(const std_msgs::Header& header) {
+void InstanceMatchingNode::publishEmpty(const std_msgs::Header& header, int width_px, int height_px) {
   // The frame still reaches object_map (visible objects are updated as
   // undetected and lockstep sees the frame handled).
   semantic_exploration::MatchedDetections empty;
   empty.header = header;
   empty.instance_image.header = header;
-  empty.instance_image.width = static_cast<uint32_t>(camera_.width);
-  empty.instance_image.height = static_cast<uint32_t>(camera_.height);
+  empty.instance_image.width = static_cast<uint32_t>(width_px);
+  empty.instance_image.height = static_cast<uint32_t>(height_px);
   empty.instance_image.encoding = enc::TYPE_16UC1;
-  empty.instance_image.step = static_cast<uint32_t>(camera_.width * 2);
-  empty.instance_image.data.assign(static_cast<size_t>(camera_.width) * camera_.height * 2, 0);
+  empty.instance_image.step = static_cast<uint32_t>(width_px * 2);
+  empty.instance_image.data.assign(static_cast<size_t>(width_px) * height_px * 2, 0);
   matched_pub_.publish(empty);
 }
 
 void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsConstPtr& msg,
                                          const sensor_msgs::ImageConstPtr& depth_msg) {
+  // The empty answer of a failed frame has the depth frame's size once it decoded (the camera's before).
+  int empty_w = camera_.width, empty_h = camera_.height;
   const auto fail = [&](const std::string& reason, const std::string& detail) {
     drops_.drop(reason, detail);
-    publishEmpty(msg->header);
+    publishEmpty(msg->header, empty_w, empty_h);
   };
   // Frames missing from the detector's stream, or whose depth never came (they never pair).
   countFrameGaps(frame_gaps_, drops_, msg->header.stamp, "detection");
   cv::Mat depth_m, instances;
   std::string err = depthToMeters(*depth_msg, depth_m);
   if (!err.empty()) return fail("bad_depth", err);
+  empty_w = depth_m.cols;
+  empty_h = depth_m.rows;
+  camera_input_.depthFrame(depth_m.cols, depth_m.rows);
   if (depth_m.cols != camera_.width || depth_m.rows != camera_.height)
     return fail("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +
                                      " but camera " + std::to_string(camera_.width) + "x" +
@@ -118,6 +124,12 @@ void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsC
     if (classes_.name(d.class_id).empty()) {
       drops_.drop("unknown_class", "class id " + std::to_string(d.class_id) + " ('" + d.class_name +
                                        "') is not in the class table");
+      excluded.insert(d.instance_id);
+    } else if (!d.class_name.empty() && d.class_name != classes_.name(d.class_id)) {
+      // The detector and this node disagree on the class table: neither the id nor the name can be trusted.
+      drops_.drop("class_mismatch", "instance " + std::to_string(d.instance_id) + ": class id " +
+                                        std::to_string(d.class_id) + " is '" + classes_.name(d.class_id) +
+                                        "' in the class table, but the detection names it '" + d.class_name + "'");
       excluded.insert(d.instance_id);
     } else if (!classes_.isOfInterest(d.class_id)) {
       excluded.insert(d.instance_id);
@@ -140,6 +152,7 @@ void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsC
   Eigen::Isometry3d T_WC;
   err = poses_->cameraPose(frames_, msg->header, T_WC);
   if (!err.empty()) return fail("no_tf", err);
+  if (!bounds_.contains(T_WC.translation())) return fail("out_of_bounds", outOfBounds("camera", T_WC.translation()));
 
   semantic_exploration::RenderInstances srv;
   const Eigen::Quaterniond q(T_WC.linear());

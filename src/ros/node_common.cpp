@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <iterator>
 #include <stdexcept>
 #include <opencv2/imgproc.hpp>
@@ -112,6 +113,52 @@ std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, 
     c.validate("camera_info/");
   } catch (const semexp::ConfigError& e) {
     return e.what();
+  }
+  camera = c;
+  return "";
+}
+
+std::string outOfBounds(const std::string& what, const Eigen::Vector3d& p_W) {
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), " at (%.3f, %.3f, %.3f) lies outside the map bounds", p_W.x(), p_W.y(), p_W.z());
+  return what + buf;
+}
+
+std::string checkSaveDirectory(const std::string& directory) {
+  namespace fs = std::filesystem;
+  const fs::path dir(directory);
+  if (directory.empty() || !dir.is_absolute())
+    return "directory '" + directory + "' must be an absolute path";
+  for (const auto& part : dir)
+    if (part == "..") return "directory '" + directory + "' must not contain '..'";
+  return "";
+}
+
+std::string ignoredDistortion(const sensor_msgs::CameraInfo& info) {
+  if (std::all_of(info.D.begin(), info.D.end(), [](double d) { return d == 0.0; })) return "";
+  std::string d;
+  char buf[32];
+  for (const double v : info.D) {
+    std::snprintf(buf, sizeof(buf), "%s%g", d.empty() ? "" : ", ", v);
+    d += buf;
+  }
+  return "distortion_model '" + info.distortion_model + "' with D = [" + d + "]";
+}
+
+std::string CameraInfoInput::accept(const sensor_msgs::CameraInfo& info, double d_min_m, double d_max_m,
+                                    semexp::PinholeCamera& camera) {
+  semexp::PinholeCamera c;
+  std::string err = cameraFromInfo(info, d_min_m, d_max_m, c);
+  if (!err.empty()) return err;
+  if (depth_width_px_ > 0 && (c.width != depth_width_px_ || c.height != depth_height_px_))
+    return "camera_info is " + std::to_string(c.width) + "x" + std::to_string(c.height) + " px but the depth frames are " +
+           std::to_string(depth_width_px_) + "x" + std::to_string(depth_height_px_) + " px";
+  if (distortion_warnings_ == 0) {
+    const std::string d = ignoredDistortion(info);
+    if (!d.empty()) {
+      ROS_WARN("camera_info has %s: ignored, images are taken as rectified (only K is used)", d.c_str());
+      ++distortion_warnings_;
+    }
   }
   camera = c;
   return "";

@@ -60,9 +60,13 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   classes_ = loadClasses(p);
   exploration_ = loadExploration(p);
   camera_ = loadCamera(p);
+  bounds_ = loadBounds(p);
   frames_ = loadFrames(p);
   poses_ = std::make_unique<PoseSource>(loadTf(p));
   map_ = std::make_unique<semexp::ObjectMap>(config_, classes_);
+  // The maps must hold what a camera inside the bounds sees (it is refused outside them).
+  if (const std::string why = map_->checkBounds(bounds_, camera_.d_max_m); !why.empty())
+    throw semexp::ConfigError("bounds/max_m", why);
 
   objects_pub_ = pnh.advertise<semantic_exploration::ObjectArray>("objects", 1, true);
   meshes_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("meshes", 1, true);
@@ -90,7 +94,7 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
 
 void ObjectMapNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
   semexp::PinholeCamera c;
-  const auto err = cameraFromInfo(*msg, camera_.d_min_m, camera_.d_max_m, c);
+  const auto err = camera_input_.accept(*msg, camera_.d_min_m, camera_.d_max_m, c);
   if (!err.empty()) {
     drops_.drop("bad_camera_info", err);
     return;
@@ -118,6 +122,7 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
   cv::Mat depth_m, rgb, instances;
   std::string err = depthToMeters(*depth_msg, depth_m);
   if (!err.empty()) return fail("bad_depth", err);
+  camera_input_.depthFrame(depth_m.cols, depth_m.rows);
   err = colourToRgb(*rgb_msg, rgb);
   if (!err.empty()) return fail("bad_rgb", err);
   if (depth_m.cols != camera_.width || depth_m.rows != camera_.height)
@@ -137,6 +142,7 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
   Eigen::Isometry3d T_WC;
   err = poses_->cameraPose(frames_, matched->header, T_WC);
   if (!err.empty()) return fail("no_tf", err);
+  if (!bounds_.contains(T_WC.translation())) return fail("out_of_bounds", outOfBounds("camera", T_WC.translation()));
 
   std::vector<semexp::ObjectDetection> detections;
   for (const auto& d : matched->detections)
@@ -153,7 +159,9 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
   if (r.dropped_unknown_class) drops_.drop("unknown_class", std::to_string(r.dropped_unknown_class) + " detection(s)");
   if (r.dropped_unknown_object)
     drops_.drop("unknown_object", std::to_string(r.dropped_unknown_object) + " detection(s) matched to no known object");
-  if (r.dropped_full) drops_.drop("too_many_objects", "all 65535 object ids are used");
+  if (r.dropped_full)
+    drops_.drop("too_many_objects", "no free object id: 65535 objects exist or were merged in the last " +
+                                         std::to_string(semexp::ObjectIdPool::kReuseAfterFrames) + " frames");
   for (const auto id : r.created)
     ROS_INFO("object_map: new object %u (%s)", id, map_->object(id)->class_name.c_str());
   for (const auto& m : r.merged) ROS_INFO("object_map: object %u is part of object %u: merged", m.first, m.second);
@@ -251,6 +259,12 @@ void ObjectMapNode::publishObjects(const ros::Time& stamp) {
 
 bool ObjectMapNode::renderInstances(semantic_exploration::RenderInstances::Request& req,
                                     semantic_exploration::RenderInstances::Response& res) {
+  // Refused before anything is sized from it: the render and its answer take w x h per-pixel buffers.
+  if (const std::string big = semexp::PinholeCamera::checkSize(req.camera_info.width, req.camera_info.height);
+      !big.empty()) {
+    drops_.drop("request_too_large", "render_instances: camera_info " + big);
+    return false;
+  }
   semexp::PinholeCamera cam;
   std::string err = cameraFromInfo(req.camera_info, camera_.d_min_m, camera_.d_max_m, cam);
   if (!err.empty()) {
@@ -267,6 +281,10 @@ bool ObjectMapNode::renderInstances(semantic_exploration::RenderInstances::Reque
   }
   T_WC.linear() = quat.normalized().toRotationMatrix();
   T_WC.translation() = Eigen::Vector3d(t.x, t.y, t.z);
+  if (!bounds_.contains(T_WC.translation())) {
+    drops_.drop("out_of_bounds", "render_instances: " + outOfBounds("camera", T_WC.translation()));
+    return false;
+  }
   cv::Mat depth_m;
   if (!req.depth.data.empty()) {
     err = depthToMeters(req.depth, depth_m);
@@ -294,16 +312,24 @@ bool ObjectMapNode::renderInstances(semantic_exploration::RenderInstances::Reque
 
 bool ObjectMapNode::computeGains(semantic_exploration::ComputeGains::Request& req,
                                  semantic_exploration::ComputeGains::Response& res) {
+  const std::string why = semexp::SphericalGrid::checkRequest(static_cast<long>(req.positions.size()), req.width,
+                                                              req.height);
+  if (!why.empty()) {
+    drops_.drop(req.width > 0 && req.height > 0 ? "request_too_large" : "bad_gain_request", "compute_gains: " + why);
+    return false;
+  }
   semexp::SphericalGrid grid;
   grid.width = req.width;
   grid.height = req.height;
   grid.vfov_rad = camera_.vfov_rad();
-  if (grid.width <= 0 || grid.height <= 0) {
-    drops_.drop("bad_gain_request", "width and height must be > 0");
-    return false;
-  }
   std::vector<Eigen::Vector3d> positions;
-  for (const auto& p : req.positions) positions.emplace_back(p.x, p.y, p.z);
+  for (const auto& p : req.positions) {
+    positions.emplace_back(p.x, p.y, p.z);
+    if (!bounds_.contains(positions.back())) {
+      drops_.drop("out_of_bounds", "compute_gains: " + outOfBounds("position", positions.back()));
+      return false;
+    }
+  }
   std::vector<cv::Mat> gains, hits;
   try {
     map_->computeGains(positions, grid, req.max_depth_m, exploration_.d_obj_m, camera_.d_max_m, gains, hits);
@@ -322,6 +348,12 @@ bool ObjectMapNode::computeGains(semantic_exploration::ComputeGains::Request& re
 }
 
 bool ObjectMapNode::save(semantic_exploration::SaveMap::Request& req, semantic_exploration::SaveMap::Response& res) {
+  if (const std::string why = checkSaveDirectory(req.directory); !why.empty()) {
+    res.success = false;
+    res.message = "object_map: save refused: " + why;
+    ROS_ERROR("%s", res.message.c_str());
+    return true;
+  }
   std::string error;
   res.files = map_->save(req.directory, exploration_.d_obj_m, &error);
   res.success = error.empty();

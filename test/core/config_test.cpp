@@ -107,6 +107,36 @@ TEST(Config, MissingOrBadIntrinsicsAreRejected) {
   EXPECT_EQ(rejected([&] { cam.validate(); }), "camera/d_max_m");
 }
 
+TEST(Config, RaycastsMustFitOneGainRequest) {
+  semexp::PlannerConfig p;
+  p.raycast_width = 360;
+  p.raycast_height = 180;  // one image fits, 20 of them (1.3 M rays) do not
+  EXPECT_EQ(rejected([&] { p.validate(); }), "planner/raycast_width");
+  p.n_candidates = 4;
+  EXPECT_EQ(rejected([&] { p.validate(); }), "");
+  semexp::DepthHistoryConfig h;
+  h.width = 720;
+  h.height = 180;
+  EXPECT_EQ(rejected([&] { h.validate(); }), "depth_history/width");
+}
+
+TEST(Config, CameraSizeIsCapped) {
+  EXPECT_EQ(PinholeCamera::checkSize(320, 240), "");
+  EXPECT_EQ(PinholeCamera::checkSize(4096, 4096), "");
+  EXPECT_EQ(PinholeCamera::checkSize(20000, 20000),
+            "must be <= 8192 px a side (PinholeCamera::kMaxSidePx), got 20000 x 20000");
+  EXPECT_EQ(PinholeCamera::checkSize(8192, 4096),
+            "width x height must be <= 16777216 px (PinholeCamera::kMaxPixels), got 8192 x 4096");
+  PinholeCamera cam;
+  cam.height = 10000;
+  cam.cy = 4999.5;
+  EXPECT_EQ(rejected([&] { cam.validate(); }), "camera/height");
+  cam = PinholeCamera();
+  cam.width = 10000;
+  cam.cx = 4999.5;
+  EXPECT_EQ(rejected([&] { cam.validate(); }), "camera/width");
+}
+
 TEST(Config, OtherBadValues) {
   PlannerConfig pl;
   pl.p_frontier = 1.5;

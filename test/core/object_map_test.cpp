@@ -343,4 +343,16 @@ TEST(ObjectMap, SaveWritesMeshesAndIndex) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(ObjectMap, BoundsMustFitTheVoxelKeys) {
+  const ObjectMap map{ObjectMapConfig(), ClassTable()};  // chairs at 2 cm: 10485.74 m
+  Bounds b;
+  EXPECT_EQ(map.checkBounds(b, 10.0), "");
+  b.max_m = {5e5, 5e6, 3.0};  // UTM-like
+  const std::string why = map.checkBounds(b, 10.0);
+  EXPECT_NE(why.find("chair map at 0.020000 m holds at most 10485.740000 m"), std::string::npos) << why;
+  b.max_m = {10470.0, 10.0, 3.0};
+  EXPECT_NE(map.checkBounds(b, 16.0), "");  // 10486 m with the sensor range
+  EXPECT_EQ(map.checkBounds(b, 15.0), "");
+}
+
 }  // namespace

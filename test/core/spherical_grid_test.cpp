@@ -1,7 +1,11 @@
 // The 360-degree image layout shared by gains and history masks.
 #include <gtest/gtest.h>
 
+#include <stdexcept>
+
 #include "semantic_exploration/core/camera.hpp"
+#include "semantic_exploration/core/object_map.hpp"
+#include "semantic_exploration/core/occupancy_map.hpp"
 #include "semantic_exploration/core/spherical_grid.hpp"
 
 using semexp::SphericalGrid;
@@ -48,4 +52,30 @@ TEST(SphericalGrid, SeamAndOutOfBand) {
 TEST(SphericalGrid, DefaultBandIsTheCameraVerticalFov) {
   semexp::PinholeCamera cam;
   EXPECT_NEAR(SphericalGrid().vfov_rad, cam.vfov_rad(), 1e-4);
+}
+
+TEST(SphericalGrid, RequestLimitsAreNamed) {
+  EXPECT_EQ(SphericalGrid::checkRequest(20, 36, 10), "");                 // the planner's request
+  EXPECT_EQ(SphericalGrid::checkRequest(4, 360, 180), "");                // 4 x 64800 = 259200 rays
+  EXPECT_EQ(SphericalGrid::checkRequest(1, 20000, 20000),
+            "20000 x 20000 px per image is over the limit of 64800 px (SphericalGrid::kMaxPixels)");
+  // uint16 sizes whose product overflows an int are refused, not wrapped.
+  EXPECT_NE(SphericalGrid::checkRequest(1, 65535, 65535).find("over the limit of 64800 px"), std::string::npos);
+  EXPECT_EQ(SphericalGrid::checkRequest(2000, 36, 10),
+            "2000 positions are over the limit of 1024 per request (SphericalGrid::kMaxPositions)");
+  EXPECT_EQ(SphericalGrid::checkRequest(1000, 36, 10),
+            "1000 positions x 360 px = 360000 rays are over the limit of 262144 per request (SphericalGrid::kMaxRays)");
+  EXPECT_EQ(SphericalGrid::checkRequest(1, 0, 10), "width and height must be > 0");
+}
+
+TEST(SphericalGrid, MapsRefuseTooLargeGainRequests) {
+  // The core refuses them too (before allocating anything), whoever calls it.
+  semexp::OccupancyMap map(semexp::BackgroundMapConfig{}, semexp::Bounds{});
+  SphericalGrid grid;
+  grid.width = grid.height = 20000;
+  EXPECT_THROW(map.computeGains({Eigen::Vector3d(0.0, 0.0, 1.0)}, grid, semexp::GainSettings{}), std::invalid_argument);
+  semexp::ObjectMap objects(semexp::ObjectMapConfig{}, semexp::ClassTable{});
+  std::vector<cv::Mat> gains, hits;
+  EXPECT_THROW(objects.computeGains({Eigen::Vector3d(0.0, 0.0, 1.0)}, grid, {}, 1.0, 10.0, gains, hits),
+               std::invalid_argument);
 }

@@ -144,3 +144,67 @@ TEST(TfGapGuard, RefusesAPoseInterpolatedAcrossAGap) {
   TfGapGuard off(0.0, false);  // 0 = no check
   EXPECT_EQ(semexp_ros::lookupPose(tf, "world", "camera", ros::Time(2.5), 0.0, T, &off), "");
 }
+
+namespace {
+
+sensor_msgs::CameraInfo cameraInfo(uint32_t w, uint32_t h) {
+  sensor_msgs::CameraInfo ci;
+  ci.width = w;
+  ci.height = h;
+  ci.K = {262.5, 0.0, (w - 1) / 2.0, 0.0, 262.5, (h - 1) / 2.0, 0.0, 0.0, 1.0};
+  return ci;
+}
+
+}  // namespace
+
+TEST(CameraInfoInput, RefusesOversizedCameraInfoNamingTheCap) {
+  semexp_ros::CameraInfoInput in;
+  semexp::PinholeCamera cam;  // 320 x 240 defaults
+  // 100000 x 100000 px with a valid K: a per-pixel buffer would take 10^10 entries.
+  std::string why = in.accept(cameraInfo(100000, 100000), 0.1, 10.0, cam);
+  EXPECT_NE(why.find("camera_info/width"), std::string::npos) << why;
+  EXPECT_NE(why.find("8192"), std::string::npos) << why;
+  EXPECT_EQ(cam.width, 320);
+  // Each side within the cap, the product over it (8192 x 4096 = 2 x 16.8 Mpx).
+  why = in.accept(cameraInfo(8192, 4096), 0.1, 10.0, cam);
+  EXPECT_NE(why.find("width x height must be <= 16777216"), std::string::npos) << why;
+  // At the cap: accepted.
+  EXPECT_EQ(in.accept(cameraInfo(4096, 4096), 0.1, 10.0, cam), "");
+  EXPECT_EQ(cam.width, 4096);
+  EXPECT_DOUBLE_EQ(cam.cx, 2047.5);
+}
+
+TEST(CameraInfoInput, RefusesASizeOtherThanTheDepthFrames) {
+  semexp_ros::CameraInfoInput in;
+  semexp::PinholeCamera cam;
+  EXPECT_EQ(in.accept(cameraInfo(640, 480), 0.1, 10.0, cam), "");  // no depth frame yet: nothing to compare with
+  in.depthFrame(320, 240);
+  const std::string why = in.accept(cameraInfo(640, 480), 0.1, 10.0, cam);
+  EXPECT_EQ(why, "camera_info is 640x480 px but the depth frames are 320x240 px");
+  EXPECT_EQ(in.accept(cameraInfo(320, 240), 0.1, 10.0, cam), "");
+  EXPECT_EQ(cam.width, 320);
+  EXPECT_EQ(cam.height, 240);
+}
+
+TEST(CameraInfoInput, WarnsOnceAboutIgnoredDistortion) {
+  sensor_msgs::CameraInfo ci = cameraInfo(320, 240);
+  EXPECT_EQ(semexp_ros::ignoredDistortion(ci), "");  // no D
+  ci.distortion_model = "plumb_bob";
+  ci.D = {0.0, 0.0, 0.0, 0.0, 0.0};
+  EXPECT_EQ(semexp_ros::ignoredDistortion(ci), "");  // all zero: rectified
+  ci.D = {0.1, -0.25, 0.001, 0.0, 0.05};
+  EXPECT_EQ(semexp_ros::ignoredDistortion(ci), "distortion_model 'plumb_bob' with D = [0.1, -0.25, 0.001, 0, 0.05]");
+  semexp_ros::CameraInfoInput in;
+  semexp::PinholeCamera cam;
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(in.accept(ci, 0.1, 10.0, cam), "");  // used: K only
+  EXPECT_EQ(in.distortion_warnings(), 1);
+}
+
+TEST(CheckSaveDirectory, OnlyAbsolutePathsWithoutDotDot) {
+  EXPECT_EQ(semexp_ros::checkSaveDirectory("/tmp/run1/map"), "");
+  EXPECT_EQ(semexp_ros::checkSaveDirectory("/tmp/run1/./map/"), "");
+  EXPECT_EQ(semexp_ros::checkSaveDirectory("map"), "directory 'map' must be an absolute path");
+  EXPECT_EQ(semexp_ros::checkSaveDirectory(""), "directory '' must be an absolute path");
+  EXPECT_EQ(semexp_ros::checkSaveDirectory("/tmp/run1/../../etc"), "directory '/tmp/run1/../../etc' must not contain '..'");
+  EXPECT_EQ(semexp_ros::checkSaveDirectory("/tmp/a..b"), "");  // a name with dots is fine
+}

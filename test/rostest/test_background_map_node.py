@@ -144,6 +144,13 @@ class TestBackgroundMapNode(unittest.TestCase):
         m = rospy.ServiceProxy("/background_map/get_map", GetMap)().map
         self.assertTrue(m.full)
         self.assertGreater(len(m.coords), 0)
+        self.assertEqual(len(m.uniform_coords), 0)  # not asked for compact: every block in full
+        # Compact: the same blocks, those of one value as that value (3 coordinates and 1 byte each).
+        c = rospy.ServiceProxy("/background_map/get_map", GetMap)(compact=True).map
+        self.assertGreater(len(c.uniform_values), 0)
+        self.assertEqual(len(c.uniform_coords), 3 * len(c.uniform_values))
+        self.assertEqual(len(c.coords) + len(c.uniform_coords), len(m.coords))
+        self.assertEqual(len(c.payload) + 512 * len(c.uniform_values), len(m.payload))
         g = rospy.ServiceProxy("/background_map/compute_gains", ComputeGains)(
             positions=[Point(0.0, 0.0, 0.0)], width=36, height=10, max_depth_m=[])
         self.assertEqual(len(g.hit_depth), 1)

@@ -89,6 +89,22 @@ class NodesUp(unittest.TestCase):
             self.assertIn(param, proc.stdout, "%s did not name %s:\n%s" % (node, param, proc.stdout))
             self.assertIn("invalid parameter", proc.stdout)
 
+    def test_depth_history_image_size_must_be_the_planners(self):
+        config = os.path.join(rospkg.RosPack().get_path(PKG), "config", "semantic.yaml")
+        with open(config) as f:
+            params = yaml.safe_load(f)
+        for key, param, other in (("width", "depth_history/width", "planner/raycast_width"),
+                                  ("height", "depth_history/height", "planner/raycast_height")):
+            bad = yaml.safe_load(yaml.safe_dump(params))
+            bad["depth_history"][key] += 2
+            rospy.set_param("/bad_depth_history_size", bad)
+            exe = roslib.packages.find_node(PKG, "depth_history_node")[0]
+            proc = subprocess.run([exe, "__name:=bad_depth_history_size"], stdout=subprocess.PIPE,
+                                  stderr=subprocess.STDOUT, timeout=60, universal_newlines=True)
+            self.assertEqual(proc.returncode, 2, proc.stdout)
+            self.assertIn("invalid parameter '%s'" % param, proc.stdout)
+            self.assertIn(other, proc.stdout)
+
     def test_missing_intrinsics_stop_node(self):
         exe = roslib.packages.find_node(PKG, "planner_node")[0]
         proc = subprocess.run([exe, "__name:=bare_planner"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,

@@ -12,7 +12,8 @@ import tf2_ros
 from geometry_msgs.msg import TransformStamped
 from sensor_msgs.msg import Image
 
-from semantic_exploration.msg import Detection, Detections, FrameIntegrated, MatchedDetections, ObjectArray
+from semantic_exploration.msg import Detection, Detections, DropCounts, FrameIntegrated, MatchedDetections, \
+    ObjectArray
 
 PKG = "semantic_exploration"
 W, H = 320, 240
@@ -57,8 +58,16 @@ class BadInput(unittest.TestCase):
         rospy.Subscriber("/matched_detections", MatchedDetections, on_matched, queue_size=10)
         rospy.Subscriber("/frame_integrated", FrameIntegrated, on_done, queue_size=10)
         rospy.Subscriber("/object_map/objects", ObjectArray, on_objects, queue_size=10)
+        cls.drops = {}
+
+        def on_drops(m):
+            with cls.lock:
+                cls.drops[m.node.lstrip("/")] = dict(zip(m.reasons, m.counts))
+
+        rospy.Subscriber("/dropped_input", DropCounts, on_drops, queue_size=10)
         # Camera 2 m in front of a wall (depth 2 m everywhere), looking along world +x.
         cls.stop = False
+        cls.camera_xyz = (0.0, 0.0, 1.0)  # where the broadcast puts the camera, world, m
 
         def broadcast():
             r = rospy.Rate(50)
@@ -67,7 +76,8 @@ class BadInput(unittest.TestCase):
                 t.header.stamp = rospy.Time.now()
                 t.header.frame_id = "world"
                 t.child_frame_id = "camera"
-                t.transform.translation.z = 1.0
+                tr = t.transform.translation
+                tr.x, tr.y, tr.z = cls.camera_xyz
                 # optical frame: z forward = world x, x right = world -y, y down = world -z
                 q = (-0.5, 0.5, -0.5, 0.5)  # x, y, z, w
                 t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z, t.transform.rotation.w = q
@@ -99,9 +109,11 @@ class BadInput(unittest.TestCase):
         det.header.stamp = stamp
         det.header.frame_id = "camera"
         det.instance_image = image(instances.astype(np.uint16), "16UC1", stamp)
-        for iid, cid in detections:
+        for det_ in detections:
+            iid, cid = det_[:2]
+            name = det_[2] if len(det_) > 2 else ("chair" if cid == CHAIR else "?")
             d = Detection()
-            d.instance_id, d.class_id, d.class_name, d.confidence = iid, cid, "chair" if cid == CHAIR else "?", 0.9
+            d.instance_id, d.class_id, d.class_name, d.confidence = iid, cid, name, 0.9
             det.detections.append(d)
         self.pub_depth.publish(image(depth, "32FC1", stamp))
         self.pub_rgb.publish(image(rgb, "rgb8", stamp))
@@ -162,6 +174,49 @@ class BadInput(unittest.TestCase):
         self.assertEqual([o.id for o in objects.objects], [1])
         self.assertAlmostEqual(objects.objects[0].centroid.x, 1.5, delta=0.03)
         self.assertAlmostEqual(objects.objects[0].centroid.z, 1.0, delta=0.1)
+
+    def test_camera_far_from_the_origin_is_refused(self):
+        # UTM-like coordinates: the object maps cannot hold surfaces there (20-bit voxel keys, float positions).
+        type(self).camera_xyz = (5e5, 5e6, 1.0)
+        time.sleep(0.5)  # the frame's pose must not be interpolated from the origin pose
+        matched, done = self.send(self.chair_mask(), [(1, CHAIR)])
+        type(self).camera_xyz = (0.0, 0.0, 1.0)
+        self.assertIsNotNone(matched, "instance_matching answered no frame from (5e5, 5e6, 1)")
+        self.assertEqual(len(matched.detections), 0)
+        self.assertIsNotNone(done, "object_map answered no frame from (5e5, 5e6, 1)")
+        self.assertFalse(done.integrated)
+        end = time.monotonic() + 3
+        while time.monotonic() < end:
+            with self.lock:
+                counts = {n: self.drops.get(n, {}).get("out_of_bounds", 0) for n in ("instance_matching", "object_map")}
+            if all(counts.values()):
+                break
+            time.sleep(0.05)
+        self.assertEqual(counts, {"instance_matching": 1, "object_map": 1})
+        time.sleep(0.5)
+        with self.lock:
+            objects = self.objects
+        # No object was made from that frame (test methods run in name order: the chair of the first is there).
+        self.assertTrue(objects is None or all(abs(o.centroid.x) < 100 for o in objects.objects))
+
+    def test_class_name_must_match_class_id(self):
+        # Class id 1 is "chair" here; a detector with another class table names it "table".
+        matched, done = self.send(self.chair_mask(), [(1, CHAIR, "table")])
+        self.assertIsNotNone(matched)
+        self.assertEqual(len(matched.detections), 0)
+        self.assertFalse(np.frombuffer(matched.instance_image.data, np.uint16).any())  # its pixels cleared
+        self.assertTrue(done.integrated)
+        end = time.monotonic() + 3
+        while time.monotonic() < end:
+            with self.lock:
+                n = self.drops.get("instance_matching", {}).get("class_mismatch", 0)
+            if n:
+                break
+            time.sleep(0.05)
+        self.assertEqual(n, 1)
+        # An empty class_name is not checked (the id alone names the class).
+        matched, done = self.send(self.chair_mask(), [(1, CHAIR, "")])
+        self.assertEqual(len(matched.detections), 1)
 
 
 if __name__ == "__main__":

@@ -21,10 +21,29 @@ struct PinholeCamera {
   double d_min_m = 0.1;    ///< nearest valid depth, m
   double d_max_m = 10.0;   ///< farthest valid depth, m
 
+  /// Largest accepted image: nodes allocate per-pixel buffers (rays, empty
+  /// instance images) from width x height before any depth frame confirms
+  /// it, so a camera_info of 100000 x 100000 px must not get that far.
+  static constexpr int kMaxSidePx = 8192;                ///< width and height, px
+  static constexpr long kMaxPixels = 4096L * 4096L;      ///< width * height, px (16.8 Mpx)
+
+  /// "" if an image of width x height px (both > 0) is within the caps above, else which cap it breaks.
+  static std::string checkSize(long width_px, long height_px) {
+    if (width_px > kMaxSidePx || height_px > kMaxSidePx)
+      return "must be <= " + std::to_string(kMaxSidePx) + " px a side (PinholeCamera::kMaxSidePx), got " +
+             std::to_string(width_px) + " x " + std::to_string(height_px);
+    if (width_px * height_px > kMaxPixels)
+      return "width x height must be <= " + std::to_string(kMaxPixels) + " px (PinholeCamera::kMaxPixels), got " +
+             std::to_string(width_px) + " x " + std::to_string(height_px);
+    return "";
+  }
+
   /// Throws ConfigError naming the first bad field (prefixed with `ns`).
   void validate(const std::string& ns = "camera/") const {
     require(width > 0, ns + "width", "must be > 0 (missing intrinsics?)");
     require(height > 0, ns + "height", "must be > 0 (missing intrinsics?)");
+    const std::string size = checkSize(width, height);
+    require(size.empty(), ns + (width > kMaxSidePx || height <= kMaxSidePx ? "width" : "height"), size);
     require(std::isfinite(fx) && fx > 0, ns + "fx", "must be a finite focal length > 0 px");
     require(std::isfinite(fy) && fy > 0, ns + "fy", "must be a finite focal length > 0 px");
     require(std::isfinite(cx) && cx >= 0 && cx < width, ns + "cx", "must lie inside the image");

@@ -28,8 +28,10 @@ struct Mesh {
 };
 
 /// Writes `mesh` as a binary little-endian PLY (vertex x y z float, red green
-/// blue uchar; face vertex_indices uchar/uint). Returns false on I/O failure.
-bool writePly(const Mesh& mesh, const std::string& path);
+/// blue uchar; face vertex_indices uchar/uint), atomically (writeFileAtomically:
+/// a failed write leaves the previous file). Returns false on I/O failure and
+/// then says why in `error` (if given).
+bool writePly(const Mesh& mesh, const std::string& path, std::string* error = nullptr);
 
 /// Reads a PLY written by writePly (binary little-endian or ASCII with the
 /// same element layout). Returns false if the file is not in that layout.

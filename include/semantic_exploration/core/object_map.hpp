@@ -15,8 +15,10 @@
 #include <utility>
 #include <vector>
 
+#include "semantic_exploration/core/bounds.hpp"
 #include "semantic_exploration/core/camera.hpp"
 #include "semantic_exploration/core/class_table.hpp"
+#include "semantic_exploration/core/object_id_pool.hpp"
 #include "semantic_exploration/core/object_map_config.hpp"
 #include "semantic_exploration/core/spherical_grid.hpp"
 #include "semantic_exploration/core/tsdf.hpp"
@@ -55,7 +57,7 @@ struct FrameIntegration {
   std::uint32_t dropped_unknown_class = 0;   ///< detections with a class id outside the class table
   std::uint32_t dropped_not_of_interest = 0; ///< detections of classes without object maps
   std::uint32_t dropped_unknown_object = 0;  ///< detections matched to an object id the map does not have
-  std::uint32_t dropped_full = 0;            ///< new objects refused: all 65535 ids used
+  std::uint32_t dropped_full = 0;            ///< new objects refused: no free 16-bit id (see ObjectIdPool)
   /// new objects not kept: under min_new_object_pixels mask pixels with depth outside other objects, or no
   /// surface voxel after integration
   std::uint32_t dropped_empty = 0;
@@ -73,8 +75,14 @@ class ObjectMap {
   const ObjectMapConfig& config() const { return config_; }
   const ClassTable& classes() const { return classes_; }
 
+  /// "" if every class's object map can hold all surfaces seen from inside
+  /// `bounds` up to `range_m` away (TsdfParams::maxCoordinate_m at the class's
+  /// resolution), else why not. Camera poses outside the bounds must then be
+  /// refused by the caller.
+  std::string checkBounds(const Bounds& bounds, double range_m) const;
+
   /// New empty object of class `class_id` at the class's resolution; 0 if
-  /// the class is unknown or no 16-bit id is left.
+  /// the class is unknown or no 16-bit id is free (see ObjectIdPool).
   std::uint32_t createObject(int class_id);
   const MappedObject* object(std::uint32_t id) const;
   const std::map<std::uint32_t, std::unique_ptr<MappedObject>>& objects() const { return objects_; }
@@ -133,7 +141,7 @@ class ObjectMap {
   ObjectMapConfig config_;
   ClassTable classes_;
   std::map<std::uint32_t, std::unique_ptr<MappedObject>> objects_;
-  std::uint32_t next_id_ = 1;
+  ObjectIdPool ids_;  ///< ids of erased and merged objects come back (see ObjectIdPool)
   std::uint64_t version_ = 0;
 };
 

@@ -22,6 +22,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <functional>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -51,8 +52,15 @@ struct MapBlocksData {
   std::uint8_t encoding = kEncodingLogOddsI8;
   std::vector<std::int32_t> coords;  ///< 3 per block (x, y, z) block coordinates
   std::vector<std::int8_t> payload;  ///< block_size^3 per block, x fastest, then y, then z
+  /// Blocks whose voxels all hold one value (a compact snapshot): 3 coordinates and one value each.
+  std::vector<std::int32_t> uniform_coords;
+  std::vector<std::int8_t> uniform_values;
 
   std::size_t blockCount() const { return coords.size() / 3; }
+  /// Bytes of coordinates and values: what the message carries besides its header.
+  std::size_t byteSize() const {
+    return 4 * (coords.size() + uniform_coords.size()) + payload.size() + uniform_values.size();
+  }
 };
 
 /// Result of one integrate() call.
@@ -184,14 +192,20 @@ class OccupancyMap {
   /// Number of cells changed since the last takeUpdate().
   std::size_t pendingUpdateCount() const { return dirty_cells_.size(); }
   /// The whole known map (full = true), sequence = last taken update's.
-  MapBlocksData snapshot() const;
+  /// With `uniform_as_values`, a block whose voxels all hold one value is sent
+  /// as that value (uniform_coords / uniform_values) instead of block_size^3
+  /// copies: the snapshot grows with the map's detail, not its known volume
+  /// (1e9 known free voxels would otherwise pass roscpp's 1 GB message limit).
+  MapBlocksData snapshot(bool uniform_as_values = false) const;
   std::uint64_t lastSequence() const { return sequence_; }
   /// Overwrites the cells named in `blocks` (dropping everything first if
   /// blocks.full). Colour and distance of those cells are reset. Returns
   /// false (and changes nothing) if geometry or encoding does not match.
   bool applyBlocks(const MapBlocksData& blocks);
 
-  /// Own binary format; load(save(m)) saves to identical bytes.
+  /// Own binary format; load(save(m)) saves to identical bytes. The three
+  /// writers below replace `path` atomically (writeFileAtomically) and throw
+  /// std::runtime_error saying why if they cannot; the previous file stays.
   void save(const std::string& path) const;
   static OccupancyMap load(const std::string& path);
   /// OctoMap binary tree (.bt) with every known voxel, via liboctomap.
@@ -219,6 +233,7 @@ class OccupancyMap {
   static constexpr std::uint8_t kVisited = 64;        ///< scratch of updateFrontiers()
 
  private:
+  void saveTo(std::ostream& f) const;  ///< the own format's bytes (save())
   struct FrameCtx;
   struct Level {
     Eigen::Vector3i dims;

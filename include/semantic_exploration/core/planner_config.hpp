@@ -7,6 +7,7 @@
 #include <string>
 
 #include "semantic_exploration/core/config_error.hpp"
+#include "semantic_exploration/core/spherical_grid.hpp"
 
 namespace semexp {
 
@@ -19,6 +20,8 @@ struct DepthHistoryConfig {
     require(std::isfinite(cell_size_m) && cell_size_m > 0, ns + "cell_size_m", "must be > 0 m");
     require(width > 0, ns + "width", "must be > 0");
     require(height > 0, ns + "height", "must be > 0");
+    require(SphericalGrid::checkRequest(1, width, height).empty(), ns + "width",
+            SphericalGrid::checkRequest(1, width, height));
   }
 };
 
@@ -84,6 +87,9 @@ struct PlannerConfig {
     require(std::isfinite(clearance_margin_m) && clearance_margin_m >= 0, ns + "clearance_margin_m", "must be >= 0 m");
     require(raycast_width > 0, ns + "raycast_width", "must be > 0");
     require(raycast_height > 0, ns + "raycast_height", "must be > 0");
+    // One gain request per iteration: n_candidates images of raycast_width x raycast_height.
+    require(SphericalGrid::checkRequest(n_candidates, raycast_width, raycast_height).empty(), ns + "raycast_width",
+            SphericalGrid::checkRequest(n_candidates, raycast_width, raycast_height) + " (with n_candidates)");
     require(std::isfinite(time_budget_s) && time_budget_s > 0, ns + "time_budget_s", "must be > 0 s");
     require(std::isfinite(time_limit_s) && time_limit_s >= 0, ns + "time_limit_s", "must be >= 0 s");
     require(max_failed_iterations > 0, ns + "max_failed_iterations", "must be > 0");

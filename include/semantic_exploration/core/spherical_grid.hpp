@@ -20,6 +20,32 @@ struct SphericalGrid {
   int height = 10;            ///< elevation samples
   double vfov_rad = 0.8575;   ///< vertical extent, rad (camera vfov; 2 atan(120 / 262.5) by default)
 
+  /// Largest batch of 360-degree images a node computes on request
+  /// (compute_gains, get_masks). Such a call runs on the node's only thread:
+  /// integration waits meanwhile, and the lockstep simulator with it. The
+  /// planner asks for n_candidates x raycast_width x raycast_height = 20 x 36
+  /// x 10 = 7200 rays (about 10 ms); the ray cap is 36 times that.
+  static constexpr long kMaxPixels = 360L * 180L;      ///< width * height of one image, px (1 degree steps)
+  static constexpr long kMaxPositions = 1024;          ///< positions per request
+  static constexpr long kMaxRays = 1L << 18;           ///< positions * width * height per request (262144)
+
+  /// "" if `positions` images of width x height stay within the limits
+  /// above (and width, height > 0), else which limit the request breaks.
+  static std::string checkRequest(long positions, long width, long height) {
+    if (width <= 0 || height <= 0) return "width and height must be > 0";
+    if (width * height > kMaxPixels)
+      return std::to_string(width) + " x " + std::to_string(height) + " px per image is over the limit of " +
+             std::to_string(kMaxPixels) + " px (SphericalGrid::kMaxPixels)";
+    if (positions > kMaxPositions)
+      return std::to_string(positions) + " positions are over the limit of " + std::to_string(kMaxPositions) +
+             " per request (SphericalGrid::kMaxPositions)";
+    if (positions * width * height > kMaxRays)
+      return std::to_string(positions) + " positions x " + std::to_string(width * height) + " px = " +
+             std::to_string(positions * width * height) + " rays are over the limit of " + std::to_string(kMaxRays) +
+             " per request (SphericalGrid::kMaxRays)";
+    return "";
+  }
+
   void validate(const std::string& ns) const {
     require(width > 0, ns + "width", "must be > 0");
     require(height > 0, ns + "height", "must be > 0");

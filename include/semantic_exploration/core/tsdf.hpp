@@ -82,6 +82,12 @@ struct TsdfParams {
   double behind_surface_m = 0.04;
   int block_size = 8;          ///< voxels per block edge (power of two)
   double max_weight = 100.0;   ///< weight cap (one unit per observation at the surface)
+
+  /// Global voxel indices must stay within +-kMaxVoxelIndex on every axis:
+  /// meshing keys voxel edges with 20 bits per axis (10.5 km at 2 cm).
+  static constexpr int kMaxVoxelIndex = 1 << 19;
+  /// Largest |world coordinate| whose voxels the map can hold, m.
+  double maxCoordinate_m() const { return resolution_m * (kMaxVoxelIndex - 1); }
 };
 
 /// First foreground surface crossing along a ray.

@@ -56,6 +56,7 @@ class BackgroundMapNode {
   bool save(semantic_exploration::SaveMap::Request& req, semantic_exploration::SaveMap::Response& res);
 
   semexp::PinholeCamera camera_;
+  CameraInfoInput camera_input_;  ///< validates camera_info against the cap and the depth frames
   semexp::Bounds bounds_;
   semexp::BackgroundMapConfig config_;
   semexp::ExplorationConfig exploration_;

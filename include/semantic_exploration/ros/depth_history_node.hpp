@@ -11,8 +11,10 @@
 /// (GetHistoryMasks).
 ///
 /// The history's image layout uses the camera's vertical field of view, so
-/// it is built from the first camera_info (or, if a depth image comes first
-/// and matches the `camera/*` parameters, from those) and kept for the run.
+/// it is built at the first depth frame whose size matches the latest
+/// camera_info (or, before any camera_info, the `camera/*` parameters) and
+/// kept for the run. A camera_info over the size cap or of another size
+/// than the depth frames is dropped ("bad_camera_info").
 
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -41,6 +43,8 @@ class DepthHistoryNode {
 
   semexp::DepthHistoryConfig config_;
   semexp::PinholeCamera camera_;
+  bool have_info_ = false;        ///< camera_ came from a camera_info
+  CameraInfoInput camera_input_;  ///< validates camera_info against the cap and the depth frames
   semexp::Bounds bounds_;
   FrameNames frames_;
   std::unique_ptr<PoseSource> poses_;  ///< T_WC at image stamps (tf2, gap-guarded)

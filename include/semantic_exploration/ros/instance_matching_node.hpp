@@ -9,8 +9,8 @@
 /// core/instance_matching.hpp); publishes `matched_detections`
 /// (MatchedDetections) with masks under min_mask_pixels removed. Detections
 /// of classes without object maps are left out; bad input (sizes, encodings,
-/// unknown class ids, masks of unlisted instance ids, missing tf, render
-/// service down) is dropped with a counter and a throttled log line, and the
+/// unknown class ids, a class_name that is not class_id's, masks of unlisted instance ids, missing tf, a camera
+/// outside `bounds`, render service down) is dropped with a counter and a throttled log line, and the
 /// frame goes on without detections (so object_map still handles it).
 
 #include <message_filters/subscriber.h>
@@ -39,7 +39,8 @@ class InstanceMatchingNode {
 
   void infoCallback(const sensor_msgs::CameraInfoConstPtr& msg);
   void frameCallback(const semantic_exploration::DetectionsConstPtr& msg, const sensor_msgs::ImageConstPtr& depth);
-  void publishEmpty(const std_msgs::Header& header);
+  /// Publishes the frame without detections (an all-zero instance image of width_px x height_px).
+  void publishEmpty(const std_msgs::Header& header, int width_px, int height_px);
   /// Calls object_map/render_instances; on a failure reconnects and tries once more.
   bool callRender(semantic_exploration::RenderInstances& srv);
 
@@ -47,8 +48,10 @@ class InstanceMatchingNode {
   semexp::MatchingConfig config_;
   semexp::ClassTable classes_;
   semexp::PinholeCamera camera_;
+  semexp::Bounds bounds_;  ///< camera poses outside are refused ("out_of_bounds")
   sensor_msgs::CameraInfo camera_info_;
   bool have_info_ = false;
+  CameraInfoInput camera_input_;  ///< validates camera_info against the cap and the depth frames
   FrameNames frames_;
   std::unique_ptr<PoseSource> poses_;  ///< T_WC at image stamps (tf2, gap-guarded)
   message_filters::Subscriber<semantic_exploration::Detections> detections_sub_;

@@ -49,6 +49,43 @@ sensor_msgs::Image floatImageMsg(const std_msgs::Header& header, const std::vect
 std::string cameraFromInfo(const sensor_msgs::CameraInfo& info, double d_min_m, double d_max_m,
                            semexp::PinholeCamera& camera);
 
+/// "<what> at (x, y, z) lies outside the map bounds", for out_of_bounds drops.
+std::string outOfBounds(const std::string& what, const Eigen::Vector3d& p_W);
+
+/// "" if `directory` may be saved into (SaveMap), else why not: it must be an
+/// absolute path without ".." components, so that a save never lands
+/// relative to a node's working directory (~/.ros under roslaunch) or
+/// outside the directory it names.
+std::string checkSaveDirectory(const std::string& directory);
+
+/// Describes the lens distortion in `info` that the nodes ignore (they take
+/// images as rectified and use K only): "" when D is empty or all zero, else
+/// e.g. "distortion_model 'plumb_bob' with D = [0.1, -0.2, 0, 0, 0]".
+std::string ignoredDistortion(const sensor_msgs::CameraInfo& info);
+
+/// camera_info -> camera model for one node: K and the size are validated
+/// (the size capped by PinholeCamera::kMaxSidePx / kMaxPixels), the size is
+/// checked against the depth frames seen so far, and distortion is warned
+/// about once per node, naming what is ignored.
+class CameraInfoInput {
+ public:
+  /// "" and `camera` set if `info` is usable, else why (the caller counts a
+  /// "bad_camera_info" drop and keeps its previous camera).
+  std::string accept(const sensor_msgs::CameraInfo& info, double d_min_m, double d_max_m,
+                     semexp::PinholeCamera& camera);
+  /// Records the size of a depth frame; a camera_info of another size is refused from then on.
+  void depthFrame(int width_px, int height_px) {
+    depth_width_px_ = width_px;
+    depth_height_px_ = height_px;
+  }
+  /// Distortion warnings logged so far (at most 1).
+  int distortion_warnings() const { return distortion_warnings_; }
+
+ private:
+  int depth_width_px_ = 0, depth_height_px_ = 0;  ///< 0 until a depth frame arrived
+  int distortion_warnings_ = 0;
+};
+
 /// Stamps of the transforms on /tf (the dynamic ones), to refuse a pose that
 /// tf2 would interpolate across a gap in the pose stream: tf2 interpolates
 /// linearly between the two samples around a stamp however far apart they

@@ -11,7 +11,8 @@
 /// id = object id), both at most every object_map/publish_period_s,
 /// and `frame_integrated` after every frame; serves `~render_instances`,
 /// `~compute_gains` and `~save`. Bad input (sizes, encodings, unknown classes
-/// or objects, missing tf) is dropped with a counter and a throttled log line.
+/// or objects, missing tf, a camera outside `bounds`) is dropped with a
+/// counter and a throttled log line.
 
 #include <message_filters/subscriber.h>
 #include <message_filters/sync_policies/approximate_time.h>
@@ -55,6 +56,8 @@ class ObjectMapNode {
   semexp::ClassTable classes_;
   semexp::ExplorationConfig exploration_;
   semexp::PinholeCamera camera_;
+  semexp::Bounds bounds_;  ///< camera poses and gain positions outside are refused ("out_of_bounds")
+  CameraInfoInput camera_input_;  ///< validates camera_info against the cap and the depth frames
   FrameNames frames_;
   std::unique_ptr<PoseSource> poses_;  ///< T_WC at image stamps (tf2, gap-guarded)
   std::unique_ptr<semexp::ObjectMap> map_;

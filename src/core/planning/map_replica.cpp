@@ -28,6 +28,11 @@ MapReplica::Result MapReplica::apply(const Update& u) {
                   std::to_string(u.payload_size) + " payload bytes";
     return Result::kBadInput;
   }
+  if (u.uniform_coord_count != 3 * u.uniform_value_count) {
+    last_error_ = "uniform coords/values sizes disagree: " + std::to_string(u.uniform_coord_count) + " coords, " +
+                  std::to_string(u.uniform_value_count) + " values";
+    return Result::kBadInput;
+  }
   if (!u.full) {
     if (sequence_ != 0 && u.sequence <= sequence_) return Result::kStale;
     if (u.sequence != sequence_ + 1) return Result::kGap;
@@ -57,6 +62,16 @@ MapReplica::Result MapReplica::apply(const Update& u) {
         ++blk.occupied;
     }
   }
+  for (std::size_t b = 0; b < u.uniform_value_count; ++b) {
+    const Eigen::Vector3i c(u.uniform_coords[3 * b], u.uniform_coords[3 * b + 1], u.uniform_coords[3 * b + 2]);
+    Block& blk = blocks_[key(c)];
+    blk.values.clear();
+    blk.values.shrink_to_fit();
+    blk.uniform = static_cast<std::int8_t>(u.uniform_values[b]);
+    const int n = static_cast<int>(voxels);
+    blk.unknown = blk.uniform == kUnknownValue ? n : 0;
+    blk.occupied = blk.uniform != kUnknownValue && blk.uniform >= free_below_ ? n : 0;
+  }
   sequence_ = u.sequence;
   return Result::kApplied;
 }
@@ -68,7 +83,7 @@ MapReplica::State MapReplica::state(const Eigen::Vector3d& p) const {
   const auto it = blocks_.find(key(b));
   if (it == blocks_.end()) return State::kUnknown;
   const Eigen::Vector3i l = v - b * block_size_;
-  const std::int8_t x = it->second.values[(static_cast<std::size_t>(l.z()) * block_size_ + l.y()) * block_size_ + l.x()];
+  const std::int8_t x = it->second.at((static_cast<std::size_t>(l.z()) * block_size_ + l.y()) * block_size_ + l.x());
   if (x == kUnknownValue) return State::kUnknown;
   return x < free_below_ ? State::kFree : State::kOccupied;
 }
@@ -99,7 +114,7 @@ bool MapReplica::sphere_check(const Eigen::Vector3d& p, double r, bool allow_unk
         for (int z = from.z(); z <= to.z(); ++z)
           for (int y = from.y(); y <= to.y(); ++y)
             for (int x = from.x(); x <= to.x(); ++x) {
-              const std::int8_t v = blk.values[(static_cast<std::size_t>(z) * bs + y) * bs + x];
+              const std::int8_t v = blk.at((static_cast<std::size_t>(z) * bs + y) * bs + x);
               const bool bad = v == kUnknownValue ? !allow_unknown : v >= free_below_;
               if (!bad) continue;
               const Eigen::Vector3d c =

@@ -113,6 +113,7 @@ class MavConfig:
     position_tolerance_m: float = 0.05   # goal reached when this close, m
     yaw_tolerance_rad: float = 0.05      # and yaw this close, rad
     speed_tolerance_mps: float = 0.05    # and this slow, m/s
+    max_path_poses: int = 1000       # longest accepted planner/path (planner paths have tens); longer: rejected unread
 
     def validate(self, ns="mav/"):
         for name, unit in (("v_max_mps", "m/s"), ("omega_max_radps", "rad/s"), ("a_max_mps2", "m/s^2"),
@@ -121,6 +122,8 @@ class MavConfig:
                            ("speed_tolerance_mps", "m/s")):
             v = getattr(self, name)
             _req(_finite(v) and v > 0, ns + name, "must be a finite value > 0 %s" % unit)
+        _req(isinstance(self.max_path_poses, int) and 1 <= self.max_path_poses <= 1000000, ns + "max_path_poses",
+             "must be an integer in [1, 1000000]")
 
 
 @dataclass

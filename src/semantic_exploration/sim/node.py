@@ -57,7 +57,8 @@ from semantic_exploration.msg import Detection, Detections, DropCounts, FrameInt
 from .config import ConfigError, SimConfig, from_dict
 from .faults import FaultInjector
 from .scene import SceneError, export_ground_truth
-from .simulator import PathError, Simulator, load_simulator, quaternion_from_matrix, waypoints_from_poses
+from .simulator import (PathError, Simulator, load_simulator, path_pose_count, quaternion_from_matrix,
+                        waypoints_from_poses)
 
 NS = 1_000_000_000
 
@@ -127,7 +128,8 @@ class MavSimNode:
         self._reported: Dict[str, int] = {}
         self._pending_path = None
         self._requests: "queue.Queue" = queue.Queue()
-        rospy.Subscriber("planner/path", Path, self._on_path, queue_size=5)
+        # Raw: a path's length is checked before it is deserialised (1e6 poses would hold the GIL for seconds).
+        rospy.Subscriber("planner/path", rospy.AnyMsg, self._on_path, queue_size=5)
         rospy.Subscriber("frame_integrated", FrameIntegrated, self._on_integrated, queue_size=50)
         rospy.Subscriber("~load_scene", String, lambda m: self._requests.put(m.data), queue_size=2)
         self._hidden = list(c.detector.hidden_object_ids)
@@ -142,22 +144,38 @@ class MavSimNode:
         self._publish_fault_counts(0)
 
     # ------------------------------------------------------------- callbacks
-    def _on_path(self, msg: Path) -> None:
+    def _on_path(self, raw: rospy.AnyMsg) -> None:
+        """Checks a path once, here: the physics loop only swaps it in."""
+        limit = self.cfg.mav.max_path_poses
+        try:
+            n = path_pose_count(raw._buff)
+        except PathError as e:
+            self._reject("path: %s" % e)
+            return
+        if n > limit:
+            self._reject("path of %d poses: more than mav/max_path_poses = %d" % (n, limit))
+            return
+        try:
+            msg = Path().deserialize(raw._buff)
+        except Exception as e:  # genpy raises several types for a malformed buffer
+            self._reject("path of %d poses: cannot deserialise it (%s)" % (n, e))
+            return
         frame = msg.header.frame_id.lstrip("/")
         if frame and frame != self.cfg.frames.world:
             self._reject("path in frame '%s' (expected '%s')" % (frame, self.cfg.frames.world))
             return
+        sim = self.sim
         try:
             wps = waypoints_from_poses([((p.pose.position.x, p.pose.position.y, p.pose.position.z),
                                          (p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z,
                                           p.pose.orientation.w)) for p in msg.poses])
-            if self.sim is not None:
-                wps = self.sim.check_path(wps)
+            if sim is not None:
+                wps = sim.check_path(wps)
         except PathError as e:
             self._reject("path of %d poses: %s" % (len(msg.poses), e))
             return
         with self._lock:
-            self._pending_path = wps
+            self._pending_path = (wps, sim)  # checked against `sim`
 
     def _on_hide(self, msg: UInt32MultiArray) -> None:
         self._hidden = [int(i) for i in msg.data]
@@ -356,6 +374,10 @@ class MavSimNode:
             except (SceneError, ConfigError) as e:
                 rospy.logerr("mav_sim: rejected scene '%s': %s; keeping the current scene", path, e)
                 continue
+            except Exception as e:  # a reader's defect must not end the simulator's loop either
+                rospy.logerr("mav_sim: rejected scene '%s': unexpected %s: %s; keeping the current scene",
+                             path, type(e).__name__, e)
+                continue
             self._install(sim)
             changed = True
         return changed
@@ -383,10 +405,11 @@ class MavSimNode:
                 f = c.frames
                 self.tf_static.sendTransform(self._transform(sim.T_BC, f.body, f.camera, t_ns))
             with self._lock:
-                path, self._pending_path = self._pending_path, None
-            if path is not None:
+                pending, self._pending_path = self._pending_path, None
+            if pending is not None:
+                path, checked_by = pending
                 try:
-                    sim.set_path(path)
+                    sim.set_path(path, checked=checked_by is sim)
                 except PathError as e:  # checked against a scene that was replaced since
                     self._reject("path: %s" % e)
                 else:

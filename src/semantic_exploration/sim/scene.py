@@ -481,6 +481,10 @@ def load_mesh_with_labels(mesh_path: str, labels_path: str, up_axis: str = "z") 
         ply = read_ply(mesh_path)
         fc, vx = ply.get("face", {}), ply.get("vertex", {})
         if "object_id" in fc:
+            if not all(k in vx for k in ("x", "y", "z")):
+                raise SceneError("%s: vertex element lacks x/y/z" % mesh_path)
+            if "vertex_indices" not in fc and "vertex_index" not in fc:
+                raise SceneError("%s: face element lacks vertex_indices" % mesh_path)
             v = _to_z_up(np.stack([vx["x"], vx["y"], vx["z"]], 1).astype(np.float64), up_axis)
             faces = fc.get("vertex_indices", fc.get("vertex_index")).astype(np.int64).reshape(-1, 3)
             obj = fc["object_id"].astype(np.int64)

@@ -5,6 +5,7 @@ simulator does lives here so that it is testable without a ROS master.
 """
 
 import math
+import struct
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -50,6 +51,20 @@ def quaternion_from_matrix(R: np.ndarray) -> Tuple[float, float, float, float]:
 
 def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def path_pose_count(buff: bytes) -> int:
+    """Number of poses in a serialised nav_msgs/Path, read from its header
+    alone (uint32 seq, stamp, frame_id string, then the poses' uint32 count),
+    so that an oversized path is refused before anything is deserialised.
+    Raises PathError if the buffer is too short to hold that much."""
+    if len(buff) < 16:
+        raise PathError("truncated message (%d bytes)" % len(buff))
+    (n_frame,) = struct.unpack_from("<I", buff, 12)
+    if len(buff) < 20 + n_frame:
+        raise PathError("truncated message (%d bytes, frame_id of %d)" % (len(buff), n_frame))
+    (count,) = struct.unpack_from("<I", buff, 16 + n_frame)
+    return count
 
 
 def waypoints_from_poses(poses: Sequence[Tuple[Sequence[float], Sequence[float]]]) -> List[Tuple[float, ...]]:
@@ -122,7 +137,11 @@ class Simulator:
 
     # ------------------------------------------------------------------ path
     def check_path(self, waypoints: Sequence[Sequence[float]]) -> List[Tuple[float, ...]]:
-        """Returns the waypoints if acceptable, else raises PathError naming the bad waypoint."""
+        """Returns the waypoints if acceptable, else raises PathError naming the bad waypoint
+        (or the length limit mav/max_path_poses)."""
+        if len(waypoints) > self.cfg.mav.max_path_poses:
+            raise PathError("%d poses are more than mav/max_path_poses = %d"
+                            % (len(waypoints), self.cfg.mav.max_path_poses))
         lo, hi = self.bounds
         out = []
         for k, w in enumerate(waypoints):
@@ -138,8 +157,10 @@ class Simulator:
             out.append(tuple(float(v) for v in w))
         return out
 
-    def set_path(self, waypoints: Sequence[Sequence[float]]) -> None:
-        self.follower.set_path(self.check_path(waypoints))
+    def set_path(self, waypoints: Sequence[Sequence[float]], checked: bool = False) -> None:
+        """Follows `waypoints`; `checked`: check_path() of this simulator already accepted them
+        (the node checks a path once, on arrival, not again on the physics loop)."""
+        self.follower.set_path(waypoints if checked else self.check_path(waypoints))
 
     # ------------------------------------------------------------------ step
     def step(self, dt: float) -> Dict:
@@ -173,7 +194,9 @@ def load_simulator(cfg: SimConfig, scene_file: Optional[str] = None, labels: str
         cfg.scene.labels = labels
     try:
         return Simulator.from_config(cfg)
-    except (OSError, ValueError) as e:
-        if isinstance(e, (SceneError, ConfigError)):
-            raise
-        raise SceneError(str(e))
+    except (SceneError, ConfigError):
+        raise
+    except (OSError, ValueError, KeyError, IndexError, AttributeError, TypeError) as e:
+        # A malformed file that the readers' own checks missed (e.g. a PLY face element without
+        # vertex indices): a rejected scene, never an exception out of the simulator's loop.
+        raise SceneError("malformed scene (%s: %s)" % (type(e).__name__, e))

@@ -7,7 +7,9 @@
 /// Payload encoding (MapBlocks ENCODING_LOG_ODDS_I8): one int8 per voxel, x
 /// fastest, then y, then z; log-odds * 10 rounded; -128 = unknown. A voxel is
 /// free when its value is < free_below (default 0, i.e. log-odds < 0), else
-/// occupied. Missing blocks are unknown.
+/// occupied. Missing blocks are unknown. A block whose voxels all hold one
+/// value may come as that value alone (Update::uniform_*, a compact GetMap
+/// snapshot) and is kept as one value.
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -39,6 +41,12 @@ class MapReplica {
     std::size_t coord_count = 0;                         ///< number of int32 values in coords
     const std::uint8_t* payload = nullptr;               ///< block_size^3 per block
     std::size_t payload_size = 0;
+    /// Uniform blocks (MapBlocks uniform_coords / uniform_values): 3 coordinates and one value each,
+    /// applied after the blocks above.
+    const std::int32_t* uniform_coords = nullptr;
+    std::size_t uniform_coord_count = 0;  ///< number of int32 values in uniform_coords
+    const std::uint8_t* uniform_values = nullptr;
+    std::size_t uniform_value_count = 0;
   };
 
   explicit MapReplica(int free_below = 0) : free_below_(free_below) {}
@@ -63,9 +71,11 @@ class MapReplica {
 
  private:
   struct Block {
-    std::vector<std::int8_t> values;
+    std::vector<std::int8_t> values;  ///< block_size^3, or empty: every voxel holds `uniform`
+    std::int8_t uniform = 0;
     int unknown = 0;   ///< voxels with -128
     int occupied = 0;  ///< voxels >= free_below
+    std::int8_t at(std::size_t i) const { return values.empty() ? uniform : values[i]; }
   };
   static std::uint64_t key(const Eigen::Vector3i& b);
   bool sphere_check(const Eigen::Vector3d& p, double r, bool allow_unknown) const;

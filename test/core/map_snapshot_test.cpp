@@ -1,0 +1,156 @@
+// GetMap snapshots: a compact snapshot sends each block whose voxels hold
+// one value as that value, so a large free map resyncs in a few bytes per
+// block, and decodes (OccupancyMap::applyBlocks, MapReplica) to exactly the
+// map a full snapshot gives.
+#include <gtest/gtest.h>
+
+#include <opencv2/core.hpp>
+
+#include "planning_test_map.hpp"
+#include "semantic_exploration/core/occupancy_map.hpp"
+#include "semantic_exploration/core/planning/map_replica.hpp"
+
+namespace semexp {
+namespace {
+
+MapReplica::Update toUpdate(const MapBlocksData& m) {
+  MapReplica::Update u;
+  u.sequence = m.sequence;
+  u.full = m.full;
+  u.resolution_m = m.resolution_m;
+  u.block_size = m.block_size;
+  u.origin_W = m.origin_m;
+  u.coords = m.coords.data();
+  u.coord_count = m.coords.size();
+  u.payload = reinterpret_cast<const std::uint8_t*>(m.payload.data());
+  u.payload_size = m.payload.size();
+  u.uniform_coords = m.uniform_coords.data();
+  u.uniform_coord_count = m.uniform_coords.size();
+  u.uniform_values = reinterpret_cast<const std::uint8_t*>(m.uniform_values.data());
+  u.uniform_value_count = m.uniform_values.size();
+  return u;
+}
+
+TEST(MapSnapshot, ALargeFreeMapResyncsInAFewBytesPerBlock) {
+  // 50 x 50 x 10 m at 4 cm: 3.9e8 voxels in 763,000 blocks, 400 MB in full (100 x 100 x 10 m, four
+  // times that, passed roscpp's 1 GB message limit).
+  Bounds b;
+  b.min_m = {0.0, 0.0, 0.0};
+  b.max_m = {50.0, 50.0, 10.0};
+  const BackgroundMapConfig cfg;  // 4 cm, 8^3 blocks
+  OccupancyMap map(cfg, b);
+  MapBlocksData all = map.snapshot(true);
+  const Eigen::Vector3i nb = ((map.extentMax() - map.extentMin()) / 0.32).array().round().cast<int>();
+  ASSERT_EQ(nb, Eigen::Vector3i(157, 157, 32));  // ceil(50 / 0.32), ceil(10 / 0.32)
+  const int nx = nb.x(), ny = nb.y(), nz = nb.z();
+  for (int z = 0; z < nz; ++z)
+    for (int y = 0; y < ny; ++y)
+      for (int x = 0; x < nx; ++x) {
+        all.uniform_coords.insert(all.uniform_coords.end(), {x, y, z});
+        all.uniform_values.push_back(-20);  // free at the clamp
+      }
+  ASSERT_TRUE(map.applyBlocks(all));
+  const std::size_t blocks = static_cast<std::size_t>(nx) * ny * nz;
+  EXPECT_NEAR(map.freeVolume(), blocks * 0.32 * 0.32 * 0.32, 1.0);
+  const MapBlocksData snap = map.snapshot(true);
+  EXPECT_EQ(snap.blockCount(), 0u);
+  EXPECT_EQ(snap.uniform_values.size(), blocks);
+  EXPECT_EQ(snap.byteSize(), 13 * blocks);  // 12 bytes of coordinates and 1 value per block: 10 MB
+  EXPECT_LT(snap.byteSize() * 39, blocks * 512);  // in full: 400 MB of payload alone
+  // The replica keeps them as one value each too, and reads them back.
+  MapReplica replica;
+  ASSERT_EQ(replica.apply(toUpdate(snap)), MapReplica::Result::kApplied);
+  EXPECT_EQ(replica.block_count(), blocks);
+  EXPECT_EQ(replica.state({25.02, 25.02, 5.02}), MapReplica::State::kFree);
+  EXPECT_TRUE(replica.sphere_free({25.0, 25.0, 5.0}, 2.0));
+  EXPECT_FALSE(replica.sphere_free({25.0, 25.0, 0.1}, 0.2));  // below z = 0: unknown
+}
+
+TEST(MapSnapshot, CompactAndFullSnapshotsDecodeToTheSameMap) {
+  // A room seen from three poses: free space (mostly uniform blocks), walls, a table, unknown beyond.
+  Bounds b;
+  b.min_m = {0.0, 0.0, 0.0};
+  b.max_m = {5.0, 4.0, 2.4};
+  semexp_test::TestGrid room(b, 0.04, semexp_test::TestGrid::kOccupied);
+  room.fill_box({0.2, 0.2, 0.1}, {4.8, 3.8, 2.3}, semexp_test::TestGrid::kFree);
+  room.fill_box({2.0, 1.0, 0.1}, {2.6, 1.6, 0.9}, semexp_test::TestGrid::kOccupied);
+  PinholeCamera cam;
+  cam.width = 160;
+  cam.height = 120;
+  cam.fx = cam.fy = 131.25;
+  cam.cx = 79.5;
+  cam.cy = 59.5;
+  const BackgroundMapConfig cfg;
+  OccupancyMap map(cfg, b);
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d p(1.2 + 0.6 * k, 2.0, 1.2);
+    const double yaw = 2.1 * k;
+    Eigen::Matrix3d R;
+    R.col(0) = Eigen::Vector3d(std::sin(yaw), -std::cos(yaw), 0.0);
+    R.col(1) = -Eigen::Vector3d::UnitZ();
+    R.col(2) = Eigen::Vector3d(std::cos(yaw), std::sin(yaw), 0.0);
+    cv::Mat depth(cam.height, cam.width, CV_32FC1);
+    for (int v = 0; v < cam.height; ++v)
+      for (int u = 0; u < cam.width; ++u) {
+        const Eigen::Vector3d r = cam.ray_C(static_cast<float>(u), static_cast<float>(v)).cast<double>();
+        const double t = room.first_hit(p, R * r.normalized(), cam.d_max_m * r.norm());
+        depth.at<float>(v, u) = std::isfinite(t) ? static_cast<float>(t / r.norm()) : 0.f;
+      }
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = R;
+    T.translation() = p;
+    map.integrate(depth, cv::Mat(), cam, T);
+  }
+  map.markFreeSphere({2.5, 2.0, 1.6}, 0.6);  // a uniform free region as the start leaves it
+  const MapBlocksData full = map.snapshot(false), compact = map.snapshot(true);
+  ASSERT_GT(compact.uniform_values.size(), 50u);
+  ASSERT_GT(compact.blockCount(), 50u);
+  EXPECT_EQ(compact.blockCount() + compact.uniform_values.size(), full.blockCount());
+  EXPECT_LT(compact.byteSize(), full.byteSize());
+  // Decoded by a map: the same full snapshot, byte for byte.
+  OccupancyMap copy(cfg, b);
+  ASSERT_TRUE(copy.applyBlocks(compact));
+  const MapBlocksData again = copy.snapshot(false);
+  EXPECT_EQ(again.coords, full.coords);
+  EXPECT_EQ(again.payload, full.payload);
+  // Decoded by replicas: the same state at every voxel centre, the same sphere answers.
+  MapReplica from_full, from_compact;
+  ASSERT_EQ(from_full.apply(toUpdate(full)), MapReplica::Result::kApplied);
+  ASSERT_EQ(from_compact.apply(toUpdate(compact)), MapReplica::Result::kApplied);
+  int differ = 0, free = 0, occupied = 0;
+  for (double z = 0.02; z < 2.4; z += 0.04)
+    for (double y = 0.02; y < 4.0; y += 0.04)
+      for (double x = 0.02; x < 5.0; x += 0.04) {
+        const MapReplica::State s = from_full.state({x, y, z});
+        differ += s != from_compact.state({x, y, z});
+        free += s == MapReplica::State::kFree;
+        occupied += s == MapReplica::State::kOccupied;
+      }
+  EXPECT_EQ(differ, 0);
+  EXPECT_GT(free, 100000);
+  EXPECT_GT(occupied, 1000);
+  for (double x = 0.3; x < 4.8; x += 0.1)
+    for (double r : {0.1, 0.3, 0.6}) {
+      const Eigen::Vector3d p(x, 2.0, 1.2);
+      EXPECT_EQ(from_full.sphere_free(p, r), from_compact.sphere_free(p, r)) << x << " " << r;
+      EXPECT_EQ(from_full.sphere_not_occupied(p, r), from_compact.sphere_not_occupied(p, r)) << x << " " << r;
+    }
+}
+
+TEST(MapSnapshot, MismatchedUniformListsAreRefused) {
+  MapBlocksData m;
+  m.full = true;
+  m.sequence = 1;
+  m.resolution_m = 0.04;
+  m.block_size = 8;
+  m.uniform_coords = {0, 0, 0, 1, 0, 0};
+  m.uniform_values = {-20};  // two blocks, one value
+  MapReplica replica;
+  EXPECT_EQ(replica.apply(toUpdate(m)), MapReplica::Result::kBadInput);
+  OccupancyMap map{BackgroundMapConfig(), Bounds()};
+  m.origin_m = map.extentMin();
+  EXPECT_FALSE(map.applyBlocks(m));
+}
+
+}  // namespace
+}  // namespace semexp
