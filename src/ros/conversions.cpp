@@ -105,6 +105,10 @@ std::string toMapUpdate(const semantic_exploration::MapBlocks& msg, semexp::MapR
   u.coord_count = msg.coords.size();
   u.payload = msg.payload.data();
   u.payload_size = msg.payload.size();
+  u.uniform_coords = msg.uniform_coords.data();
+  u.uniform_coord_count = msg.uniform_coords.size();
+  u.uniform_values = msg.uniform_values.data();
+  u.uniform_value_count = msg.uniform_values.size();
   return "";
 }
 

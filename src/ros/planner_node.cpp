@@ -77,7 +77,11 @@ bool PlannerNode::applyBlocks(const semantic_exploration::MapBlocks& msg, bool& 
   }
   switch (replica_.apply(u)) {
     case semexp::MapReplica::Result::kApplied: return true;
-    case semexp::MapReplica::Result::kStale: return false;
+    case semexp::MapReplica::Result::kStale:
+      // A sequence below the replica's: background_map restarted and counts
+      // from 1 again; its blocks must not be merged onto the old map.
+      gap = u.sequence < replica_.sequence();
+      return false;
     case semexp::MapReplica::Result::kGap: gap = true; return false;
     case semexp::MapReplica::Result::kBadInput: drops_.drop("bad_map_update", replica_.last_error()); return false;
   }
@@ -98,8 +102,9 @@ bool PlannerNode::resync() {
 void PlannerNode::mapUpdateCallback(const semantic_exploration::MapBlocksConstPtr& msg) {
   bool gap = false;
   if (!applyBlocks(*msg, gap) && gap) {
-    ROS_WARN("planner: map update %lu after %lu: resyncing", static_cast<unsigned long>(msg->sequence),
-             static_cast<unsigned long>(replica_.sequence()));
+    ROS_WARN("planner: map update %lu after %lu (%s): resyncing", static_cast<unsigned long>(msg->sequence),
+             static_cast<unsigned long>(replica_.sequence()),
+             msg->sequence < replica_.sequence() ? "the map restarted" : "updates were lost");
     resync();
   }
 }

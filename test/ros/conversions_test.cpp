@@ -137,6 +137,13 @@ TEST(ToMapUpdate, PointsIntoTheMessageAndRefusesUnknownEncodings) {
   EXPECT_EQ(u.coords, m.coords.data());
   EXPECT_EQ(u.coord_count, 3u);
   EXPECT_EQ(u.payload_size, 8u);
+  m.uniform_coords = {4, 5, 6};
+  m.uniform_values = {200};
+  EXPECT_EQ(toMapUpdate(m, u), "");
+  EXPECT_EQ(u.uniform_coords, m.uniform_coords.data());
+  EXPECT_EQ(u.uniform_coord_count, 3u);
+  EXPECT_EQ(u.uniform_value_count, 1u);
+  EXPECT_EQ(u.uniform_values[0], 200);
   m.encoding = 9;
   EXPECT_NE(toMapUpdate(m, u).find("encoding 9"), std::string::npos);
 }

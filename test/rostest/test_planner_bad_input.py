@@ -83,8 +83,8 @@ class PlannerBadInputTest(unittest.TestCase):
         rospy.Subscriber("/planner/status", ExplorationStatus, lambda m: cls.status.append(m))
         cls.gains_srv = rospy.Service("/background_map/compute_gains", ComputeGains, cls.compute_gains)
         rospy.Service("/depth_history/get_masks", GetHistoryMasks, cls.get_masks)
-        rospy.Service("/background_map/get_map", GetMap,
-                      lambda _req: GetMapResponse(map=blocks_msg(cls.grid, 7, True)))
+        cls.get_map_calls = 0
+        rospy.Service("/background_map/get_map", GetMap, cls.get_map)
         cls.map_pub = rospy.Publisher("/background_map/map_update", MapBlocks, queue_size=5, latch=True)
         cls.frontier_pub = rospy.Publisher("/background_map/frontiers", PointCloud2, queue_size=1, latch=True)
         cls.tf = tf2_ros.StaticTransformBroadcaster()
@@ -107,6 +107,12 @@ class PlannerBadInputTest(unittest.TestCase):
         t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = p
         t.transform.rotation.w = 1.0
         cls.tf.sendTransform([t])
+
+    @classmethod
+    def get_map(cls, _req):
+        with cls.lock:
+            cls.get_map_calls += 1
+        return GetMapResponse(map=blocks_msg(cls.grid, 7, True))
 
     @classmethod
     def compute_gains(cls, req):
@@ -242,6 +248,18 @@ class PlannerBadInputTest(unittest.TestCase):
         finally:
             self.frontier_pub.publish(good)
             sub.unregister()
+
+    def test_3b_a_restarted_map_is_resynced(self):
+        """background_map restarted: its updates count from 1 again. An update
+        below the replica's sequence is not ignored as stale (its blocks would
+        be merged onto the old map) but triggers a get_map resync."""
+        self.map_pub.publish(blocks_msg(self.grid, 100, True))
+        time.sleep(1.0)
+        with self.lock:
+            before = self.get_map_calls
+        self.map_pub.publish(blocks_msg(self.grid, 1, False))
+        self.assertTrue(self.wait_for(lambda: self.get_map_calls > before, 10.0),
+                        "no get_map resync after a sequence restarting at 1")
 
     def test_4_start_in_occupied_space_is_reported_until_termination(self):
         start = (2.1, 1.0, 1.0)  # inside the wall
