@@ -118,8 +118,7 @@ def evaluate(out, gt, classes, saved):
                                "observable_fraction": ev.observable_fraction.get(m.gt_id)} for m in ev.matches]
         occ = [f for f in saved.get("background_map", {}).get("files", []) if f.endswith("occupied.ply")]
         if occ:
-            b = metrics.evaluate_background(metrics.load_ground_truth(gt["gt_dir"]), metrics.read_ply_vertices(occ[0]),
-                                            classes)
+            b = metrics.evaluate_background(metrics.load_ground_truth(gt["gt_dir"]), metrics.read_ply_vertices(occ[0]))
             res["background"] = {"rmse_m": b.rmse_m, "completeness": b.completeness,
                                  "n_reconstructed": b.n_reconstructed, "observable_fraction": b.observable_fraction}
     except Exception as e:  # a failed evaluation must not lose the rest of the report
