@@ -99,6 +99,30 @@ def _free_cells(vertices: np.ndarray, faces: np.ndarray, res: float, margin_cell
     return ~occ, lo
 
 
+def _clear_cells(free: np.ndarray, res: float, radius_m: float) -> np.ndarray:
+    """Cells whose centre's distance to the nearest non-free cell centre, less
+    half a cell, is at least radius_m: the same answer, float for float, as
+    ndimage.distance_transform_edt(free) * res - 0.5 * res >= radius_m, from
+    squared distances computed one axis after the other over offsets up to K
+    cells only. Where the nearest non-free cell lies within K cells the
+    squared distance is exact; otherwise it, and the true one, exceed K^2,
+    and K is chosen so that any such cell is clear."""
+    k_max = int(np.ceil((radius_m + 0.5 * res) / res)) + 1
+    big = np.int32(3 * (k_max + 1) ** 2)
+    d2 = np.where(free, big, np.int32(0)).astype(np.int32)
+    for axis in range(3):
+        out = d2.copy()
+        n = d2.shape[axis]
+        for k in range(1, min(k_max, n - 1) + 1):
+            src = [slice(None)] * 3
+            dst = [slice(None)] * 3
+            for a, b in ((slice(k, None), slice(None, -k)), (slice(None, -k), slice(k, None))):
+                src[axis], dst[axis] = a, b
+                np.minimum(out[tuple(dst)], d2[tuple(src)] + np.int32(k * k), out=out[tuple(dst)])
+        d2 = np.minimum(out, big)
+    return np.sqrt(d2.astype(np.float64)) * res - 0.5 * res >= radius_m
+
+
 class Observability:
     """Observability test of surface points in one scene (triangle soup in the world frame)."""
 
@@ -118,7 +142,7 @@ class Observability:
         # Cells touched by a surface, then each cell centre's distance to the
         # nearest touched cell; a surface lies within about half a cell of that one's centre.
         free, origin = _free_cells(vertices, faces, res)
-        clear = ndimage.distance_transform_edt(free) * res - 0.5 * res >= self.view.radius_m
+        clear = _clear_cells(free, res, self.view.radius_m)
         s = np.floor((np.asarray(start_xyz[:3], np.float64) - origin) / res).astype(int)
         if np.any(s < 0) or np.any(s >= clear.shape) or not clear[tuple(s)]:
             raise SceneError("start %s is not at least %.3f m from every surface"
@@ -179,13 +203,18 @@ class Observability:
             return out
         # Depth is along the optical axis: the ray makes angle |elev - pitch| with it (yaw centred on p).
         cos_axis = np.cos(np.arcsin(np.clip(u[:, 2], -1, 1)) - self.view.pitch_rad)
-        t_cam = self._first_camera_position(p, u, self.view.d_min_m / cos_axis, self.view.d_max_m / cos_axis)
+        t0, t1 = self.view.d_min_m / cos_axis, self.view.d_max_m / cos_axis
+        # The first surface along the ray (from 1 mm off p) first: a camera
+        # position beyond it cannot see p, so the search stops there. p is seen
+        # iff the first camera position comes before that surface, which is
+        # what an occlusion test of the segment to it would answer; most rays
+        # from a surface point hit another surface within centimetres.
+        o = (p + eps * u).astype(np.float32)
+        t_hit = self._embree.run(o, u.astype(np.float32), dists=(t1 - eps).astype(np.float32), query="DISTANCE")
+        blocked = t_hit < (t1 - eps).astype(np.float32)
+        t_cam = self._first_camera_position(p, u, t0, np.where(blocked, np.minimum(t1, eps + t_hit), t1))
         ok = np.isfinite(t_cam)
-        if np.any(ok):
-            o = (p[ok] + eps * u[ok]).astype(np.float32)
-            free = self._embree.run(o, u[ok].astype(np.float32), dists=(t_cam[ok] - eps).astype(np.float32),
-                                    query="OCCLUDED") == -1
-            ok[np.flatnonzero(ok)[~free]] = False
+        ok[ok] = ~blocked[ok] | (t_hit[ok] > (t_cam[ok] - eps).astype(np.float32))
         return ok
 
     def mask(self, points: np.ndarray, normals: Optional[np.ndarray] = None, chunk: int = 16384,
@@ -216,20 +245,37 @@ class Observability:
             out[a:a + chunk] = seen
         return out
 
-
     def mask_by_probes(self, points: np.ndarray, point_faces: np.ndarray, probes: np.ndarray,
                        probe_faces: np.ndarray, probe_normals: Optional[np.ndarray] = None) -> np.ndarray:
         """Cheaper mask for large surfaces: the observability of a coarser probe
         sample, carried to each point from the nearest probe on the same face
         (face indices of one mesh; every face needs a probe)."""
         from scipy.spatial import cKDTree
+        from .metrics import spatial_order
         seen = self.mask(probes, probe_normals)
+        out = np.zeros(len(points), bool)
         if len(points) == 0:
-            return np.zeros(0, bool)
-        # A fourth coordinate keeps faces 1 km apart, so the nearest probe shares the face.
-        tree = cKDTree(np.hstack([probes, 1e3 * probe_faces[:, None].astype(np.float64)]))
-        _, i = tree.query(np.hstack([points, 1e3 * point_faces[:, None].astype(np.float64)]))
-        return seen[i]
+            return out
+        # Points and probes grouped by face. A face whose probes agree passes
+        # their answer on (nearest or not: most faces, such as a wall's outside);
+        # on the others each point takes its nearest probe's.
+        p_order = np.argsort(point_faces, kind="stable")
+        q_order = np.argsort(probe_faces, kind="stable")
+        q_faces, q_start, q_count = np.unique(probe_faces[q_order], return_index=True, return_counts=True)
+        q_seen = np.add.reduceat(seen[q_order].astype(np.int64), q_start)
+        faces, p_start, p_count = np.unique(point_faces[p_order], return_index=True, return_counts=True)
+        k = np.minimum(np.searchsorted(q_faces, faces), len(q_faces) - 1)
+        if np.any(q_faces[k] != faces):
+            raise ValueError("mask_by_probes: faces %s have points but no probe"
+                             % faces[q_faces[k] != faces][:5].tolist())
+        q_start, q_count, n_seen = q_start[k], q_count[k], q_seen[k]
+        out[p_order] = np.repeat(n_seen == q_count, p_count)
+        for f in np.flatnonzero((n_seen > 0) & (n_seen < q_count)):
+            pi = p_order[p_start[f]:p_start[f] + p_count[f]]
+            pi = pi[spatial_order(points[pi])]
+            qi = q_order[q_start[f]:q_start[f] + q_count[f]]
+            out[pi] = seen[qi[cKDTree(probes[qi]).query(points[pi])[1]]]
+        return out
 
 
 def scene_of_ground_truth(gt: dict):

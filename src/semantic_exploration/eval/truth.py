@@ -1,0 +1,155 @@
+"""A ground truth prepared once for scoring any number of reconstructions.
+
+Sampling the true surfaces, building their k-d trees and deciding which
+samples are observable (`observable`) cost seconds to tens of seconds per
+scene and do not depend on the reconstruction; a run's time series scores
+many map snapshots against the same ground truth. `GroundTruthIndex` does
+that work once, lazily (object matching alone needs neither the background
+nor the observability), and `metrics.evaluate_objects` /
+`metrics.evaluate_background` are one-shot uses of it.
+"""
+import os
+from typing import Dict, List, Optional
+
+import numpy as np
+
+from . import metrics
+from .metrics import (COMPLETENESS_THRESHOLD_M, ObjectEvaluation, ObjectMatch, SurfaceScore, face_normals,
+                      kd_tree, read_ply_vertices, sample_surface_faces, score_surface, within)
+
+
+class TruthSurface:
+    """Samples of one true surface, their k-d tree, and (when asked) which are observable."""
+
+    def __init__(self, samples: np.ndarray, visible_fn):
+        self.samples = samples
+        self._visible_fn = visible_fn
+        self._visible = None
+        self._tree = None
+
+    @property
+    def tree(self):
+        if self._tree is None:
+            self._tree = kd_tree(self.samples)
+        return self._tree
+
+    @property
+    def visible(self) -> np.ndarray:
+        """(N,) bool over samples: the ones completeness counts."""
+        if self._visible is None:
+            self._visible = self._visible_fn()
+        return self._visible
+
+
+class GroundTruthIndex:
+    """Scores reconstructions against one exported ground truth (`gt`: metrics.load_ground_truth).
+
+    classes: the classes of interest (the objects evaluate_objects matches).
+    Object surfaces are sampled object_spacing_m apart, the whole scene
+    (evaluate_background) background_spacing_m apart with observability
+    computed at probes probe_spacing_m apart. observable_only=False counts
+    every sample in completeness; view is the observable.ViewModel.
+    """
+
+    def __init__(self, gt: Dict, classes: List[str], observable_only: bool = True, view=None,
+                 object_spacing_m: float = 0.005, background_spacing_m: float = 0.01,
+                 probe_spacing_m: float = 0.1, threshold_m: float = COMPLETENESS_THRESHOLD_M, seed: int = 0):
+        self.gt = gt
+        self.gt_objects = [o for o in gt["objects"] if o["class"] in classes]
+        self.observable_only = observable_only
+        self.view = view
+        self.object_spacing_m, self.background_spacing_m = object_spacing_m, background_spacing_m
+        self.probe_spacing_m, self.threshold_m, self.seed = probe_spacing_m, threshold_m, seed
+        self._objects: Optional[Dict[int, TruthSurface]] = None
+        self._background: Optional[TruthSurface] = None
+
+    def _path(self, rel: str) -> str:
+        return os.path.join(self.gt["dir"], rel)
+
+    def _obs(self):
+        return metrics._observability(self.gt, self.observable_only, self.view)
+
+    @property
+    def objects(self) -> Dict[int, TruthSurface]:
+        """Ground-truth id -> its surface, for the objects of interest."""
+        if self._objects is None:
+            self._objects = {}
+            for o in self.gt_objects:
+                path = self._path(o["mesh"])
+                pts, faces = sample_surface_faces(path, self.object_spacing_m, self.seed)
+
+                def visible(path=path, pts=pts, faces=faces):
+                    obs = self._obs()
+                    return obs.mask(pts, face_normals(path, faces)) if obs else np.ones(len(pts), bool)
+                self._objects[o["id"]] = TruthSurface(pts, visible)
+        return self._objects
+
+    @property
+    def background(self) -> TruthSurface:
+        """Every surface of the scene (see metrics.evaluate_background)."""
+        if self._background is None:
+            meshes = [self.gt["background_mesh"]] + [o["mesh"] for o in self.gt["objects"]]
+            sampled = [sample_surface_faces(self._path(m), self.background_spacing_m, self.seed) for m in meshes]
+
+            def visible():
+                obs = self._obs()
+                if obs is None:
+                    return np.ones(sum(len(p) for p, _ in sampled), bool)
+                out = []
+                for m, (pts, faces) in zip(meshes, sampled):
+                    probes, probe_faces = sample_surface_faces(self._path(m), self.probe_spacing_m, self.seed,
+                                                               face_centres=True)
+                    out.append(obs.mask_by_probes(pts, faces, probes, probe_faces,
+                                                  face_normals(self._path(m), probe_faces)))
+                return np.concatenate(out)
+            self._background = TruthSurface(np.vstack([p for p, _ in sampled]), visible)
+        return self._background
+
+    def match(self, class_name: str, vertices: np.ndarray):
+        """(ground-truth id or None, fraction of the vertices within the
+        threshold of it): the object of class_name that most vertices lie on,
+        matched if that is more than half of them."""
+        best, best_frac = None, 0.0
+        if len(vertices):
+            for g in self.gt_objects:
+                if g["class"] != class_name:
+                    continue
+                frac = float(np.mean(within(self.objects[g["id"]].tree, vertices, self.threshold_m)))
+                if frac > best_frac:
+                    best, best_frac = g["id"], frac
+        return (best if best_frac > 0.5 else None), best_frac
+
+    def found(self, rec: Dict) -> List[int]:
+        """Ground-truth ids some map object of `rec` (metrics.load_reconstruction) matches;
+        no observability needed."""
+        out = set()
+        for o in rec.get("objects", []):
+            gid, _ = self.match(o["class_name"], read_ply_vertices(os.path.join(rec["dir"], o["mesh"])))
+            if gid is not None:
+                out.add(gid)
+        return sorted(out)
+
+    def evaluate_objects(self, rec: Dict, score: bool = True) -> ObjectEvaluation:
+        """See metrics.evaluate_objects."""
+        surfaces = self.objects
+        ev = ObjectEvaluation(n_ground_truth=len(self.gt_objects))
+        if score:
+            ev.observable_fraction = {k: float(np.mean(s.visible)) for k, s in surfaces.items()}
+        found = set()
+        for o in rec.get("objects", []):
+            verts = read_ply_vertices(os.path.join(rec["dir"], o["mesh"]))
+            gid, frac = self.match(o["class_name"], verts)
+            m = ObjectMatch(o["id"], o["class_name"], gid, frac)
+            if gid is not None:
+                s = surfaces[gid]
+                if score:
+                    m.score = score_surface(verts, s.samples, self.threshold_m, s.tree, s.visible)
+                found.add(gid)
+            ev.matches.append(m)
+        ev.found_gt_ids = sorted(found)
+        return ev
+
+    def evaluate_background(self, occupied_points: np.ndarray) -> SurfaceScore:
+        """See metrics.evaluate_background."""
+        s = self.background
+        return score_surface(occupied_points, s.samples, self.threshold_m, s.tree, s.visible)
