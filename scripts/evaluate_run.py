@@ -32,6 +32,9 @@ def main(argv=None):
     ap.add_argument("--objects", default="", help="saved object map directory (with objects.json)")
     ap.add_argument("--period-s", type=float, default=1.0, help="time-series row period, s of bag time")
     ap.add_argument("--no-eval", action="store_true", help="skip scoring saved maps against ground truth")
+    ap.add_argument("--start", type=float, nargs=4, default=None, metavar=("X", "Y", "Z", "YAW"),
+                    help="the run's start pose (m, rad) where the ground truth has none (its observable surface "
+                    "depends on it)")
     args = ap.parse_args(argv)
 
     sys.path.insert(0, HERE)
@@ -44,6 +47,8 @@ def main(argv=None):
     with open(os.path.join(args.gt_dir, "objects.json")) as f:
         gt = json.load(f)
     gt["gt_dir"] = os.path.abspath(args.gt_dir)
+    if args.start:
+        gt["start"] = list(args.start)
     gt_objs = [o for o in gt["objects"] if o["class"] in args.classes]
     log, rows, info = read_bag(args.bag, gt_objs, args.period_s)
     if not rows:

@@ -36,11 +36,17 @@ def _import_package():
 
 
 def prepare_scene(args, out):
-    """Generates the scene (unless given) and exports ground truth; returns (ply, gt doc)."""
+    """Generates the scene (unless given) and exports ground truth; returns (ply, gt doc).
+
+    The ground truth's start is the pose the simulator will start from
+    (--start, else the scene's, else the simulator's rule for a scene without
+    one), which main() hands to the simulator too: the evaluation needs it to
+    tell observable surface from the rest."""
     _import_package()
     from semantic_exploration.sim.classes import DEFAULT_CLASS_NAMES
     from semantic_exploration.sim.generator import generate
     from semantic_exploration.sim.scene import export_ground_truth, load_scene, save_habitat
+    from semantic_exploration.sim.simulator import start_pose_of
     gt_dir = os.path.join(out, "ground_truth")
     if args.scene:
         scene = load_scene(args.scene)
@@ -48,9 +54,23 @@ def prepare_scene(args, out):
     else:
         scene = generate(args.seed, args.size, None)
         ply = save_habitat(scene, os.path.join(out, "scene"))
-    doc = export_ground_truth(scene, gt_dir, DEFAULT_CLASS_NAMES)
+    start = start_pose_of(scene, getattr(args, "start", None))
+    doc = export_ground_truth(scene, gt_dir, DEFAULT_CLASS_NAMES, start=start)
     doc["gt_dir"] = gt_dir
     return ply, doc
+
+
+def launch_command(args, ply, overrides, port, start):
+    """The roslaunch command line of a mission (sim.launch on a private master at port)."""
+    return ["roslaunch", "-p", str(port), "semantic_exploration", "sim.launch",
+            "mode:=" + args.mode, "scene:=" + ply, "overrides:=" + overrides,
+            "classes_of_interest:=[%s]" % ", ".join(args.classes),
+            "start_pose:=[%s]" % ", ".join(repr(float(v)) for v in start),
+            "lockstep:=" + ("false" if args.no_lockstep else "true"),
+            "real_time_factor:=%g" % args.real_time_factor, "rviz:=" + ("true" if args.rviz else "false"),
+            "sim_overrides:=" + (os.path.abspath(args.sim_overrides) if args.sim_overrides else ""),
+            "bag:=" + (os.path.abspath(args.record_bag) if args.record_bag else ""),
+            "output:=log"]
 
 
 def write_overrides(path, gt, classes, margin_m=0.5):
@@ -101,14 +121,19 @@ def rviz_screenshot(out, env, gt, timeout_s=60.0):
 
 
 def evaluate(out, gt, classes, saved):
-    """Final figures from the saved meshes and map (empty where a map was not saved)."""
+    """Final figures from the saved meshes and map (empty where a map was not saved).
+    gt["start"] stands in for a ground truth exported without one."""
     from semantic_exploration.eval import metrics
+    from semantic_exploration.eval.truth import GroundTruthIndex
     res = {}
     try:
+        doc = metrics.load_ground_truth(gt["gt_dir"])
+        if not doc.get("start") and gt.get("start"):
+            doc["start"] = list(gt["start"])
+        index = GroundTruthIndex(doc, classes)
         rec_dir = saved.get("object_map", {}).get("dir") or os.path.join(out, "objects")
         if saved.get("object_map", {}).get("success") and os.path.exists(os.path.join(rec_dir, "objects.json")):
-            ev = metrics.evaluate_objects(metrics.load_ground_truth(gt["gt_dir"]),
-                                          metrics.load_reconstruction(rec_dir), classes)
+            ev = index.evaluate_objects(metrics.load_reconstruction(rec_dir))
             res["found"] = len(ev.found_gt_ids)
             res["ground_truth"] = ev.n_ground_truth
             res["objects"] = [{"map_id": m.map_id, "class": m.map_class, "gt_id": m.gt_id,
@@ -118,7 +143,7 @@ def evaluate(out, gt, classes, saved):
                                "observable_fraction": ev.observable_fraction.get(m.gt_id)} for m in ev.matches]
         occ = [f for f in saved.get("background_map", {}).get("files", []) if f.endswith("occupied.ply")]
         if occ:
-            b = metrics.evaluate_background(metrics.load_ground_truth(gt["gt_dir"]), metrics.read_ply_vertices(occ[0]))
+            b = index.evaluate_background(metrics.read_ply_vertices(occ[0]))
             res["background"] = {"rmse_m": b.rmse_m, "completeness": b.completeness,
                                  "n_reconstructed": b.n_reconstructed, "observable_fraction": b.observable_fraction}
     except Exception as e:  # a failed evaluation must not lose the rest of the report
@@ -231,10 +256,12 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
     return summary
 
 
-def main(argv=None):
+def parse_args(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--mode", choices=["semantic", "classic"], default="semantic")
     ap.add_argument("--scene", default="", help="scene file; default: generate a house")
+    ap.add_argument("--start", type=float, nargs=4, default=None, metavar=("X", "Y", "Z", "YAW"),
+                    help="start pose (m, rad); default: the scene's, else the centre of its box at 1.2 m")
     ap.add_argument("--seed", type=int, default=0, help="generator seed")
     ap.add_argument("--size", type=float, nargs=3, default=[10.0, 8.0, 3.0], metavar=("X", "Y", "H"),
                     help="generated house size, m (default 10 8 3)")
@@ -256,7 +283,11 @@ def main(argv=None):
                     help="skip scoring the saved meshes and map against ground truth (minutes on a loaded machine)")
     ap.add_argument("--sim-overrides", default="", help="YAML for the simulator loaded after config/sim.yaml "
                     "(e.g. faults: tf_gap_s, detector_scale, frame_drop_fraction)")
-    args = ap.parse_args(argv)
+    return ap.parse_args(argv)
+
+
+def main(argv=None):
+    args = parse_args(argv)
 
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
@@ -275,14 +306,7 @@ def main(argv=None):
     env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOSTNAME="127.0.0.1")
     env.setdefault("ROS_HOME", os.path.join(out, "ros_home"))
     os.environ.update(ROS_MASTER_URI=env["ROS_MASTER_URI"], ROS_HOSTNAME="127.0.0.1", ROS_HOME=env["ROS_HOME"])
-    cmd = ["roslaunch", "-p", str(port), "semantic_exploration", "sim.launch",
-           "mode:=" + args.mode, "scene:=" + ply, "overrides:=" + overrides,
-           "classes_of_interest:=[%s]" % ", ".join(args.classes),
-           "lockstep:=" + ("false" if args.no_lockstep else "true"),
-           "real_time_factor:=%g" % args.real_time_factor, "rviz:=" + ("true" if args.rviz else "false"),
-           "sim_overrides:=" + (os.path.abspath(args.sim_overrides) if args.sim_overrides else ""),
-           "bag:=" + (os.path.abspath(args.record_bag) if args.record_bag else ""),
-           "output:=log"]
+    cmd = launch_command(args, ply, overrides, port, gt["start"])
     log_path = os.path.join(out, "roslaunch.log")
     print("[mission] %s  (log: %s)" % (" ".join(cmd), log_path), flush=True)
     log = open(log_path, "w")

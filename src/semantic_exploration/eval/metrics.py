@@ -189,7 +189,7 @@ def _observability(gt: Dict, observable_only: bool, view):
     if not observable_only:
         return None
     from . import observable
-    key = (os.path.realpath(gt["dir"]), repr(view))
+    key = (os.path.realpath(gt["dir"]), repr(view), repr(gt.get("start")))
     if key not in _OBSERVABILITY_CACHE:
         _OBSERVABILITY_CACHE.clear()  # a grid per scene is large; keep the last one only
         _OBSERVABILITY_CACHE[key] = observable.for_ground_truth(gt, view)
