@@ -163,9 +163,23 @@ def stop_launch(launch):
         launch.wait()
 
 
-def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
+def detector_of(sim_overrides, min_mask_pixels):
+    """The detector a run used: {"min_mask_pixels": px or None (unknown), "source": the file that set it}."""
+    source = "config/sim.yaml"
+    if sim_overrides:
+        import yaml
+        with open(sim_overrides) as f:
+            if "min_mask_pixels" in ((yaml.safe_load(f) or {}).get("detector") or {}):
+                source = os.path.basename(sim_overrides)
+    return {"min_mask_pixels": min_mask_pixels, "source": source}
+
+
+def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None):
     """report.md and summary.json of a run; args needs mode, seed and classes,
-    mon is a RunLog (live or read from a bag), wall_s may be None (a bag)."""
+    mon is a RunLog (live or read from a bag), wall_s may be None (a bag),
+    detector as detector_of() gives it (None: not known)."""
+    _import_package()
+    from semantic_exploration.eval.experiments import describe_detector
     objects = mon.objects.objects if mon.objects else []
     classes = set(args.classes)
     gt_objs = [o for o in gt["objects"] if o["class"] in classes]
@@ -180,7 +194,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
         "path_length_m": mon.path_length_m, "collisions": mon.collisions,
         "dropped_input": mon.drop_summary(),
         "invalid_depth_pixels": stats.invalid_depth_pixels if stats else 0,
-        "saved": saved,
+        "saved": saved, "detector": detector,
     }
     free = os.path.join(gt["gt_dir"], "free_space.json")
     if os.path.exists(free):
@@ -197,6 +211,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
         "| | |", "|---|---|",
         "| mode | %s |" % args.mode,
         "| scene | %s |" % summary["scene"],
+        "| detector | %s |" % describe_detector(detector),
         "| termination | %s |" % reason,
         "| sim time | %.1f s |" % sim_s,
         "| wall time | %s |" % ("%.1f s" % wall_s if wall_s is not None else "- (from a bag)"),
@@ -330,6 +345,7 @@ def main(argv=None):
                 raise RuntimeError("roslaunch did not come up (see %s)" % log_path)
             time.sleep(0.5)
         rospy.init_node("mission", anonymous=True, disable_signals=True)
+        detector = detector_of(args.sim_overrides, rospy.get_param("/mav_sim/detector/min_mask_pixels", None))
         mon = Monitor()
         gt_objs = [o for o in gt["objects"] if o["class"] in args.classes]
         n_gt = len(gt_objs)
@@ -380,7 +396,7 @@ def main(argv=None):
         # The evaluation reads only the saved files: stop the simulator and
         # the nodes first instead of letting them run on beside it.
         stop_launch(launch)
-        summary = write_report(out, args, gt, mon, saved, sim_end, wall_end, reason)
+        summary = write_report(out, args, gt, mon, saved, sim_end, wall_end, reason, detector)
     finally:
         stop_launch(launch)
         log.close()

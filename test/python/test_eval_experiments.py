@@ -10,7 +10,7 @@ pytest.importorskip("matplotlib")
 from semantic_exploration.eval import experiments  # noqa: E402
 
 
-def make_run(d, times, explored, found, n_gt=4, reason="explored"):
+def make_run(d, times, explored, found, n_gt=4, reason="explored", detector=None):
     os.makedirs(d)
     with open(os.path.join(d, "timeseries.csv"), "w", newline="") as f:
         w = csv.writer(f)
@@ -18,7 +18,8 @@ def make_run(d, times, explored, found, n_gt=4, reason="explored"):
         for t, e, n in zip(times, explored, found):
             w.writerow([t, t, e, n, t * 0.5])
     with open(os.path.join(d, "summary.json"), "w") as f:
-        json.dump({"ground_truth_objects": n_gt, "termination_reason": reason, "collisions": 0}, f)
+        json.dump({"ground_truth_objects": n_gt, "termination_reason": reason, "collisions": 0,
+                   "detector": detector}, f)
     return experiments.read_run(d)
 
 
@@ -70,6 +71,23 @@ def test_report_names_the_setup_and_the_simulator_overrides(tmp_path):
     report = open(str(tmp_path / "out" / "report.md")).read().splitlines()
     assert report[2:4] == ["- scenes 0 1 2", "- simulator overrides: sim.yaml (detector/min_mask_pixels 1200, "
                            "real_time_factor 0)"]
+
+
+def test_report_names_the_detector(tmp_path):
+    default = {"min_mask_pixels": 1200, "source": "config/sim.yaml"}
+    far = {"min_mask_pixels": 50, "source": "detector_long_range.yaml"}
+    a = [make_run(str(tmp_path / "a0"), [0, 10], [0, 10], [0, 4], detector=default)]
+    experiments.write_outputs(str(tmp_path / "out"), {"semantic": a}, grid_step_s=10, setup=["scenes 0"])
+    report = open(str(tmp_path / "out" / "report.md")).read().splitlines()
+    assert report[3] == ("- detector: masks of at least 1200 px (config/sim.yaml; a whole chair detected from "
+                         "about 4 m)")
+    b = [make_run(str(tmp_path / "b0"), [0, 10], [0, 10], [0, 4], detector=far)]
+    experiments.write_outputs(str(tmp_path / "mixed"), {"semantic": a, "classic": b}, grid_step_s=10)
+    report = open(str(tmp_path / "mixed" / "report.md")).read().splitlines()
+    assert report[2] == ("- detector: masks of at least 1200 px (config/sim.yaml; a whole chair detected from "
+                         "about 4 m); masks of at least 50 px (detector_long_range.yaml; a whole chair detected "
+                         "from 10 m) (differs between runs)")
+    assert experiments.describe_detector(None) == "unknown"
 
 
 def test_paper_claims_on_known_curves(tmp_path):

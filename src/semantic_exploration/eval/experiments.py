@@ -9,7 +9,7 @@ report the median and the 10th/90th percentiles.
 import csv
 import json
 import os
-from typing import Dict, List, Sequence
+from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
@@ -108,6 +108,20 @@ def paper_claims(agg: Dict[str, Dict[str, Dict[str, np.ndarray]]], grid: np.ndar
     ]
 
 
+#: Minimum mask size (px) -> from how far a whole chair is detected (config/sim.yaml's comment).
+DETECTOR_RANGES = {1200: "a whole chair detected from about 4 m", 50: "a whole chair detected from 10 m"}
+
+
+def describe_detector(detector: Optional[Dict]) -> str:
+    """One line naming a run's detector (summary.json "detector"), e.g.
+    "masks of at least 1200 px (config/sim.yaml; a whole chair detected from about 4 m)"."""
+    if not detector or detector.get("min_mask_pixels") is None:
+        return "unknown"
+    px = int(detector["min_mask_pixels"])
+    notes = [detector.get("source") or "?"] + ([DETECTOR_RANGES[px]] if px in DETECTOR_RANGES else [])
+    return "masks of at least %d px (%s)" % (px, "; ".join(notes))
+
+
 def describe_yaml(path: str) -> str:
     """A YAML file's settings as "section/key value" pairs for a report (its path, then the pairs)."""
     import yaml
@@ -174,7 +188,10 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
                      "time_to_all_found_s_median": float(np.median(t100)),
                      "collisions": int(sum(r["summary"].get("collisions", 0) for r in runs)),
                      "termination": ", ".join(reasons)})
-    lines = ["# Experiment report", ""] + ["- %s" % l for l in setup] + ([""] if setup else []) + [
+    detectors = sorted({describe_detector(r["summary"].get("detector")) for runs in by_mode.values() for r in runs})
+    setup = list(setup) + ["detector: " + "; ".join(detectors) + (" (differs between runs)" if len(detectors) > 1
+                                                                   else "")]
+    lines = ["# Experiment report", ""] + ["- %s" % l for l in setup] + [""] + [
              "Median over runs; curves show the median and the 10th-90th percentile band.", "",
              "| mode | runs | objects found (final, median) | explored volume (final, median) | "
              "time to find all (median) | collisions | termination |", "|---|---|---|---|---|---|---|"]
