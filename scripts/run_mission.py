@@ -60,6 +60,19 @@ def prepare_scene(args, out):
     return ply, doc
 
 
+def object_snapshots(out, gt, args):
+    """Snapshots of the object map every --snapshot-period-s of sim time, matched to
+    ground truth as the report matches (None with --snapshot-period-s 0)."""
+    if args.snapshot_period_s <= 0:
+        return None
+    from semantic_exploration.eval import metrics
+    from semantic_exploration.eval.snapshots import ObjectSnapshots
+    from semantic_exploration.eval.truth import GroundTruthIndex
+    doc = metrics.load_ground_truth(gt["gt_dir"])
+    return ObjectSnapshots(GroundTruthIndex(doc, args.classes), lambda d: call_save("/object_map/save", d),
+                           os.path.join(out, "snapshot", "objects"), args.snapshot_period_s)
+
+
 def launch_command(args, ply, overrides, port, start):
     """The roslaunch command line of a mission (sim.launch on a private master at port)."""
     return ["roslaunch", "-p", str(port), "semantic_exploration", "sim.launch",
@@ -194,7 +207,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
         "path_length_m": mon.path_length_m, "collisions": mon.collisions,
         "dropped_input": mon.drop_summary(),
         "invalid_depth_pixels": stats.invalid_depth_pixels if stats else 0,
-        "saved": saved, "detector": detector,
+        "saved": saved, "detector": detector, "snapshots": getattr(args, "snapshot_summary", None),
     }
     free = os.path.join(gt["gt_dir"], "free_space.json")
     if os.path.exists(free):
@@ -260,6 +273,12 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
                                                100 * b.get("observable_fraction", 1.0), b["n_reconstructed"])]
     if ev.get("error"):
         lines += ["", "evaluation: %s" % ev["error"]]
+    sn = summary.get("snapshots")
+    if sn:
+        lines += ["", "time series: objects found matched as above at %d object-map snapshots, one every %g s of "
+                  "sim time (%d failed), which took %.1f s of wall time (%s of the run)" % (
+                      sn["count"], sn["period_s"], sn["failed"], sn["wall_s"],
+                      "%.1f%%" % (100 * sn["share_of_wall"]) if sn["share_of_wall"] is not None else "-")]
     lines += ["", "## Dropped input", ""] + mon.drop_report_lines()
     lines += ["", "## Files", ""]
     for name, s in saved.items():
@@ -291,6 +310,10 @@ def parse_args(argv=None):
                     help="at the end, save rviz.png: rviz with the project's config on Xvfb "
                     "(scripts/rviz_screenshot.py)")
     ap.add_argument("--progress-period-s", type=float, default=10.0)
+    ap.add_argument("--period-s", type=float, default=1.0, help="timeseries.csv row period, s of sim time")
+    ap.add_argument("--snapshot-period-s", type=float, default=5.0,
+                    help="object map snapshot period, s of sim time: objects found in timeseries.csv "
+                    "(ground_truth_found) are matched as in the report at each snapshot; 0 = none")
     ap.add_argument("--extra-overrides", default="", help="YAML for the C++ nodes loaded after the scene's")
     ap.add_argument("--record-bag", default="", help="also record the run into this bag (launch/record.launch); "
                     "scripts/evaluate_run.py --bag evaluates it")
@@ -349,20 +372,23 @@ def main(argv=None):
         mon = Monitor()
         gt_objs = [o for o in gt["objects"] if o["class"] in args.classes]
         n_gt = len(gt_objs)
+        snaps = object_snapshots(out, gt, args)
         series = open(os.path.join(out, "timeseries.csv"), "w")
         writer = None
         next_print = next_row = 0.0
         while True:
             wall = time.time() - t0
             sim = rospy.get_time()
-            if time.time() >= next_row:
+            if snaps is not None and snaps.due(sim):
+                snaps.take(sim, mon)
+            if sim >= next_row:  # one row every --period-s of sim time
                 row = mon.row(sim, wall, gt_objs)
                 if writer is None:
                     writer = csv.DictWriter(series, fieldnames=list(row))
                     writer.writeheader()
                 writer.writerow(row)
                 series.flush()
-                next_row = time.time() + 1.0
+                next_row = (sim // args.period_s + 1) * args.period_s
             if time.time() >= next_print:
                 print(mon.line(sim, wall, n_gt), flush=True)
                 next_print = time.time() + args.progress_period_s
@@ -378,14 +404,11 @@ def main(argv=None):
             if sim > args.sim_limit_s:
                 reason = "sim_time_limit"
                 break
-            time.sleep(0.5)
+            time.sleep(0.05)
         print(mon.line(rospy.get_time(), time.time() - t0, n_gt), flush=True)
         # The simulator runs on while the maps are saved: the report's figures are those at the stop.
         mon.freeze()
         sim_end, wall_end = rospy.get_time(), time.time() - t0
-        if writer is not None:
-            writer.writerow(mon.row(rospy.get_time(), time.time() - t0, gt_objs))
-        series.close()
         if args.rviz_screenshot and launch.poll() is None:
             print("[mission] rviz screenshot (headless)", flush=True)
             saved["rviz"] = rviz_screenshot(out, env, gt)
@@ -393,6 +416,15 @@ def main(argv=None):
         print("[mission] stopping: %s; saving maps" % reason, flush=True)
         saved["background_map"] = call_save("/background_map/save", os.path.join(out, "map"))
         saved["object_map"] = call_save("/object_map/save", os.path.join(out, "objects"))
+        if writer is not None:  # the last row: found as the report counts it, from the saved object map
+            if snaps is not None and saved["object_map"]["success"]:
+                from semantic_exploration.eval.metrics import load_reconstruction
+                mon.found_ids = snaps.index.found(load_reconstruction(os.path.join(out, "objects")))
+                mon.found_at_s = sim_end
+            writer.writerow(mon.row(sim_end, wall_end, gt_objs))
+        series.close()
+        if snaps is not None:
+            args.snapshot_summary = snaps.summary(wall_end)
         # The evaluation reads only the saved files: stop the simulator and
         # the nodes first instead of letting them run on beside it.
         stop_launch(launch)

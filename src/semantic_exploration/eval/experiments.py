@@ -1,7 +1,8 @@
 """Aggregation of many runs into the paper's Figures 5-8 style curves.
 
 Each run directory holds `timeseries.csv` (written by run_mission.py once a
-second: sim time, explored volume, objects found, ...) and `summary.json`.
+second of sim time: explored volume, objects found -- matched as in the final
+report, at the last object-map snapshot --, ...) and `summary.json`.
 Curves are resampled on a common sim-time grid; a run that ended earlier
 keeps its last value (it has stopped exploring). Across runs of one mode we
 report the median and the 10th/90th percentiles.
@@ -20,6 +21,15 @@ CURVES = {  # column of timeseries.csv -> (label, unit)
 }
 
 
+def _filled(values: Sequence[str]) -> np.ndarray:
+    """Numbers from CSV fields; an empty field (no object-map snapshot yet) holds the value before it, 0 at first."""
+    out, last = [], 0.0
+    for v in values:
+        last = float(v) if v not in ("", None) else last
+        out.append(last)
+    return np.array(out, float)
+
+
 def read_run(run_dir: str) -> Dict:
     with open(os.path.join(run_dir, "timeseries.csv")) as f:
         rows = list(csv.DictReader(f))
@@ -29,7 +39,7 @@ def read_run(run_dir: str) -> Dict:
     n_gt = max(1, int(summary.get("ground_truth_objects", 0)))
     series = {
         "explored_volume_m3": np.array([float(r["explored_volume_m3"]) for r in rows]),
-        "found_percent": 100.0 * np.array([float(r["ground_truth_found"]) for r in rows]) / n_gt,
+        "found_percent": 100.0 * _filled([r.get("ground_truth_found", "") for r in rows]) / n_gt,
         "path_length_m": np.array([float(r["path_length_m"]) for r in rows]),
     }
     order = np.argsort(t, kind="stable")
