@@ -246,13 +246,16 @@ class Observability:
         return out
 
     def mask_by_probes(self, points: np.ndarray, point_faces: np.ndarray, probes: np.ndarray,
-                       probe_faces: np.ndarray, probe_normals: Optional[np.ndarray] = None) -> np.ndarray:
+                       probe_faces: np.ndarray, probe_normals: Optional[np.ndarray] = None,
+                       seen: Optional[np.ndarray] = None) -> np.ndarray:
         """Cheaper mask for large surfaces: the observability of a coarser probe
         sample, carried to each point from the nearest probe on the same face
-        (face indices of one mesh; every face needs a probe)."""
+        (face indices of one mesh; every face needs a probe). seen: the
+        probes' mask(probes, probe_normals) if already known."""
         from scipy.spatial import cKDTree
         from .metrics import spatial_order
-        seen = self.mask(probes, probe_normals)
+        if seen is None:
+            seen = self.mask(probes, probe_normals)
         out = np.zeros(len(points), bool)
         if len(points) == 0:
             return out
@@ -276,6 +279,34 @@ class Observability:
             qi = q_order[q_start[f]:q_start[f] + q_count[f]]
             out[pi] = seen[qi[cKDTree(probes[qi]).query(points[pi])[1]]]
         return out
+
+
+_POOL_STATE = {}  # what forked workers of masks() read: the Observability and the jobs
+
+
+def _pool_mask(i: int):
+    obs, jobs = _POOL_STATE["obs"], _POOL_STATE["jobs"]
+    return i, obs.mask(*jobs[i])
+
+
+def masks(obs: "Observability", jobs, processes: int = 2):
+    """[obs.mask(points, normals) for (points, normals) in jobs], the jobs
+    spread over forked processes (largest first), which share obs's grids
+    and Embree scene with this one. Each job's answer does not depend on
+    where it runs: mask() seeds its directions per call."""
+    import multiprocessing as mp
+    if processes <= 1 or len(jobs) < 2 or "fork" not in mp.get_all_start_methods():
+        return [obs.mask(*j) for j in jobs]
+    order = sorted(range(len(jobs)), key=lambda i: -len(jobs[i][0]))
+    out = [None] * len(jobs)
+    _POOL_STATE.update(obs=obs, jobs=jobs)
+    try:
+        with mp.get_context("fork").Pool(min(processes, len(jobs))) as pool:
+            for i, m in pool.imap_unordered(_pool_mask, order):
+                out[i] = m
+    finally:
+        _POOL_STATE.clear()
+    return out
 
 
 def scene_of_ground_truth(gt: dict):

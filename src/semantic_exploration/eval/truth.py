@@ -21,8 +21,9 @@ from .metrics import (COMPLETENESS_THRESHOLD_M, ObjectEvaluation, ObjectMatch, S
 class TruthSurface:
     """Samples of one true surface, their k-d tree, and (when asked) which are observable."""
 
-    def __init__(self, samples: np.ndarray, visible_fn):
+    def __init__(self, samples: np.ndarray, visible_fn, path: str = "", faces: Optional[np.ndarray] = None):
         self.samples = samples
+        self.path, self.faces = path, faces  # the mesh and each sample's face in it
         self._visible_fn = visible_fn
         self._visible = None
         self._tree = None
@@ -53,15 +54,18 @@ class GroundTruthIndex:
 
     def __init__(self, gt: Dict, classes: List[str], observable_only: bool = True, view=None,
                  object_spacing_m: float = 0.005, background_spacing_m: float = 0.01,
-                 probe_spacing_m: float = 0.1, threshold_m: float = COMPLETENESS_THRESHOLD_M, seed: int = 0):
+                 probe_spacing_m: float = 0.1, threshold_m: float = COMPLETENESS_THRESHOLD_M, seed: int = 0,
+                 processes: int = 2):
         self.gt = gt
         self.gt_objects = [o for o in gt["objects"] if o["class"] in classes]
         self.observable_only = observable_only
         self.view = view
         self.object_spacing_m, self.background_spacing_m = object_spacing_m, background_spacing_m
         self.probe_spacing_m, self.threshold_m, self.seed = probe_spacing_m, threshold_m, seed
+        self.processes = processes  # observability is computed over this many processes
         self._objects: Optional[Dict[int, TruthSurface]] = None
         self._background: Optional[TruthSurface] = None
+        self._probes: Optional[Dict[str, tuple]] = None  # background mesh -> (probes, their faces, seen)
 
     def _path(self, rel: str) -> str:
         return os.path.join(self.gt["dir"], rel)
@@ -81,7 +85,7 @@ class GroundTruthIndex:
                 def visible(path=path, pts=pts, faces=faces):
                     obs = self._obs()
                     return obs.mask(pts, face_normals(path, faces)) if obs else np.ones(len(pts), bool)
-                self._objects[o["id"]] = TruthSurface(pts, visible)
+                self._objects[o["id"]] = TruthSurface(pts, visible, path, faces)
         return self._objects
 
     @property
@@ -95,15 +99,42 @@ class GroundTruthIndex:
                 obs = self._obs()
                 if obs is None:
                     return np.ones(sum(len(p) for p, _ in sampled), bool)
-                out = []
-                for m, (pts, faces) in zip(meshes, sampled):
-                    probes, probe_faces = sample_surface_faces(self._path(m), self.probe_spacing_m, self.seed,
-                                                               face_centres=True)
-                    out.append(obs.mask_by_probes(pts, faces, probes, probe_faces,
-                                                  face_normals(self._path(m), probe_faces)))
-                return np.concatenate(out)
+                self._probe_masks()
+                return np.concatenate([obs.mask_by_probes(pts, faces, *self._probes[m][:2], seen=self._probes[m][2])
+                                       for m, (pts, faces) in zip(meshes, sampled)])
             self._background = TruthSurface(np.vstack([p for p, _ in sampled]), visible)
         return self._background
+
+    def _probe_masks(self, objects: bool = False) -> None:
+        """The background meshes' probe observability (and, with objects, the
+        objects' sample observability) in one batch over self.processes."""
+        obs = self._obs()
+        jobs, sinks = [], []
+        if objects:
+            for s in self.objects.values():
+                if s._visible is None:
+                    jobs.append((s.samples, face_normals(s.path, s.faces)))
+                    sinks.append(s)
+        if self._probes is None:
+            self._probes = {}
+            for m in [self.gt["background_mesh"]] + [o["mesh"] for o in self.gt["objects"]]:
+                probes, probe_faces = sample_surface_faces(self._path(m), self.probe_spacing_m, self.seed,
+                                                           face_centres=True)
+                self._probes[m] = (probes, probe_faces, None)
+                jobs.append((probes, face_normals(self._path(m), probe_faces)))
+                sinks.append(m)
+        from . import observable
+        for sink, seen in zip(sinks, observable.masks(obs, jobs, self.processes)):
+            if isinstance(sink, TruthSurface):
+                sink._visible = seen
+            else:
+                self._probes[sink] = self._probes[sink][:2] + (seen,)
+
+    def prepare_observability(self) -> None:
+        """Decides which samples are observable, objects and background together
+        (spread over self.processes); scoring does it on first need otherwise."""
+        if self._obs() is not None:
+            self._probe_masks(objects=True)
 
     def match(self, class_name: str, vertices: np.ndarray):
         """(ground-truth id or None, fraction of the vertices within the
@@ -134,6 +165,7 @@ class GroundTruthIndex:
         surfaces = self.objects
         ev = ObjectEvaluation(n_ground_truth=len(self.gt_objects))
         if score:
+            self.prepare_observability()
             ev.observable_fraction = {k: float(np.mean(s.visible)) for k, s in surfaces.items()}
         found = set()
         for o in rec.get("objects", []):
