@@ -172,6 +172,7 @@ class Observability:
                                max_steps: int = 200) -> np.ndarray:
         """Ray parameter (m) of the first camera cell along p + t u, t in [t0, t1]; inf if none."""
         res, shape = self._res, np.array(self._to_camera.shape)
+        flat = self._to_camera.reshape(-1)
         t = t0.copy()
         out = np.full(len(p), np.inf)
         act = np.flatnonzero(t <= t1)
@@ -180,9 +181,10 @@ class Observability:
                 break
             x = p[act] + t[act, None] * u[act]
             idx = np.floor((x - self._origin) / res).astype(np.int64)
-            inside = np.all((idx >= 0) & (idx < shape), axis=1)
-            act, idx = act[inside], idx[inside]  # the grid holds every camera cell: outside is a miss
-            g = self._to_camera[idx[:, 0], idx[:, 1], idx[:, 2]]
+            inside = ((idx >= 0) & (idx < shape)).all(1)
+            if not inside.all():
+                act, idx = act[inside], idx[inside]  # the grid holds every camera cell: outside is a miss
+            g = flat[(idx[:, 0] * shape[1] + idx[:, 1]) * shape[2] + idx[:, 2]]
             hit = g == 0
             out[act[hit]] = t[act[hit]]
             act, g = act[~hit], g[~hit]
@@ -241,7 +243,7 @@ class Observability:
                 u = dirs[todo, r:r + round_rays].reshape(-1, 3)
                 owner = np.repeat(todo, min(round_rays, k - r))
                 nn = None if normals is None else normals[a:a + chunk][owner]
-                seen[np.unique(owner[self._sees(p[owner], u, nn)])] = True
+                seen[owner[self._sees(p[owner], u, nn)]] = True
             out[a:a + chunk] = seen
         return out
 
