@@ -125,3 +125,13 @@ def test_background_scores_are_the_same(gt):
     rmse, completeness = reference_score(rec, bg.samples, metrics.COMPLETENESS_THRESHOLD_M, bg.visible)
     assert s.rmse_m == rmse and s.completeness == completeness
     assert 0.5 < completeness < 1.0
+
+
+def test_surface_samples_are_trimeshs(gt):
+    # metrics' sampler draws the same random numbers and does the same arithmetic as trimesh's.
+    for m in [gt["background_mesh"]] + [o["mesh"] for o in gt["objects"]]:
+        mesh = trimesh.load(os.path.join(gt["dir"], m), process=False, force="mesh")
+        for count, seed in ((1, 0), (5000, 0), (123457, 3)):
+            a, fa = trimesh.sample.sample_surface(mesh, count, seed=seed)
+            b, fb = metrics._sample_triangles(mesh, count, seed, chunk=4096)
+            assert np.array_equal(a, b) and np.array_equal(fa, fb), (m, count)

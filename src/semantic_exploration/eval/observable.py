@@ -258,27 +258,31 @@ class Observability:
         from .metrics import spatial_order
         if seen is None:
             seen = self.mask(probes, probe_normals)
-        out = np.zeros(len(points), bool)
         if len(points) == 0:
-            return out
-        # Points and probes grouped by face. A face whose probes agree passes
-        # their answer on (nearest or not: most faces, such as a wall's outside);
-        # on the others each point takes its nearest probe's.
-        p_order = np.argsort(point_faces, kind="stable")
-        q_order = np.argsort(probe_faces, kind="stable")
-        q_faces, q_start, q_count = np.unique(probe_faces[q_order], return_index=True, return_counts=True)
-        q_seen = np.add.reduceat(seen[q_order].astype(np.int64), q_start)
-        faces, p_start, p_count = np.unique(point_faces[p_order], return_index=True, return_counts=True)
-        k = np.minimum(np.searchsorted(q_faces, faces), len(q_faces) - 1)
-        if np.any(q_faces[k] != faces):
+            return np.zeros(0, bool)
+        # Per face: how many probes, how many seen. A face whose probes agree
+        # passes their answer on (most faces, such as a wall's outside); on the
+        # others each point takes its nearest probe's.
+        n_faces = int(max(point_faces.max(), probe_faces.max())) + 1
+        q_count = np.bincount(probe_faces, minlength=n_faces)
+        q_seen = np.bincount(probe_faces, weights=seen.astype(np.float64), minlength=n_faces).astype(np.int64)
+        if np.any(q_count[point_faces] == 0):
             raise ValueError("mask_by_probes: faces %s have points but no probe"
-                             % faces[q_faces[k] != faces][:5].tolist())
-        q_start, q_count, n_seen = q_start[k], q_count[k], q_seen[k]
-        out[p_order] = np.repeat(n_seen == q_count, p_count)
-        for f in np.flatnonzero((n_seen > 0) & (n_seen < q_count)):
-            pi = p_order[p_start[f]:p_start[f] + p_count[f]]
-            pi = pi[spatial_order(points[pi])]
-            qi = q_order[q_start[f]:q_start[f] + q_count[f]]
+                             % np.unique(point_faces[q_count[point_faces] == 0])[:5].tolist())
+        out = (q_seen == q_count)[point_faces]
+        mixed = (q_seen > 0) & (q_seen < q_count)
+        on_mixed = np.flatnonzero(mixed[point_faces])
+        if len(on_mixed) == 0:
+            return out
+        p_order = on_mixed[np.argsort(point_faces[on_mixed], kind="stable")]
+        faces, p_start, p_count = np.unique(point_faces[p_order], return_index=True, return_counts=True)
+        q_order = np.argsort(probe_faces, kind="stable")
+        q_start = np.searchsorted(probe_faces[q_order], faces, "left")
+        for f, a, n, b in zip(faces, p_start, p_count, q_start):
+            pi = p_order[a:a + n]
+            if n > 20000:  # large faces: queries in spatial order
+                pi = pi[spatial_order(points[pi])]
+            qi = q_order[b:b + q_count[f]]
             out[pi] = seen[qi[cKDTree(probes[qi]).query(points[pi])[1]]]
         return out
 
