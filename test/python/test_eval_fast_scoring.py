@@ -1,8 +1,9 @@
 """The faster scoring algorithms give the same answers, value for value, as
 the straightforward ones they replaced (written out here as references), on
 a small furnished room: observability with the first surface along each ray
-found before the camera search, probe masks carried per face, the capped
-clearance transform, and k-d tree queries in spatial order."""
+found before the camera search and the incidence rule applied before rays
+are built, probe masks carried per face, the capped clearance transform,
+k-d tree queries in spatial order, and surface sampling."""
 import os
 import sys
 import types
@@ -44,6 +45,55 @@ def reference_sees(self, p, u, n=None):
     return ok
 
 
+def reference_first_camera_position(self, p, u, t0, t1, max_steps=200):
+    """Observability._first_camera_position before: three-index reads of the grid."""
+    res, shape = self._res, np.array(self._to_camera.shape)
+    t = t0.copy()
+    out = np.full(len(p), np.inf)
+    act = np.flatnonzero(t <= t1)
+    for _ in range(max_steps):
+        if len(act) == 0:
+            break
+        x = p[act] + t[act, None] * u[act]
+        idx = np.floor((x - self._origin) / res).astype(np.int64)
+        inside = np.all((idx >= 0) & (idx < shape), axis=1)
+        act, idx = act[inside], idx[inside]
+        g = self._to_camera[idx[:, 0], idx[:, 1], idx[:, 2]]
+        hit = g == 0
+        out[act[hit]] = t[act[hit]]
+        act, g = act[~hit], g[~hit]
+        t[act] += np.maximum(g - 0.87 * res, 0.5 * res)
+        act = act[t[act] <= t1[act]]
+    self.unresolved_rays += len(act)
+    return out
+
+
+def reference_mask(self, points, normals=None, chunk=16384, round_rays=8):
+    """Observability.mask before: every ray of a round built, the incidence rule applied in _sees."""
+    points = np.asarray(points, np.float64).reshape(-1, 3)
+    if normals is not None:
+        normals = np.asarray(normals, np.float64).reshape(-1, 3)
+        normals = normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+    rng = np.random.default_rng(self.view.seed)
+    k = self.view.directions
+    out = np.zeros(len(points), bool)
+    order = np.random.default_rng(self.view.seed + 1).permutation(k)
+    for a in range(0, len(points), chunk):
+        p = points[a:a + chunk]
+        dirs = self._directions(len(p), rng)[:, order]
+        seen = np.zeros(len(p), bool)
+        for r in range(0, k, round_rays):
+            todo = np.flatnonzero(~seen)
+            if len(todo) == 0:
+                break
+            u = dirs[todo, r:r + round_rays].reshape(-1, 3)
+            owner = np.repeat(todo, min(round_rays, k - r))
+            nn = None if normals is None else normals[a:a + chunk][owner]
+            seen[np.unique(owner[self._sees(p[owner], u, nn)])] = True
+        out[a:a + chunk] = seen
+    return out
+
+
 def reference_mask_by_probes(obs, points, point_faces, probes, probe_faces, probe_normals):
     """mask_by_probes before: one 4-d tree, faces 1 km apart along the fourth axis."""
     seen = obs.mask(probes, probe_normals)
@@ -72,6 +122,8 @@ def obs_pair(gt):
     fast = observable.for_ground_truth(gt)
     ref = observable.for_ground_truth(gt)
     ref._sees = types.MethodType(reference_sees, ref)
+    ref.mask = types.MethodType(reference_mask, ref)
+    ref._first_camera_position = types.MethodType(reference_first_camera_position, ref)
     return fast, ref
 
 

@@ -232,18 +232,22 @@ class Observability:
         out = np.zeros(len(points), bool)
         # Rays go out in rounds over a fixed shuffle of the strata; a point stops once one ray sees it.
         order = np.random.default_rng(self.view.seed + 1).permutation(k)
+        cos_max = np.cos(self.view.max_incidence_rad) - 1e-9
         for a in range(0, len(points), chunk):
             p = points[a:a + chunk]
             dirs = self._directions(len(p), rng)[:, order]
+            # Directions within the incidence limit of each point's normal (all without normals).
+            steep = (np.abs(np.einsum("ijk,ik->ij", dirs, normals[a:a + chunk])) >= cos_max
+                     if normals is not None else np.ones(dirs.shape[:2], bool))
             seen = np.zeros(len(p), bool)
             for r in range(0, k, round_rays):
                 todo = np.flatnonzero(~seen)
                 if len(todo) == 0:
                     break
-                u = dirs[todo, r:r + round_rays].reshape(-1, 3)
-                owner = np.repeat(todo, min(round_rays, k - r))
-                nn = None if normals is None else normals[a:a + chunk][owner]
-                seen[owner[self._sees(p[owner], u, nn)]] = True
+                sel = steep[todo, r:r + round_rays]
+                owner = np.repeat(todo, sel.sum(1))
+                u = dirs[todo, r:r + round_rays][sel]
+                seen[owner[self._sees(p[owner], u)]] = True
             out[a:a + chunk] = seen
         return out
 
