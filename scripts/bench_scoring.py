@@ -72,11 +72,23 @@ def main(argv=None):
 
     t0, c0 = time.time(), cpu()
     gt = metrics.load_ground_truth(os.path.join(run, "ground_truth"))
-    ev = metrics.evaluate_objects(gt, metrics.load_reconstruction(os.path.join(run, "objects")), args.classes)
-    t1, c1 = time.time(), cpu()
+    rec = metrics.load_reconstruction(os.path.join(run, "objects"))
     pts = metrics.read_ply_vertices(os.path.join(run, "map", "occupied.ply"))
-    extra = [args.classes] if "classes" in inspect.signature(metrics.evaluate_background).parameters else []
-    b = metrics.evaluate_background(gt, pts, *extra)
+    try:  # as run_mission.py scores: one index, observability started first
+        from semantic_exploration.eval.truth import GroundTruthIndex
+    except ImportError:  # the code before GroundTruthIndex
+        ev = metrics.evaluate_objects(gt, rec, args.classes)
+        t1, c1 = time.time(), cpu()
+        extra = [args.classes] if "classes" in inspect.signature(metrics.evaluate_background).parameters else []
+        b = metrics.evaluate_background(gt, pts, *extra)
+    else:
+        index = GroundTruthIndex(gt, args.classes)
+        if hasattr(index, "start_observability"):
+            index.start_observability()
+            index.background.tree
+        ev = index.evaluate_objects(rec)
+        t1, c1 = time.time(), cpu()
+        b = index.evaluate_background(pts)
     t2, c2 = time.time(), cpu()
     print(json.dumps({
         "src": os.path.abspath(args.src), "run": run, "wall_s": round(t2 - t0, 1), "cpu_s": round(c2 - c0, 1),

@@ -144,6 +144,9 @@ def evaluate(out, gt, classes, saved):
         if not doc.get("start") and gt.get("start"):
             doc["start"] = list(gt["start"])
         index = GroundTruthIndex(doc, classes)
+        # Observability in other processes while this one samples the scene and builds its trees.
+        index.start_observability()
+        index.background.tree
         rec_dir = saved.get("object_map", {}).get("dir") or os.path.join(out, "objects")
         if saved.get("object_map", {}).get("success") and os.path.exists(os.path.join(rec_dir, "objects.json")):
             ev = index.evaluate_objects(metrics.load_reconstruction(rec_dir))

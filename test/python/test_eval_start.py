@@ -79,3 +79,15 @@ def test_start_option(habitat_scene, tmp_path):
     # 0.1 m cells that surfaces touch.
     with open(os.path.join(out, "ground_truth", "free_space.json")) as f:
         assert 13.0 < json.load(f)["explorable_free_volume_m3"] < 16.5
+
+
+def test_a_start_next_to_a_wall_is_reported(habitat_scene, tmp_path):
+    # Observability is computed in another process (GroundTruthIndex.start_observability); its error
+    # reaches the report.
+    out = str(tmp_path / "run")
+    args = run_mission.parse_args(["--scene", habitat_scene, "--out", out, "--start", "0.05", "1.0", "1.0", "0"])
+    _, gt = run_mission.prepare_scene(args, out)
+    (tmp_path / "objects").mkdir()
+    (tmp_path / "objects" / "objects.json").write_text(json.dumps({"objects": []}))
+    res = run_mission.evaluate(out, gt, ["chair"], {"object_map": {"success": True, "dir": str(tmp_path / "objects")}})
+    assert "start [0.05, 1.0, 1.0] is not at least 0.125 m from every surface" in res["error"]

@@ -258,37 +258,43 @@ class Observability:
         sample, carried to each point from the nearest probe on the same face
         (face indices of one mesh; every face needs a probe). seen: the
         probes' mask(probes, probe_normals) if already known."""
-        from scipy.spatial import cKDTree
-        from .metrics import spatial_order
         if seen is None:
             seen = self.mask(probes, probe_normals)
-        if len(points) == 0:
-            return np.zeros(0, bool)
-        # Per face: how many probes, how many seen. A face whose probes agree
-        # passes their answer on (most faces, such as a wall's outside); on the
-        # others each point takes its nearest probe's.
-        n_faces = int(max(point_faces.max(), probe_faces.max())) + 1
-        q_count = np.bincount(probe_faces, minlength=n_faces)
-        q_seen = np.bincount(probe_faces, weights=seen.astype(np.float64), minlength=n_faces).astype(np.int64)
-        if np.any(q_count[point_faces] == 0):
-            raise ValueError("mask_by_probes: faces %s have points but no probe"
-                             % np.unique(point_faces[q_count[point_faces] == 0])[:5].tolist())
-        out = (q_seen == q_count)[point_faces]
-        mixed = (q_seen > 0) & (q_seen < q_count)
-        on_mixed = np.flatnonzero(mixed[point_faces])
-        if len(on_mixed) == 0:
-            return out
-        p_order = on_mixed[np.argsort(point_faces[on_mixed], kind="stable")]
-        faces, p_start, p_count = np.unique(point_faces[p_order], return_index=True, return_counts=True)
-        q_order = np.argsort(probe_faces, kind="stable")
-        q_start = np.searchsorted(probe_faces[q_order], faces, "left")
-        for f, a, n, b in zip(faces, p_start, p_count, q_start):
-            pi = p_order[a:a + n]
-            if n > 20000:  # large faces: queries in spatial order
-                pi = pi[spatial_order(points[pi])]
-            qi = q_order[b:b + q_count[f]]
-            out[pi] = seen[qi[cKDTree(probes[qi]).query(points[pi])[1]]]
+        return carry_probe_masks(points, point_faces, probes, probe_faces, seen)
+
+
+def carry_probe_masks(points: np.ndarray, point_faces: np.ndarray, probes: np.ndarray, probe_faces: np.ndarray,
+                      seen: np.ndarray) -> np.ndarray:
+    """Observability.mask_by_probes once the probes' mask `seen` is known."""
+    from scipy.spatial import cKDTree
+    from .metrics import spatial_order
+    if len(points) == 0:
+        return np.zeros(0, bool)
+    # Per face: how many probes, how many seen. A face whose probes agree
+    # passes their answer on (most faces, such as a wall's outside); on the
+    # others each point takes its nearest probe's.
+    n_faces = int(max(point_faces.max(), probe_faces.max())) + 1
+    q_count = np.bincount(probe_faces, minlength=n_faces)
+    q_seen = np.bincount(probe_faces, weights=seen.astype(np.float64), minlength=n_faces).astype(np.int64)
+    if np.any(q_count[point_faces] == 0):
+        raise ValueError("mask_by_probes: faces %s have points but no probe"
+                         % np.unique(point_faces[q_count[point_faces] == 0])[:5].tolist())
+    out = (q_seen == q_count)[point_faces]
+    mixed = (q_seen > 0) & (q_seen < q_count)
+    on_mixed = np.flatnonzero(mixed[point_faces])
+    if len(on_mixed) == 0:
         return out
+    p_order = on_mixed[np.argsort(point_faces[on_mixed], kind="stable")]
+    faces, p_start, p_count = np.unique(point_faces[p_order], return_index=True, return_counts=True)
+    q_order = np.argsort(probe_faces, kind="stable")
+    q_start = np.searchsorted(probe_faces[q_order], faces, "left")
+    for f, a, n, b in zip(faces, p_start, p_count, q_start):
+        pi = p_order[a:a + n]
+        if n > 20000:  # large faces: queries in spatial order
+            pi = pi[spatial_order(points[pi])]
+        qi = q_order[b:b + q_count[f]]
+        out[pi] = seen[qi[cKDTree(probes[qi]).query(points[pi])[1]]]
+    return out
 
 
 _POOL_STATE = {}  # what forked workers of masks() read: the Observability and the jobs

@@ -13,7 +13,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-from . import metrics
+from . import metrics, observable
 from .metrics import (COMPLETENESS_THRESHOLD_M, ObjectEvaluation, ObjectMatch, SurfaceScore, face_normals,
                       kd_tree, read_ply_vertices, sample_surface_faces, score_surface, spatial_order, within)
 
@@ -41,6 +41,10 @@ class TruthSurface:
             self._visible = self._visible_fn()
         return self._visible
 
+    def visible_or_wait(self, index: "GroundTruthIndex") -> np.ndarray:
+        index._finish_observability()
+        return self.visible
+
 
 class GroundTruthIndex:
     """Scores reconstructions against one exported ground truth (`gt`: metrics.load_ground_truth).
@@ -66,6 +70,7 @@ class GroundTruthIndex:
         self._objects: Optional[Dict[int, TruthSurface]] = None
         self._background: Optional[TruthSurface] = None
         self._probes: Optional[Dict[str, tuple]] = None  # background mesh -> (probes, their faces, seen)
+        self._pending = None  # (process, pipe, sinks) of start_observability
 
     def _path(self, rel: str) -> str:
         return os.path.join(self.gt["dir"], rel)
@@ -83,8 +88,9 @@ class GroundTruthIndex:
                 pts, faces = sample_surface_faces(path, self.object_spacing_m, self.seed)
 
                 def visible(path=path, pts=pts, faces=faces):
-                    obs = self._obs()
-                    return obs.mask(pts, face_normals(path, faces)) if obs else np.ones(len(pts), bool)
+                    if not self.observable_only:
+                        return np.ones(len(pts), bool)
+                    return self._obs().mask(pts, face_normals(path, faces))
                 self._objects[o["id"]] = TruthSurface(pts, visible, path, faces)
         return self._objects
 
@@ -96,11 +102,10 @@ class GroundTruthIndex:
             sampled = [sample_surface_faces(self._path(m), self.background_spacing_m, self.seed) for m in meshes]
 
             def visible():
-                obs = self._obs()
-                if obs is None:
+                if not self.observable_only:
                     return np.ones(sum(len(p) for p, _ in sampled), bool)
                 self._probe_masks()
-                return np.concatenate([obs.mask_by_probes(pts, faces, *self._probes[m][:2], seen=self._probes[m][2])
+                return np.concatenate([observable.carry_probe_masks(pts, faces, *self._probes[m])
                                        for m, (pts, faces) in zip(meshes, sampled)])
             # Samples in spatial order: the tree builds faster and completeness queries them in that order.
             samples = np.vstack([p for p, _ in sampled])
@@ -111,10 +116,9 @@ class GroundTruthIndex:
             self._background = TruthSurface(samples[order], visible_sorted)
         return self._background
 
-    def _probe_masks(self, objects: bool = False) -> None:
-        """The background meshes' probe observability (and, with objects, the
-        objects' sample observability) in one batch over self.processes."""
-        obs = self._obs()
+    def _mask_jobs(self, objects: bool):
+        """(points, normals) jobs of the masks still unknown: the background
+        meshes' probes, and with objects the objects' samples; and where each answer goes."""
         jobs, sinks = [], []
         if objects:
             for s in self.objects.values():
@@ -129,18 +133,63 @@ class GroundTruthIndex:
                 self._probes[m] = (probes, probe_faces, None)
                 jobs.append((probes, face_normals(self._path(m), probe_faces)))
                 sinks.append(m)
-        from . import observable
-        for sink, seen in zip(sinks, observable.masks(obs, jobs, self.processes)):
+        return jobs, sinks
+
+    def _assign(self, sinks, results) -> None:
+        for sink, seen in zip(sinks, results):
             if isinstance(sink, TruthSurface):
                 sink._visible = seen
             else:
                 self._probes[sink] = self._probes[sink][:2] + (seen,)
 
+    def _probe_masks(self, objects: bool = False) -> None:
+        """The background meshes' probe observability (and, with objects, the
+        objects' sample observability) in one batch over self.processes."""
+        self._finish_observability()
+        jobs, sinks = self._mask_jobs(objects)
+        if jobs:
+            self._assign(sinks, observable.masks(self._obs(), jobs, self.processes))
+
     def prepare_observability(self) -> None:
         """Decides which samples are observable, objects and background together
         (spread over self.processes); scoring does it on first need otherwise."""
-        if self._obs() is not None:
+        if self.observable_only:
             self._probe_masks(objects=True)
+
+    def start_observability(self) -> None:
+        """Starts prepare_observability in a forked process (with its own
+        workers), so that what needs no observability (sampling the background,
+        building trees, matching objects) runs meanwhile; the first use of a
+        mask waits for it. Done in this process where fork is not available."""
+        import multiprocessing as mp
+        if self._pending is not None or not self.observable_only or "fork" not in mp.get_all_start_methods():
+            return
+        jobs, sinks = self._mask_jobs(objects=True)
+        if not jobs:
+            return
+        receive, send = mp.Pipe(duplex=False)
+        proc = mp.get_context("fork").Process(target=_observability_worker,
+                                              args=(self.gt, self.view, jobs, self.processes, send), daemon=False)
+        proc.start()
+        send.close()
+        self._pending = (proc, receive, sinks)
+
+    def _finish_observability(self) -> None:
+        if self._pending is None:
+            return
+        proc, receive, sinks = self._pending
+        self._pending = None
+        try:
+            kind, payload = receive.recv()
+        except EOFError:
+            kind, payload = "error", "the observability process ended without an answer (exit code %s)" % (
+                proc.exitcode,)
+        finally:
+            receive.close()
+            proc.join()
+        if kind != "ok":
+            raise RuntimeError(payload)
+        self._assign(sinks, payload)
 
     def match(self, class_name: str, vertices: np.ndarray):
         """(ground-truth id or None, fraction of the vertices within the
@@ -170,24 +219,33 @@ class GroundTruthIndex:
         """See metrics.evaluate_objects."""
         surfaces = self.objects
         ev = ObjectEvaluation(n_ground_truth=len(self.gt_objects))
-        if score:
-            self.prepare_observability()
-            ev.observable_fraction = {k: float(np.mean(s.visible)) for k, s in surfaces.items()}
-        found = set()
+        matched = []  # matching needs no observability: first
         for o in rec.get("objects", []):
             verts = read_ply_vertices(os.path.join(rec["dir"], o["mesh"]))
             gid, frac = self.match(o["class_name"], verts)
-            m = ObjectMatch(o["id"], o["class_name"], gid, frac)
-            if gid is not None:
-                s = surfaces[gid]
-                if score:
-                    m.score = score_surface(verts, s.samples, self.threshold_m, s.tree, s.visible)
-                found.add(gid)
-            ev.matches.append(m)
-        ev.found_gt_ids = sorted(found)
+            ev.matches.append(ObjectMatch(o["id"], o["class_name"], gid, frac))
+            matched.append(verts)
+        if score:
+            self.prepare_observability()
+            ev.observable_fraction = {k: float(np.mean(s.visible_or_wait(self))) for k, s in surfaces.items()}
+        for m, verts in zip(ev.matches, matched):
+            if m.gt_id is not None and score:
+                s = surfaces[m.gt_id]
+                m.score = score_surface(verts, s.samples, self.threshold_m, s.tree, s.visible)
+        ev.found_gt_ids = sorted({m.gt_id for m in ev.matches if m.gt_id is not None})
         return ev
 
     def evaluate_background(self, occupied_points: np.ndarray) -> SurfaceScore:
         """See metrics.evaluate_background."""
         s = self.background
-        return score_surface(occupied_points, s.samples, self.threshold_m, s.tree, s.visible)
+        return score_surface(occupied_points, s.samples, self.threshold_m, s.tree, s.visible_or_wait(self))
+
+
+def _observability_worker(gt, view, jobs, processes, send) -> None:
+    """start_observability's process: the scene's Observability and the masks of jobs, sent back."""
+    try:
+        send.send(("ok", observable.masks(observable.for_ground_truth(gt, view), jobs, processes)))
+    except Exception as e:  # the waiting process raises it
+        send.send(("error", "%s: %s" % (type(e).__name__, e)))
+    finally:
+        send.close()
