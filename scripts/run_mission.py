@@ -36,11 +36,17 @@ def _import_package():
 
 
 def prepare_scene(args, out):
-    """Generates the scene (unless given) and exports ground truth; returns (ply, gt doc)."""
+    """Generates the scene (unless given) and exports ground truth; returns (ply, gt doc).
+
+    The ground truth's start is the pose the simulator will start from
+    (--start, else the scene's, else the simulator's rule for a scene without
+    one), which main() hands to the simulator too: the evaluation needs it to
+    tell observable surface from the rest."""
     _import_package()
     from semantic_exploration.sim.classes import DEFAULT_CLASS_NAMES
     from semantic_exploration.sim.generator import generate
     from semantic_exploration.sim.scene import export_ground_truth, load_scene, save_habitat
+    from semantic_exploration.sim.simulator import start_pose_of
     gt_dir = os.path.join(out, "ground_truth")
     if args.scene:
         scene = load_scene(args.scene)
@@ -48,9 +54,36 @@ def prepare_scene(args, out):
     else:
         scene = generate(args.seed, args.size, None)
         ply = save_habitat(scene, os.path.join(out, "scene"))
-    doc = export_ground_truth(scene, gt_dir, DEFAULT_CLASS_NAMES)
+    start = start_pose_of(scene, getattr(args, "start", None))
+    doc = export_ground_truth(scene, gt_dir, DEFAULT_CLASS_NAMES, start=start)
     doc["gt_dir"] = gt_dir
     return ply, doc
+
+
+def object_snapshots(out, gt, args):
+    """Snapshots of the object map every --snapshot-period-s of sim time, matched to
+    ground truth as the report matches (None with --snapshot-period-s 0)."""
+    if args.snapshot_period_s <= 0:
+        return None
+    from semantic_exploration.eval import metrics
+    from semantic_exploration.eval.snapshots import ObjectSnapshots
+    from semantic_exploration.eval.truth import GroundTruthIndex
+    doc = metrics.load_ground_truth(gt["gt_dir"])
+    return ObjectSnapshots(GroundTruthIndex(doc, args.classes), lambda d: call_save("/object_map/save", d),
+                           os.path.join(out, "snapshot", "objects"), args.snapshot_period_s)
+
+
+def launch_command(args, ply, overrides, port, start):
+    """The roslaunch command line of a mission (sim.launch on a private master at port)."""
+    return ["roslaunch", "-p", str(port), "semantic_exploration", "sim.launch",
+            "mode:=" + args.mode, "scene:=" + ply, "overrides:=" + overrides,
+            "classes_of_interest:=[%s]" % ", ".join(args.classes),
+            "start_pose:=[%s]" % ", ".join(repr(float(v)) for v in start),
+            "lockstep:=" + ("false" if args.no_lockstep else "true"),
+            "real_time_factor:=%g" % args.real_time_factor, "rviz:=" + ("true" if args.rviz else "false"),
+            "sim_overrides:=" + (os.path.abspath(args.sim_overrides) if args.sim_overrides else ""),
+            "bag:=" + (os.path.abspath(args.record_bag) if args.record_bag else ""),
+            "output:=log"]
 
 
 def write_overrides(path, gt, classes, margin_m=0.5):
@@ -101,14 +134,22 @@ def rviz_screenshot(out, env, gt, timeout_s=60.0):
 
 
 def evaluate(out, gt, classes, saved):
-    """Final figures from the saved meshes and map (empty where a map was not saved)."""
+    """Final figures from the saved meshes and map (empty where a map was not saved).
+    gt["start"] stands in for a ground truth exported without one."""
     from semantic_exploration.eval import metrics
+    from semantic_exploration.eval.truth import GroundTruthIndex
     res = {}
     try:
+        doc = metrics.load_ground_truth(gt["gt_dir"])
+        if not doc.get("start") and gt.get("start"):
+            doc["start"] = list(gt["start"])
+        index = GroundTruthIndex(doc, classes)
+        # Observability in other processes while this one samples the scene and builds its trees.
+        index.start_observability()
+        index.background.tree
         rec_dir = saved.get("object_map", {}).get("dir") or os.path.join(out, "objects")
         if saved.get("object_map", {}).get("success") and os.path.exists(os.path.join(rec_dir, "objects.json")):
-            ev = metrics.evaluate_objects(metrics.load_ground_truth(gt["gt_dir"]),
-                                          metrics.load_reconstruction(rec_dir), classes)
+            ev = index.evaluate_objects(metrics.load_reconstruction(rec_dir))
             res["found"] = len(ev.found_gt_ids)
             res["ground_truth"] = ev.n_ground_truth
             res["objects"] = [{"map_id": m.map_id, "class": m.map_class, "gt_id": m.gt_id,
@@ -118,8 +159,7 @@ def evaluate(out, gt, classes, saved):
                                "observable_fraction": ev.observable_fraction.get(m.gt_id)} for m in ev.matches]
         occ = [f for f in saved.get("background_map", {}).get("files", []) if f.endswith("occupied.ply")]
         if occ:
-            b = metrics.evaluate_background(metrics.load_ground_truth(gt["gt_dir"]), metrics.read_ply_vertices(occ[0]),
-                                            classes)
+            b = index.evaluate_background(metrics.read_ply_vertices(occ[0]))
             res["background"] = {"rmse_m": b.rmse_m, "completeness": b.completeness,
                                  "n_reconstructed": b.n_reconstructed, "observable_fraction": b.observable_fraction}
     except Exception as e:  # a failed evaluation must not lose the rest of the report
@@ -139,9 +179,23 @@ def stop_launch(launch):
         launch.wait()
 
 
-def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
+def detector_of(sim_overrides, min_mask_pixels):
+    """The detector a run used: {"min_mask_pixels": px or None (unknown), "source": the file that set it}."""
+    source = "config/sim.yaml"
+    if sim_overrides:
+        import yaml
+        with open(sim_overrides) as f:
+            if "min_mask_pixels" in ((yaml.safe_load(f) or {}).get("detector") or {}):
+                source = os.path.basename(sim_overrides)
+    return {"min_mask_pixels": min_mask_pixels, "source": source}
+
+
+def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None):
     """report.md and summary.json of a run; args needs mode, seed and classes,
-    mon is a RunLog (live or read from a bag), wall_s may be None (a bag)."""
+    mon is a RunLog (live or read from a bag), wall_s may be None (a bag),
+    detector as detector_of() gives it (None: not known)."""
+    _import_package()
+    from semantic_exploration.eval.experiments import describe_detector
     objects = mon.objects.objects if mon.objects else []
     classes = set(args.classes)
     gt_objs = [o for o in gt["objects"] if o["class"] in classes]
@@ -156,7 +210,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
         "path_length_m": mon.path_length_m, "collisions": mon.collisions,
         "dropped_input": mon.drop_summary(),
         "invalid_depth_pixels": stats.invalid_depth_pixels if stats else 0,
-        "saved": saved,
+        "saved": saved, "detector": detector, "snapshots": getattr(args, "snapshot_summary", None),
     }
     free = os.path.join(gt["gt_dir"], "free_space.json")
     if os.path.exists(free):
@@ -173,6 +227,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
         "| | |", "|---|---|",
         "| mode | %s |" % args.mode,
         "| scene | %s |" % summary["scene"],
+        "| detector | %s |" % describe_detector(detector),
         "| termination | %s |" % reason,
         "| sim time | %.1f s |" % sim_s,
         "| wall time | %s |" % ("%.1f s" % wall_s if wall_s is not None else "- (from a bag)"),
@@ -221,6 +276,12 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
                                                100 * b.get("observable_fraction", 1.0), b["n_reconstructed"])]
     if ev.get("error"):
         lines += ["", "evaluation: %s" % ev["error"]]
+    sn = summary.get("snapshots")
+    if sn:
+        lines += ["", "time series: objects found matched as above at %d object-map snapshots, one every %g s of "
+                  "sim time (%d failed), which took %.1f s of wall time (%s of the run)" % (
+                      sn["count"], sn["period_s"], sn["failed"], sn["wall_s"],
+                      "%.1f%%" % (100 * sn["share_of_wall"]) if sn["share_of_wall"] is not None else "-")]
     lines += ["", "## Dropped input", ""] + mon.drop_report_lines()
     lines += ["", "## Files", ""]
     for name, s in saved.items():
@@ -232,10 +293,12 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason):
     return summary
 
 
-def main(argv=None):
+def parse_args(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--mode", choices=["semantic", "classic"], default="semantic")
     ap.add_argument("--scene", default="", help="scene file; default: generate a house")
+    ap.add_argument("--start", type=float, nargs=4, default=None, metavar=("X", "Y", "Z", "YAW"),
+                    help="start pose (m, rad); default: the scene's, else the centre of its box at 1.2 m")
     ap.add_argument("--seed", type=int, default=0, help="generator seed")
     ap.add_argument("--size", type=float, nargs=3, default=[10.0, 8.0, 3.0], metavar=("X", "Y", "H"),
                     help="generated house size, m (default 10 8 3)")
@@ -250,6 +313,10 @@ def main(argv=None):
                     help="at the end, save rviz.png: rviz with the project's config on Xvfb "
                     "(scripts/rviz_screenshot.py)")
     ap.add_argument("--progress-period-s", type=float, default=10.0)
+    ap.add_argument("--period-s", type=float, default=1.0, help="timeseries.csv row period, s of sim time")
+    ap.add_argument("--snapshot-period-s", type=float, default=5.0,
+                    help="object map snapshot period, s of sim time: objects found in timeseries.csv "
+                    "(ground_truth_found) are matched as in the report at each snapshot; 0 = none")
     ap.add_argument("--extra-overrides", default="", help="YAML for the C++ nodes loaded after the scene's")
     ap.add_argument("--record-bag", default="", help="also record the run into this bag (launch/record.launch); "
                     "scripts/evaluate_run.py --bag evaluates it")
@@ -257,7 +324,11 @@ def main(argv=None):
                     help="skip scoring the saved meshes and map against ground truth (minutes on a loaded machine)")
     ap.add_argument("--sim-overrides", default="", help="YAML for the simulator loaded after config/sim.yaml "
                     "(e.g. faults: tf_gap_s, detector_scale, frame_drop_fraction)")
-    args = ap.parse_args(argv)
+    return ap.parse_args(argv)
+
+
+def main(argv=None):
+    args = parse_args(argv)
 
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
@@ -276,14 +347,7 @@ def main(argv=None):
     env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOSTNAME="127.0.0.1")
     env.setdefault("ROS_HOME", os.path.join(out, "ros_home"))
     os.environ.update(ROS_MASTER_URI=env["ROS_MASTER_URI"], ROS_HOSTNAME="127.0.0.1", ROS_HOME=env["ROS_HOME"])
-    cmd = ["roslaunch", "-p", str(port), "semantic_exploration", "sim.launch",
-           "mode:=" + args.mode, "scene:=" + ply, "overrides:=" + overrides,
-           "classes_of_interest:=[%s]" % ", ".join(args.classes),
-           "lockstep:=" + ("false" if args.no_lockstep else "true"),
-           "real_time_factor:=%g" % args.real_time_factor, "rviz:=" + ("true" if args.rviz else "false"),
-           "sim_overrides:=" + (os.path.abspath(args.sim_overrides) if args.sim_overrides else ""),
-           "bag:=" + (os.path.abspath(args.record_bag) if args.record_bag else ""),
-           "output:=log"]
+    cmd = launch_command(args, ply, overrides, port, gt["start"])
     log_path = os.path.join(out, "roslaunch.log")
     print("[mission] %s  (log: %s)" % (" ".join(cmd), log_path), flush=True)
     log = open(log_path, "w")
@@ -307,23 +371,27 @@ def main(argv=None):
                 raise RuntimeError("roslaunch did not come up (see %s)" % log_path)
             time.sleep(0.5)
         rospy.init_node("mission", anonymous=True, disable_signals=True)
+        detector = detector_of(args.sim_overrides, rospy.get_param("/mav_sim/detector/min_mask_pixels", None))
         mon = Monitor()
         gt_objs = [o for o in gt["objects"] if o["class"] in args.classes]
         n_gt = len(gt_objs)
+        snaps = object_snapshots(out, gt, args)
         series = open(os.path.join(out, "timeseries.csv"), "w")
         writer = None
         next_print = next_row = 0.0
         while True:
             wall = time.time() - t0
             sim = rospy.get_time()
-            if time.time() >= next_row:
+            if snaps is not None and snaps.due(sim):
+                snaps.take(sim, mon)
+            if sim >= next_row:  # one row every --period-s of sim time
                 row = mon.row(sim, wall, gt_objs)
                 if writer is None:
                     writer = csv.DictWriter(series, fieldnames=list(row))
                     writer.writeheader()
                 writer.writerow(row)
                 series.flush()
-                next_row = time.time() + 1.0
+                next_row = (sim // args.period_s + 1) * args.period_s
             if time.time() >= next_print:
                 print(mon.line(sim, wall, n_gt), flush=True)
                 next_print = time.time() + args.progress_period_s
@@ -339,14 +407,11 @@ def main(argv=None):
             if sim > args.sim_limit_s:
                 reason = "sim_time_limit"
                 break
-            time.sleep(0.5)
+            time.sleep(0.05)
         print(mon.line(rospy.get_time(), time.time() - t0, n_gt), flush=True)
         # The simulator runs on while the maps are saved: the report's figures are those at the stop.
         mon.freeze()
         sim_end, wall_end = rospy.get_time(), time.time() - t0
-        if writer is not None:
-            writer.writerow(mon.row(rospy.get_time(), time.time() - t0, gt_objs))
-        series.close()
         if args.rviz_screenshot and launch.poll() is None:
             print("[mission] rviz screenshot (headless)", flush=True)
             saved["rviz"] = rviz_screenshot(out, env, gt)
@@ -354,10 +419,19 @@ def main(argv=None):
         print("[mission] stopping: %s; saving maps" % reason, flush=True)
         saved["background_map"] = call_save("/background_map/save", os.path.join(out, "map"))
         saved["object_map"] = call_save("/object_map/save", os.path.join(out, "objects"))
+        if writer is not None:  # the last row: found as the report counts it, from the saved object map
+            if snaps is not None and saved["object_map"]["success"]:
+                from semantic_exploration.eval.metrics import load_reconstruction
+                mon.found_ids = snaps.index.found(load_reconstruction(os.path.join(out, "objects")))
+                mon.found_at_s = sim_end
+            writer.writerow(mon.row(sim_end, wall_end, gt_objs))
+        series.close()
+        if snaps is not None:
+            args.snapshot_summary = snaps.summary(wall_end)
         # The evaluation reads only the saved files: stop the simulator and
         # the nodes first instead of letting them run on beside it.
         stop_launch(launch)
-        summary = write_report(out, args, gt, mon, saved, sim_end, wall_end, reason)
+        summary = write_report(out, args, gt, mon, saved, sim_end, wall_end, reason, detector)
     finally:
         stop_launch(launch)
         log.close()

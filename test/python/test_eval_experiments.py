@@ -10,7 +10,7 @@ pytest.importorskip("matplotlib")
 from semantic_exploration.eval import experiments  # noqa: E402
 
 
-def make_run(d, times, explored, found, n_gt=4, reason="explored"):
+def make_run(d, times, explored, found, n_gt=4, reason="explored", detector=None):
     os.makedirs(d)
     with open(os.path.join(d, "timeseries.csv"), "w", newline="") as f:
         w = csv.writer(f)
@@ -18,7 +18,8 @@ def make_run(d, times, explored, found, n_gt=4, reason="explored"):
         for t, e, n in zip(times, explored, found):
             w.writerow([t, t, e, n, t * 0.5])
     with open(os.path.join(d, "summary.json"), "w") as f:
-        json.dump({"ground_truth_objects": n_gt, "termination_reason": reason, "collisions": 0}, f)
+        json.dump({"ground_truth_objects": n_gt, "termination_reason": reason, "collisions": 0,
+                   "detector": detector}, f)
     return experiments.read_run(d)
 
 
@@ -72,13 +73,31 @@ def test_report_names_the_setup_and_the_simulator_overrides(tmp_path):
                            "real_time_factor 0)"]
 
 
+def test_report_names_the_detector(tmp_path):
+    default = {"min_mask_pixels": 1200, "source": "config/sim.yaml"}
+    far = {"min_mask_pixels": 50, "source": "detector_long_range.yaml"}
+    a = [make_run(str(tmp_path / "a0"), [0, 10], [0, 10], [0, 4], detector=default)]
+    experiments.write_outputs(str(tmp_path / "out"), {"semantic": a}, grid_step_s=10, setup=["scenes 0"])
+    report = open(str(tmp_path / "out" / "report.md")).read().splitlines()
+    assert report[3] == ("- detector: masks of at least 1200 px (config/sim.yaml; a whole chair detected from "
+                         "about 4 m)")
+    b = [make_run(str(tmp_path / "b0"), [0, 10], [0, 10], [0, 4], detector=far)]
+    experiments.write_outputs(str(tmp_path / "mixed"), {"semantic": a, "classic": b}, grid_step_s=10)
+    report = open(str(tmp_path / "mixed" / "report.md")).read().splitlines()
+    assert report[2] == ("- detector: masks of at least 1200 px (config/sim.yaml; a whole chair detected from "
+                         "about 4 m); masks of at least 50 px (detector_long_range.yaml; a whole chair detected "
+                         "from 10 m) (differs between runs)")
+    assert experiments.describe_detector(None) == "unknown"
+
+
 def test_paper_claims_on_known_curves(tmp_path):
     # Semantic: all 4 found at 20 s, 30 m3 at the end; classic: all at 30 s, 32 m3.
     sem = [make_run(str(tmp_path / "s0"), [0, 10, 20, 30], [0, 10, 20, 30], [0, 2, 4, 4])]
     cls = [make_run(str(tmp_path / "c0"), [0, 10, 20, 30], [0, 12, 24, 32], [0, 1, 3, 4])]
     res = experiments.write_outputs(str(tmp_path / "out"), {"semantic": sem, "classic": cls}, grid_step_s=10)
     claims = res["claims"]
-    assert [c["holds"] for c in claims] == [True, True, True]
+    assert [c["holds"] for c in claims] == [True, True, True, None, None, None]  # no accuracy columns
+    assert claims[3]["measured"] == "not measured"
     assert claims[1]["measured"] == "semantic 20 s, classic 30 s"
     assert "ratio 0.938" in claims[2]["measured"]  # 30 / 32
     report = open(str(tmp_path / "out" / "report.md")).read()
@@ -91,7 +110,7 @@ def test_paper_claims_that_fail_say_where(tmp_path):
     cls = [make_run(str(tmp_path / "c0"), [0, 10, 20], [0, 10, 20], [0, 2, 4])]
     res = experiments.write_outputs(str(tmp_path / "out"), {"semantic": sem, "classic": cls}, grid_step_s=10)
     c = res["claims"]
-    assert [x["holds"] for x in c] == [False, False, False]
+    assert [x["holds"] for x in c] == [False, False, False, None, None, None]
     assert c[0]["measured"] == "behind at 2 of 3 times (first at 10 s, by up to 25 points)"
     assert c[1]["measured"] == "semantic never, classic 20 s"
     assert "ratio 0.800" in c[2]["measured"]
@@ -104,3 +123,74 @@ def test_implausible_runs_are_named(tmp_path):
     # A mission that took wall time (seconds since 1970) for sim time.
     bad = make_run(str(tmp_path / "bad"), [1795335807.5], [0], [0])
     assert experiments.implausible(bad, sim_limit_s=200) == "sim time 1795335808 s is beyond the 200 s limit"
+
+
+COLUMNS = ["sim_s", "explored_volume_m3", "ground_truth_found", "background_rmse_m", "object_rmse_m",
+           "background_completeness", "object_completeness", "background_observed_share", "object_observed_share",
+           "path_length_m"]
+
+
+def write_series(d, rows, n_gt=4, reason="explored"):
+    """A run directory from hand-written rows (one dict per row; absent columns empty)."""
+    os.makedirs(d)
+    with open(os.path.join(d, "timeseries.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=COLUMNS)
+        w.writeheader()
+        w.writerows(rows)
+    with open(os.path.join(d, "summary.json"), "w") as f:
+        json.dump({"ground_truth_objects": n_gt, "termination_reason": reason, "collisions": 0}, f)
+    return experiments.read_run(d)
+
+
+def test_aggregated_curves_of_every_panel(tmp_path):
+    # Three runs sampled at 0, 10 and 20 s; accuracy and completeness only at snapshots
+    # (empty fields hold the value before, none before the first: no RMSE yet, 0% complete).
+    runs = []
+    for i, k in enumerate([1, 2, 4]):
+        runs.append(write_series(str(tmp_path / str(i)), [
+            {"sim_s": 0, "explored_volume_m3": 0, "ground_truth_found": 0, "path_length_m": 0},
+            {"sim_s": 10, "explored_volume_m3": 10 * k, "ground_truth_found": k, "background_rmse_m": 0.01 * k,
+             "object_rmse_m": 0.002 * k, "background_completeness": 0.1 * k, "object_completeness": 0.2 * k,
+             "background_observed_share": 0.05 * k, "object_observed_share": 0.1 * k, "path_length_m": 2 * k},
+            {"sim_s": 20, "explored_volume_m3": 20 * k, "ground_truth_found": 4, "path_length_m": 3 * k}]))
+    agg = experiments.aggregate(runs, np.array([0.0, 10.0, 20.0]))
+    # At 10 s the runs hold k = 1, 2, 4 times a figure f: median 2 f; numpy's linear percentiles
+    # p10 = 1 + 0.2 (2 - 1) = 1.2 f and p90 = 2 + 0.8 (4 - 2) = 3.6 f.
+    per_k = {"explored_volume_m3": 10.0, "found_percent": 25.0, "background_rmse_cm": 1.0, "object_rmse_cm": 0.2,
+             "background_completeness_percent": 10.0, "object_completeness_percent": 20.0,
+             "background_observed_percent": 5.0, "object_observed_percent": 10.0, "path_length_m": 2.0}
+    assert set(per_k) == set(experiments.CURVES)
+    for key, f in per_k.items():
+        c = agg[key]
+        assert [c["median"][1], c["p10"][1], c["p90"][1]] == pytest.approx([2 * f, 1.2 * f, 3.6 * f]), key
+    # At 0 s: nothing yet (no RMSE, zeros elsewhere); at 20 s the snapshot figures hold their 10 s values.
+    assert np.isnan(agg["background_rmse_cm"]["median"][0]) and np.isnan(agg["object_rmse_cm"]["p90"][0])
+    assert agg["object_completeness_percent"]["median"][0] == 0.0
+    assert agg["background_completeness_percent"]["median"][2] == pytest.approx(20.0)
+    assert agg["found_percent"]["p10"][2] == 100.0 and agg["explored_volume_m3"]["p90"][2] == pytest.approx(72.0)
+    assert agg["path_length_m"]["median"][2] == pytest.approx(6.0)
+
+
+def test_eight_panels_and_the_reconstruction_claims(tmp_path):
+    def run(name, rmse_bg, rmse_obj, observed, reason):
+        return write_series(str(tmp_path / name), [
+            {"sim_s": 0, "explored_volume_m3": 0, "ground_truth_found": 0, "path_length_m": 0},
+            {"sim_s": 10, "explored_volume_m3": 10, "ground_truth_found": 4, "background_rmse_m": rmse_bg,
+             "object_rmse_m": rmse_obj, "background_completeness": 0.5, "object_completeness": 0.6,
+             "background_observed_share": 0.3, "object_observed_share": observed, "path_length_m": 1}],
+            reason=reason)
+    sem = [run("s0", 0.030, 0.010, 0.8, "explored"), run("s1", 0.032, 0.012, 0.9, "time_limit")]
+    cls = [run("c0", 0.028, 0.011, 0.5, "explored"), run("c1", 0.030, 0.011, 0.6, "explored")]
+    res = experiments.write_outputs(str(tmp_path / "out"), {"semantic": sem, "classic": cls}, grid_step_s=10)
+    for key in experiments.CURVES:
+        assert os.path.getsize(str(tmp_path / "out" / ("%s.png" % key))) > 0
+    assert os.path.getsize(str(tmp_path / "out" / "figures_5_8.png")) > 0
+    c = res["claims"]
+    # Background: 3.1 vs 2.9 cm; objects: 1.1 vs 1.1 cm; observed from <= d_obj: 85% vs 55%.
+    assert c[3]["holds"] is True and c[3]["measured"] == "semantic 3.10 cm, classic 2.90 cm"
+    assert c[4]["holds"] is True and c[4]["measured"] == "semantic 1.10 cm, classic 1.10 cm"
+    assert c[5]["holds"] is True and c[5]["measured"] == "semantic 85%, classic 55%"
+    rows = {r["mode"]: r for r in res["rows"]}
+    assert rows["semantic"]["explored_share"] == 0.5 and rows["classic"]["explored_share"] == 1.0
+    report = open(str(tmp_path / "out" / "report.md")).read()
+    assert "| explored, time_limit | 50% |" in report

@@ -275,12 +275,12 @@ def test_detector_hides_chosen_objects_without_changing_the_others():
     assert seen > 5  # the plain detector did report the hidden chair
 
 
-def test_campaign_detector_sees_a_whole_chair_from_d_bg_but_not_from_5_m():
-    """config/experiments_sim.yaml's min_mask_pixels: a generated chair, seen whole from d_bg (3 m) by a
+def test_default_detector_sees_a_whole_chair_from_d_bg_but_not_from_5_m():
+    """config/sim.yaml's min_mask_pixels: a generated chair, seen whole from d_bg (3 m) by a
     camera at 1.4 m, is detected; from 5 m it is missed (the detector range the paper's d_bg assumes)."""
     import yaml
     from semantic_exploration.sim.generator import three_chairs_room
-    with open(os.path.join(ROOT, "config", "experiments_sim.yaml")) as f:
+    with open(os.path.join(ROOT, "config", "sim.yaml")) as f:
         cfg = DetectorConfig(**yaml.safe_load(f)["detector"])
     with open(os.path.join(ROOT, "config", "semantic.yaml")) as f:
         d_bg = yaml.safe_load(f)["exploration"]["d_bg_m"]

@@ -1,7 +1,8 @@
 """Aggregation of many runs into the paper's Figures 5-8 style curves.
 
 Each run directory holds `timeseries.csv` (written by run_mission.py once a
-second: sim time, explored volume, objects found, ...) and `summary.json`.
+second of sim time: explored volume, objects found -- matched as in the final
+report, at the last object-map snapshot --, ...) and `summary.json`.
 Curves are resampled on a common sim-time grid; a run that ended earlier
 keeps its last value (it has stopped exploring). Across runs of one mode we
 report the median and the 10th/90th percentiles.
@@ -9,29 +10,53 @@ report the median and the 10th/90th percentiles.
 import csv
 import json
 import os
-from typing import Dict, List, Sequence
+from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
-CURVES = {  # column of timeseries.csv -> (label, unit)
-    "explored_volume_m3": ("explored volume", "m^3"),
-    "found_percent": ("ground-truth objects found", "%"),
-    "path_length_m": ("path length", "m"),
+from .claims import paper_claims  # noqa: F401 (part of this module's interface)
+
+#: Curve -> (label, unit, figure of the paper, timeseries.csv column, scale, value before its first sample).
+#: found_percent's scale is 100 / the number of ground-truth objects.
+CURVES = {
+    "explored_volume_m3": ("explored volume", "m^3", "Fig. 5", "explored_volume_m3", 1.0, 0.0),
+    "found_percent": ("ground-truth objects found", "%", "Fig. 5", "ground_truth_found", None, 0.0),
+    "background_rmse_cm": ("background accuracy (RMSE)", "cm", "Fig. 6", "background_rmse_m", 100.0, np.nan),
+    "object_rmse_cm": ("object accuracy (RMSE)", "cm", "Fig. 6", "object_rmse_m", 100.0, np.nan),
+    "background_completeness_percent": ("background completeness", "%", "Fig. 7", "background_completeness",
+                                        100.0, 0.0),
+    "object_completeness_percent": ("object completeness", "%", "Fig. 7", "object_completeness", 100.0, 0.0),
+    "background_observed_percent": ("background observed from <= d_bg", "%", "Fig. 8",
+                                    "background_observed_share", 100.0, 0.0),
+    "object_observed_percent": ("object surface observed from <= d_obj", "%", "Fig. 8", "object_observed_share",
+                                100.0, 0.0),
+    "path_length_m": ("path length", "m", "", "path_length_m", 1.0, 0.0),
 }
 
 
+def _filled(values: Sequence[str], before: float = 0.0) -> np.ndarray:
+    """Numbers from CSV fields; an empty field (no snapshot yet) holds the value before it, `before` at first."""
+    out, last = [], before
+    for v in values:
+        last = float(v) if v not in ("", None) else last
+        out.append(last)
+    return np.array(out, float)
+
+
 def read_run(run_dir: str) -> Dict:
+    """A run's time series as the curves of CURVES (all nan where the run lacks the column)."""
     with open(os.path.join(run_dir, "timeseries.csv")) as f:
         rows = list(csv.DictReader(f))
     with open(os.path.join(run_dir, "summary.json")) as f:
         summary = json.load(f)
     t = np.array([float(r["sim_s"]) for r in rows])
     n_gt = max(1, int(summary.get("ground_truth_objects", 0)))
-    series = {
-        "explored_volume_m3": np.array([float(r["explored_volume_m3"]) for r in rows]),
-        "found_percent": 100.0 * np.array([float(r["ground_truth_found"]) for r in rows]) / n_gt,
-        "path_length_m": np.array([float(r["path_length_m"]) for r in rows]),
-    }
+    series = {}
+    for key, (_, _, _, column, scale, before) in CURVES.items():
+        if rows and column not in rows[0]:
+            series[key] = np.full(len(rows), np.nan)
+            continue
+        series[key] = _filled([r.get(column, "") for r in rows], before) * (100.0 / n_gt if scale is None else scale)
     order = np.argsort(t, kind="stable")
     return {"dir": run_dir, "t": t[order], "series": {k: v[order] for k, v in series.items()}, "summary": summary}
 
@@ -47,22 +72,25 @@ def implausible(run: Dict, sim_limit_s: float, slack_s: float = 60.0) -> str:
     return ""
 
 
-def resample(t: np.ndarray, y: np.ndarray, grid: np.ndarray) -> np.ndarray:
-    """Step-wise value of y at each grid time (last sample at or before it; 0 before the first)."""
+def resample(t: np.ndarray, y: np.ndarray, grid: np.ndarray, before: float = 0.0) -> np.ndarray:
+    """Step-wise value of y at each grid time (last sample at or before it; `before` before the first)."""
     if len(t) == 0:
-        return np.zeros_like(grid)
+        return np.full(len(grid), before, float)
     idx = np.searchsorted(t, grid, side="right") - 1
-    out = np.where(idx >= 0, y[np.clip(idx, 0, len(y) - 1)], 0.0)
+    out = np.where(idx >= 0, y[np.clip(idx, 0, len(y) - 1)], before)
     return out.astype(float)
 
 
 def aggregate(runs: Sequence[Dict], grid: np.ndarray) -> Dict[str, Dict[str, np.ndarray]]:
-    """Per curve: median, p10, p90 over runs on the grid."""
+    """Per curve: median, p10, p90 over the runs that have a value at each grid time (nan where none has)."""
+    import warnings
     out = {}
-    for key in CURVES:
-        stack = np.stack([resample(r["t"], r["series"][key], grid) for r in runs])
-        out[key] = {"median": np.median(stack, 0), "p10": np.percentile(stack, 10, 0),
-                    "p90": np.percentile(stack, 90, 0)}
+    for key, spec in CURVES.items():
+        stack = np.stack([resample(r["t"], r["series"][key], grid, spec[5]) for r in runs])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # all-nan columns: no run has the figure yet
+            out[key] = {"median": np.nanmedian(stack, 0), "p10": np.nanpercentile(stack, 10, 0),
+                        "p90": np.nanpercentile(stack, 90, 0)}
     return out
 
 
@@ -72,40 +100,18 @@ def time_to_reach(t: np.ndarray, y: np.ndarray, level: float) -> float:
     return float(t[hit[0]]) if len(hit) else float("inf")
 
 
-def paper_claims(agg: Dict[str, Dict[str, Dict[str, np.ndarray]]], grid: np.ndarray, rows: Sequence[Dict],
-                 volume_tolerance: float = 0.10) -> List[Dict]:
-    """The paper's Section V-B claims, semantic vs classic, on the median curves.
+#: Minimum mask size (px) -> from how far a whole chair is detected (config/sim.yaml's comment).
+DETECTOR_RANGES = {1200: "a whole chair detected from about 4 m", 50: "a whole chair detected from 10 m"}
 
-    1. Semantic finds at least as many objects as classic at every time.
-    2. Semantic reaches 100% of the objects sooner (median time to all found).
-    3. Semantic's final explored volume is within volume_tolerance of classic's.
-    Each entry: claim text, holds (bool) and the measured figure.
-    """
-    if "semantic" not in agg or "classic" not in agg:
-        return []
-    sem, cls = agg["semantic"], agg["classic"]
-    deficit = cls["found_percent"]["median"] - sem["found_percent"]["median"]
-    behind = np.nonzero(deficit > 1e-9)[0]
-    t_sem = next(r["time_to_all_found_s_median"] for r in rows if r["mode"] == "semantic")
-    t_cls = next(r["time_to_all_found_s_median"] for r in rows if r["mode"] == "classic")
-    v_sem, v_cls = sem["explored_volume_m3"]["median"][-1], cls["explored_volume_m3"]["median"][-1]
-    ratio = v_sem / v_cls if v_cls > 0 else float("nan")
 
-    def secs(x):
-        return "%.0f s" % x if np.isfinite(x) else "never"
-
-    return [
-        {"claim": "semantic finds at least as many objects as classic at every time (median)",
-         "holds": len(behind) == 0,
-         "measured": "always" if len(behind) == 0 else "behind at %d of %d times (first at %.0f s, by up to %.0f points)"
-         % (len(behind), len(grid), grid[behind[0]], deficit.max())},
-        {"claim": "semantic finds 100% of the objects sooner (median time)",
-         "holds": bool(np.isfinite(t_sem) and t_sem < t_cls),
-         "measured": "semantic %s, classic %s" % (secs(t_sem), secs(t_cls))},
-        {"claim": "semantic's explored volume is within %.0f%% of classic's (final median)" % (100 * volume_tolerance),
-         "holds": bool(np.isfinite(ratio) and abs(ratio - 1.0) <= volume_tolerance),
-         "measured": "%.1f vs %.1f m3 (ratio %.3f)" % (v_sem, v_cls, ratio)},
-    ]
+def describe_detector(detector: Optional[Dict]) -> str:
+    """One line naming a run's detector (summary.json "detector"), e.g.
+    "masks of at least 1200 px (config/sim.yaml; a whole chair detected from about 4 m)"."""
+    if not detector or detector.get("min_mask_pixels") is None:
+        return "unknown"
+    px = int(detector["min_mask_pixels"])
+    notes = [detector.get("source") or "?"] + ([DETECTOR_RANGES[px]] if px in DETECTOR_RANGES else [])
+    return "masks of at least %d px (%s)" % (px, "; ".join(notes))
 
 
 def describe_yaml(path: str) -> str:
@@ -146,22 +152,40 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
                     w.writerow([mode, key, "%.1f" % t, "%.4f" % c["median"][i], "%.4f" % c["p10"][i],
                                 "%.4f" % c["p90"][i]])
     plots = []
-    for key, (label, unit) in CURVES.items():
-        fig, ax = plt.subplots(figsize=(6, 4))
+
+    def draw(ax, key):
+        label, unit, figure = CURVES[key][:3]
         for mode, curves in agg.items():
             c = curves[key]
             line, = ax.plot(grid, c["median"], label="%s (median)" % mode)
             ax.fill_between(grid, c["p10"], c["p90"], color=line.get_color(), alpha=0.2,
                             label="%s (10th-90th percentile)" % mode)
+        if not any(np.isfinite(curves[key]["median"]).any() for curves in agg.values()):
+            ax.text(0.5, 0.5, "not measured in these runs", ha="center", va="center", transform=ax.transAxes)
         ax.set_xlabel("sim time (s)")
         ax.set_ylabel("%s (%s)" % (label, unit))
+        if figure:
+            ax.set_title("%s: %s" % (figure, label), fontsize=9)
         ax.grid(True, alpha=0.3)
-        ax.legend()
+        ax.legend(fontsize=7)
+
+    for key in CURVES:
+        fig, ax = plt.subplots(figsize=(6, 4))
+        draw(ax, key)
         fig.tight_layout()
         path = os.path.join(out_dir, "%s.png" % key)
         fig.savefig(path, dpi=100)
         plt.close(fig)
         plots.append(path)
+    panels = [k for k, spec in CURVES.items() if spec[2]]  # the paper's Figures 5-8: eight panels
+    fig, axes = plt.subplots(2, 4, figsize=(20, 8))
+    for ax, key in zip(axes.T.ravel(), panels):
+        draw(ax, key)
+    fig.tight_layout()
+    path = os.path.join(out_dir, "figures_5_8.png")
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+    plots.insert(0, path)
 
     rows = []
     for mode, runs in by_mode.items():
@@ -169,24 +193,31 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
         final_vol = [r["series"]["explored_volume_m3"][-1] for r in runs]
         t100 = [time_to_reach(r["t"], r["series"]["found_percent"], 100.0) for r in runs]
         reasons = sorted(set(r["summary"].get("termination_reason", "?") for r in runs))
+        explored = sum(r["summary"].get("termination_reason") == "explored" for r in runs)
         rows.append({"mode": mode, "runs": len(runs), "found_percent_median": float(np.median(final_found)),
+                     "explored_share": explored / len(runs),
                      "explored_m3_median": float(np.median(final_vol)),
                      "time_to_all_found_s_median": float(np.median(t100)),
                      "collisions": int(sum(r["summary"].get("collisions", 0) for r in runs)),
                      "termination": ", ".join(reasons)})
-    lines = ["# Experiment report", ""] + ["- %s" % l for l in setup] + ([""] if setup else []) + [
+    detectors = sorted({describe_detector(r["summary"].get("detector")) for runs in by_mode.values() for r in runs})
+    setup = list(setup) + ["detector: " + "; ".join(detectors) + (" (differs between runs)" if len(detectors) > 1
+                                                                   else "")]
+    lines = ["# Experiment report", ""] + ["- %s" % l for l in setup] + [""] + [
              "Median over runs; curves show the median and the 10th-90th percentile band.", "",
              "| mode | runs | objects found (final, median) | explored volume (final, median) | "
-             "time to find all (median) | collisions | termination |", "|---|---|---|---|---|---|---|"]
+             "time to find all (median) | collisions | termination | ended explored |",
+             "|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append("| %s | %d | %.0f%% | %.1f m3 | %s | %d | %s |" % (
+        lines.append("| %s | %d | %.0f%% | %.1f m3 | %s | %d | %s | %.0f%% |" % (
             r["mode"], r["runs"], r["found_percent_median"], r["explored_m3_median"],
             "%.0f s" % r["time_to_all_found_s_median"] if np.isfinite(r["time_to_all_found_s_median"]) else "never",
-            r["collisions"], r["termination"]))
+            r["collisions"], r["termination"], 100 * r["explored_share"]))
     claims = paper_claims(agg, grid, rows)
     if claims:
         lines += ["", "## The paper's claims, measured here", "", "| claim | holds | measured |", "|---|---|---|"]
-        lines += ["| %s | %s | %s |" % (c["claim"], "yes" if c["holds"] else "no", c["measured"]) for c in claims]
+        lines += ["| %s | %s | %s |" % (c["claim"], {True: "yes", False: "no", None: "n/a"}[c["holds"]],
+                                        c["measured"]) for c in claims]
     lines += ["", "Figures: " + ", ".join("[%s](%s)" % (os.path.basename(p), os.path.basename(p)) for p in plots),
               "", "Data: [curves.csv](curves.csv)", ""]
     for mode, runs in by_mode.items():

@@ -99,6 +99,30 @@ def _free_cells(vertices: np.ndarray, faces: np.ndarray, res: float, margin_cell
     return ~occ, lo
 
 
+def _clear_cells(free: np.ndarray, res: float, radius_m: float) -> np.ndarray:
+    """Cells whose centre's distance to the nearest non-free cell centre, less
+    half a cell, is at least radius_m: the same answer, float for float, as
+    ndimage.distance_transform_edt(free) * res - 0.5 * res >= radius_m, from
+    squared distances computed one axis after the other over offsets up to K
+    cells only. Where the nearest non-free cell lies within K cells the
+    squared distance is exact; otherwise it, and the true one, exceed K^2,
+    and K is chosen so that any such cell is clear."""
+    k_max = int(np.ceil((radius_m + 0.5 * res) / res)) + 1
+    big = np.int32(3 * (k_max + 1) ** 2)
+    d2 = np.where(free, big, np.int32(0)).astype(np.int32)
+    for axis in range(3):
+        out = d2.copy()
+        n = d2.shape[axis]
+        for k in range(1, min(k_max, n - 1) + 1):
+            src = [slice(None)] * 3
+            dst = [slice(None)] * 3
+            for a, b in ((slice(k, None), slice(None, -k)), (slice(None, -k), slice(k, None))):
+                src[axis], dst[axis] = a, b
+                np.minimum(out[tuple(dst)], d2[tuple(src)] + np.int32(k * k), out=out[tuple(dst)])
+        d2 = np.minimum(out, big)
+    return np.sqrt(d2.astype(np.float64)) * res - 0.5 * res >= radius_m
+
+
 class Observability:
     """Observability test of surface points in one scene (triangle soup in the world frame)."""
 
@@ -118,7 +142,7 @@ class Observability:
         # Cells touched by a surface, then each cell centre's distance to the
         # nearest touched cell; a surface lies within about half a cell of that one's centre.
         free, origin = _free_cells(vertices, faces, res)
-        clear = ndimage.distance_transform_edt(free) * res - 0.5 * res >= self.view.radius_m
+        clear = _clear_cells(free, res, self.view.radius_m)
         s = np.floor((np.asarray(start_xyz[:3], np.float64) - origin) / res).astype(int)
         if np.any(s < 0) or np.any(s >= clear.shape) or not clear[tuple(s)]:
             raise SceneError("start %s is not at least %.3f m from every surface"
@@ -148,6 +172,7 @@ class Observability:
                                max_steps: int = 200) -> np.ndarray:
         """Ray parameter (m) of the first camera cell along p + t u, t in [t0, t1]; inf if none."""
         res, shape = self._res, np.array(self._to_camera.shape)
+        flat = self._to_camera.reshape(-1)
         t = t0.copy()
         out = np.full(len(p), np.inf)
         act = np.flatnonzero(t <= t1)
@@ -156,9 +181,10 @@ class Observability:
                 break
             x = p[act] + t[act, None] * u[act]
             idx = np.floor((x - self._origin) / res).astype(np.int64)
-            inside = np.all((idx >= 0) & (idx < shape), axis=1)
-            act, idx = act[inside], idx[inside]  # the grid holds every camera cell: outside is a miss
-            g = self._to_camera[idx[:, 0], idx[:, 1], idx[:, 2]]
+            inside = ((idx >= 0) & (idx < shape)).all(1)
+            if not inside.all():
+                act, idx = act[inside], idx[inside]  # the grid holds every camera cell: outside is a miss
+            g = flat[(idx[:, 0] * shape[1] + idx[:, 1]) * shape[2] + idx[:, 2]]
             hit = g == 0
             out[act[hit]] = t[act[hit]]
             act, g = act[~hit], g[~hit]
@@ -179,13 +205,18 @@ class Observability:
             return out
         # Depth is along the optical axis: the ray makes angle |elev - pitch| with it (yaw centred on p).
         cos_axis = np.cos(np.arcsin(np.clip(u[:, 2], -1, 1)) - self.view.pitch_rad)
-        t_cam = self._first_camera_position(p, u, self.view.d_min_m / cos_axis, self.view.d_max_m / cos_axis)
+        t0, t1 = self.view.d_min_m / cos_axis, self.view.d_max_m / cos_axis
+        # The first surface along the ray (from 1 mm off p) first: a camera
+        # position beyond it cannot see p, so the search stops there. p is seen
+        # iff the first camera position comes before that surface, which is
+        # what an occlusion test of the segment to it would answer; most rays
+        # from a surface point hit another surface within centimetres.
+        o = (p + eps * u).astype(np.float32)
+        t_hit = self._embree.run(o, u.astype(np.float32), dists=(t1 - eps).astype(np.float32), query="DISTANCE")
+        blocked = t_hit < (t1 - eps).astype(np.float32)
+        t_cam = self._first_camera_position(p, u, t0, np.where(blocked, np.minimum(t1, eps + t_hit), t1))
         ok = np.isfinite(t_cam)
-        if np.any(ok):
-            o = (p[ok] + eps * u[ok]).astype(np.float32)
-            free = self._embree.run(o, u[ok].astype(np.float32), dists=(t_cam[ok] - eps).astype(np.float32),
-                                    query="OCCLUDED") == -1
-            ok[np.flatnonzero(ok)[~free]] = False
+        ok[ok] = ~blocked[ok] | (t_hit[ok] > (t_cam[ok] - eps).astype(np.float32))
         return ok
 
     def mask(self, points: np.ndarray, normals: Optional[np.ndarray] = None, chunk: int = 16384,
@@ -201,35 +232,97 @@ class Observability:
         out = np.zeros(len(points), bool)
         # Rays go out in rounds over a fixed shuffle of the strata; a point stops once one ray sees it.
         order = np.random.default_rng(self.view.seed + 1).permutation(k)
+        cos_max = np.cos(self.view.max_incidence_rad) - 1e-9
         for a in range(0, len(points), chunk):
             p = points[a:a + chunk]
             dirs = self._directions(len(p), rng)[:, order]
+            # Directions within the incidence limit of each point's normal (all without normals).
+            steep = (np.abs(np.einsum("ijk,ik->ij", dirs, normals[a:a + chunk])) >= cos_max
+                     if normals is not None else np.ones(dirs.shape[:2], bool))
             seen = np.zeros(len(p), bool)
             for r in range(0, k, round_rays):
                 todo = np.flatnonzero(~seen)
                 if len(todo) == 0:
                     break
-                u = dirs[todo, r:r + round_rays].reshape(-1, 3)
-                owner = np.repeat(todo, min(round_rays, k - r))
-                nn = None if normals is None else normals[a:a + chunk][owner]
-                seen[np.unique(owner[self._sees(p[owner], u, nn)])] = True
+                sel = steep[todo, r:r + round_rays]
+                owner = np.repeat(todo, sel.sum(1))
+                u = dirs[todo, r:r + round_rays][sel]
+                seen[owner[self._sees(p[owner], u)]] = True
             out[a:a + chunk] = seen
         return out
 
-
     def mask_by_probes(self, points: np.ndarray, point_faces: np.ndarray, probes: np.ndarray,
-                       probe_faces: np.ndarray, probe_normals: Optional[np.ndarray] = None) -> np.ndarray:
+                       probe_faces: np.ndarray, probe_normals: Optional[np.ndarray] = None,
+                       seen: Optional[np.ndarray] = None) -> np.ndarray:
         """Cheaper mask for large surfaces: the observability of a coarser probe
         sample, carried to each point from the nearest probe on the same face
-        (face indices of one mesh; every face needs a probe)."""
-        from scipy.spatial import cKDTree
-        seen = self.mask(probes, probe_normals)
-        if len(points) == 0:
-            return np.zeros(0, bool)
-        # A fourth coordinate keeps faces 1 km apart, so the nearest probe shares the face.
-        tree = cKDTree(np.hstack([probes, 1e3 * probe_faces[:, None].astype(np.float64)]))
-        _, i = tree.query(np.hstack([points, 1e3 * point_faces[:, None].astype(np.float64)]))
-        return seen[i]
+        (face indices of one mesh; every face needs a probe). seen: the
+        probes' mask(probes, probe_normals) if already known."""
+        if seen is None:
+            seen = self.mask(probes, probe_normals)
+        return carry_probe_masks(points, point_faces, probes, probe_faces, seen)
+
+
+def carry_probe_masks(points: np.ndarray, point_faces: np.ndarray, probes: np.ndarray, probe_faces: np.ndarray,
+                      seen: np.ndarray) -> np.ndarray:
+    """Observability.mask_by_probes once the probes' mask `seen` is known."""
+    from scipy.spatial import cKDTree
+    from .metrics import spatial_order
+    if len(points) == 0:
+        return np.zeros(0, bool)
+    # Per face: how many probes, how many seen. A face whose probes agree
+    # passes their answer on (most faces, such as a wall's outside); on the
+    # others each point takes its nearest probe's.
+    n_faces = int(max(point_faces.max(), probe_faces.max())) + 1
+    q_count = np.bincount(probe_faces, minlength=n_faces)
+    q_seen = np.bincount(probe_faces, weights=seen.astype(np.float64), minlength=n_faces).astype(np.int64)
+    if np.any(q_count[point_faces] == 0):
+        raise ValueError("mask_by_probes: faces %s have points but no probe"
+                         % np.unique(point_faces[q_count[point_faces] == 0])[:5].tolist())
+    out = (q_seen == q_count)[point_faces]
+    mixed = (q_seen > 0) & (q_seen < q_count)
+    on_mixed = np.flatnonzero(mixed[point_faces])
+    if len(on_mixed) == 0:
+        return out
+    p_order = on_mixed[np.argsort(point_faces[on_mixed], kind="stable")]
+    faces, p_start, p_count = np.unique(point_faces[p_order], return_index=True, return_counts=True)
+    q_order = np.argsort(probe_faces, kind="stable")
+    q_start = np.searchsorted(probe_faces[q_order], faces, "left")
+    for f, a, n, b in zip(faces, p_start, p_count, q_start):
+        pi = p_order[a:a + n]
+        if n > 20000:  # large faces: queries in spatial order
+            pi = pi[spatial_order(points[pi])]
+        qi = q_order[b:b + q_count[f]]
+        out[pi] = seen[qi[cKDTree(probes[qi]).query(points[pi])[1]]]
+    return out
+
+
+_POOL_STATE = {}  # what forked workers of masks() read: the Observability and the jobs
+
+
+def _pool_mask(i: int):
+    obs, jobs = _POOL_STATE["obs"], _POOL_STATE["jobs"]
+    return i, obs.mask(*jobs[i])
+
+
+def masks(obs: "Observability", jobs, processes: int = 2):
+    """[obs.mask(points, normals) for (points, normals) in jobs], the jobs
+    spread over forked processes (largest first), which share obs's grids
+    and Embree scene with this one. Each job's answer does not depend on
+    where it runs: mask() seeds its directions per call."""
+    import multiprocessing as mp
+    if processes <= 1 or len(jobs) < 2 or "fork" not in mp.get_all_start_methods():
+        return [obs.mask(*j) for j in jobs]
+    order = sorted(range(len(jobs)), key=lambda i: -len(jobs[i][0]))
+    out = [None] * len(jobs)
+    _POOL_STATE.update(obs=obs, jobs=jobs)
+    try:
+        with mp.get_context("fork").Pool(min(processes, len(jobs))) as pool:
+            for i, m in pool.imap_unordered(_pool_mask, order):
+                out[i] = m
+    finally:
+        _POOL_STATE.clear()
+    return out
 
 
 def scene_of_ground_truth(gt: dict):

@@ -5,7 +5,7 @@ Messages are read by field name only; the module imports no ROS package unless
 `subscribe` is called.
 """
 import math
-from typing import Dict, List
+from typing import Dict, List, Optional
 
 #: topic -> handler name; record.launch records these for evaluation.
 TOPICS = {
@@ -55,6 +55,10 @@ class RunLog:
         self.drops: Dict[str, Dict[str, int]] = {}   # node (short name) -> reason -> count
         self.faults: Dict[str, int] = {}             # injected by mav_sim
         self.last_pose = None                        # (x, y, z) of the last mav/pose
+        # Ground-truth ids matched by the object map's meshes (eval.metrics' matching, the final
+        # report's) at the last snapshot, and its sim time; None before the first or without snapshots.
+        self.found_ids: Optional[List[int]] = None
+        self.found_at_s: Optional[float] = None
         self._last_pos = None
         self._frozen = False
 
@@ -109,10 +113,17 @@ class RunLog:
         self.faults = dict(zip(msg.reasons, (int(c) for c in msg.counts)))
 
     # ------------------------------------------------------------ output
-    def found_ground_truth(self, gt_objs, margin_m=0.1):
-        """Ground-truth ids whose box (grown by margin_m) holds a map object's
-        centroid of the same class: a cheap per-tick estimate; the final
-        figures come from the meshes (semantic_exploration.eval.metrics)."""
+    def set_found(self, gt_ids, sim_s: float) -> None:
+        """The ground-truth ids a snapshot of the object map matches (GroundTruthIndex.found), taken at sim_s."""
+        if not self._frozen:
+            self.found_ids, self.found_at_s = sorted(gt_ids), sim_s
+
+    def found_proxy(self, gt_objs, margin_m=0.1):
+        """A proxy of the ground-truth objects found, from the published
+        objects alone (no mesh): the ids whose box (grown by margin_m) holds a
+        map object's centroid of the same class. It can differ from the
+        mesh matching of eval.metrics (the found figure of the report and of
+        the time series' ground_truth_found), e.g. for a merged or misplaced object."""
         found = set()
         for o in (self.objects.objects if self.objects else []):
             c = (o.centroid.x, o.centroid.y, o.centroid.z)
@@ -130,7 +141,9 @@ class RunLog:
                 "explored_volume_m3": round(st.explored_volume_m3, 3) if st else 0.0,
                 "frontier_count": st.frontier_count if st else 0,
                 "objects_in_map": len(self.objects.objects) if self.objects else 0,
-                "ground_truth_found": len(self.found_ground_truth(gt_objs)),
+                "ground_truth_found": len(self.found_ids) if self.found_ids is not None else "",
+                "found_at_s": round(self.found_at_s, 2) if self.found_at_s is not None else "",
+                "ground_truth_found_proxy": len(self.found_proxy(gt_objs)),
                 "path_length_m": round(self.path_length_m, 3), "collisions": self.collisions,
                 "planning_time_s": round(self.status.planning_time_s, 4) if self.status else 0.0,
                 "integration_time_ms": round(st.integration_time_ms, 3) if st else 0.0,

@@ -74,7 +74,7 @@ class NoiseConfig:
 
 @dataclass
 class DetectorConfig:
-    min_mask_pixels: int = 50        # px; smaller masks are missed
+    min_mask_pixels: int = 1200      # px; smaller masks are missed (config/sim.yaml: a whole chair from about 4 m)
     drop_fraction: float = 0.0       # probability that a detection is missed
     bleed_probability: float = 0.0   # probability that a mask bleeds onto its neighbours
     bleed_pixels: int = 3            # px; dilation of a bleeding mask

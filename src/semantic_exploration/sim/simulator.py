@@ -80,6 +80,16 @@ def waypoints_from_poses(poses: Sequence[Tuple[Sequence[float], Sequence[float]]
     return out
 
 
+def start_pose_of(scene: Scene, start_pose=None) -> Tuple[float, float, float, float]:
+    """The MAV's start (x, y, z, yaw; m, rad): start_pose if given, else the
+    scene's, else the centre of its box at 1.2 m (at most 0.3 m under its top)."""
+    start = start_pose or scene.start
+    if start is None:
+        c = scene.bounds.mean(0)
+        start = (c[0], c[1], min(1.2, scene.bounds[1, 2] - 0.3), 0.0)
+    return tuple(float(v) for v in start)
+
+
 class Simulator:
     def __init__(self, cfg: SimConfig, scene: Scene):
         cfg.validate()
@@ -93,11 +103,7 @@ class Simulator:
             self.bounds = np.array([cfg.bounds_min_m, cfg.bounds_max_m], float)
         else:
             self.bounds = scene.bounds
-        start = cfg.start_pose or scene.start
-        if start is None:
-            c = scene.bounds.mean(0)
-            start = (c[0], c[1], min(1.2, scene.bounds[1, 2] - 0.3), 0.0)
-        self.start = tuple(float(v) for v in start)
+        self.start = start_pose_of(scene, cfg.start_pose)
         self.follower = PathFollower(cfg.mav, self.start)
         self.T_BC = np.eye(4)
         self.T_BC[:3, :3] = rpy_matrix(*cfg.camera.mount_rpy_rad) @ R_OPTICAL
