@@ -216,7 +216,7 @@ void BackgroundMapNode::publishStats(const std_msgs::Header& header) {
   s.explored_volume_m3 = s.free_volume_m3 + s.occupied_volume_m3;
   s.frontier_count = static_cast<std::uint32_t>(map_->frontierCount());
   s.surface_voxels = surface_.occupied_voxels;
-  s.surface_observed_share = surface_.share();
+  s.surface_observed_share = surface_measured_ ? surface_.share() : -1.0;
   s.block_count = static_cast<std::uint32_t>(map_->blockCount());
   s.memory_bytes = map_->memoryBytes();
   s.integration_time_ms = last_integration_ms_;
@@ -259,6 +259,7 @@ void BackgroundMapNode::publishClouds(const ros::Time& stamp) {
     last_frontier_pub_ = now;
     // The termination's background share, at the frontier cloud's pace (one pass over the occupied blocks).
     surface_ = map_->surfaceObservedWithin(exploration_.d_bg_m);
+    surface_measured_ = true;
     frontiers_dirty_ = false;
   }
   if (occupied_dirty_ && due(last_occupied_pub_, config_.publish_period_s)) {

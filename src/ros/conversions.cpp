@@ -123,7 +123,8 @@ std::vector<semexp::ObjectSummary> toObjectSummaries(const semantic_exploration:
     s.bbox_max_W = {o.bbox_max.x, o.bbox_max.y, o.bbox_max.z};
     s.centroid_W = {o.centroid.x, o.centroid.y, o.centroid.z};
     s.observed_fraction = o.observed_fraction;
-    if (s.bbox_min_W.allFinite() && s.bbox_max_W.allFinite() && s.centroid_W.allFinite())
+    const bool share_ok = std::isfinite(s.observed_fraction) && s.observed_fraction >= 0 && s.observed_fraction <= 1;
+    if (s.bbox_min_W.allFinite() && s.bbox_max_W.allFinite() && s.centroid_W.allFinite() && share_ok)
       out.push_back(s);
     else
       ++dropped;

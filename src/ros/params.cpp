@@ -353,9 +353,11 @@ semexp::FrontierRetirementConfig loadFrontierRetirement(const ParamReader& p) {
 PlannerNodeConfig loadPlannerNode(const ParamReader& p) {
   PlannerNodeConfig c;
   p.get("planner/service_timeout_s", c.service_timeout_s);
-  if (!(c.service_timeout_s > 0)) throw semexp::ConfigError("planner/service_timeout_s", "must be > 0 s");
+  if (!(c.service_timeout_s > 0 && c.service_timeout_s <= 3600))
+    throw semexp::ConfigError("planner/service_timeout_s", "must be in (0, 3600] s");
   p.get("planner/retry_period_s", c.retry_period_s);
-  if (!(c.retry_period_s > 0)) throw semexp::ConfigError("planner/retry_period_s", "must be > 0 s");
+  if (!(c.retry_period_s > 0 && c.retry_period_s <= 3600))
+    throw semexp::ConfigError("planner/retry_period_s", "must be in (0, 3600] s");
   p.getAtLeast("planner/goal_timeout_factor", c.goal_timeout_factor, 1.0, "(a factor)");
   return c;
 }

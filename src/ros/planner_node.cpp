@@ -28,6 +28,7 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   frames_ = loadFrames(p);
   termination_ = loadTermination(p);
   retirement_ = loadFrontierRetirement(p);
+  semexp::FrontierRetirement(retirement_, camera_, bounds_, config_.clearance_radius_m(), 1.0);  // checks them together
   node_config_ = loadPlannerNode(p);
   poses_ = std::make_unique<PoseSource>(loadTf(p), false);  // the latest pose, never an interpolated one: no gap guard
   services_ = std::make_unique<PlannerServices>(nh, config_, camera_, node_config_.service_timeout_s, drops_);
@@ -36,9 +37,9 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   candidates_pub_ = pnh.advertise<semantic_exploration::CandidateViewArray>("candidates", 1, true);
   markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("candidate_markers", 1, true);
   status_pub_ = pnh.advertise<ExplorationStatus>("status", 10, true);
-  const char* gains[4] = {"gain_images/entropy", "gain_images/background", "gain_images/object",
-                          "gain_images/combined"};
-  for (int i = 0; i < 4; ++i) gain_pubs_[i] = pnh.advertise<sensor_msgs::Image>(gains[i], 1, true);
+  const char* gains[4] = {"entropy", "background", "object", "combined"};
+  for (int i = 0; i < 4; ++i)
+    gain_pubs_[i] = pnh.advertise<sensor_msgs::Image>(std::string("gain_images/") + gains[i], 1, true);
   plan_srv_ = pnh.advertiseService("plan_once", &PlannerNode::planOnce, this);
   update_sub_ = nh.subscribe("background_map/map_update", 50, &PlannerNode::mapUpdateCallback, this);
   frontiers_sub_ = nh.subscribe("background_map/frontiers", 1, &PlannerNode::frontiersCallback, this);
@@ -62,6 +63,7 @@ void PlannerNode::publishStatus(uint8_t state, const std::string& message) {
   s.iteration = iteration_;
   s.message = message;
   s.service_timeouts = static_cast<uint32_t>(drops_.count("service_timeout"));
+  s.background_observed_share = static_cast<float>(background_share_);
   status_pub_.publish(s);
 }
 
@@ -78,9 +80,10 @@ bool PlannerNode::applyBlocks(const semantic_exploration::MapBlocks& msg, bool& 
   switch (replica_.apply(u)) {
     case semexp::MapReplica::Result::kApplied: return true;
     case semexp::MapReplica::Result::kStale:
-      // A sequence below the replica's: background_map restarted and counts
-      // from 1 again; its blocks must not be merged onto the old map.
-      gap = u.sequence < replica_.sequence();
+      // Sequence 1 after a later one: background_map restarted and counts
+      // from 1 again, and its blocks must not be merged onto the old map.
+      // Older updates queued before a resync are only stale.
+      gap = u.sequence == 1 && replica_.sequence() > 1;
       return false;
     case semexp::MapReplica::Result::kGap: gap = true; return false;
     case semexp::MapReplica::Result::kBadInput: drops_.drop("bad_map_update", replica_.last_error()); return false;
@@ -104,7 +107,7 @@ void PlannerNode::mapUpdateCallback(const semantic_exploration::MapBlocksConstPt
   if (!applyBlocks(*msg, gap) && gap) {
     ROS_WARN("planner: map update %lu after %lu (%s): resyncing", static_cast<unsigned long>(msg->sequence),
              static_cast<unsigned long>(replica_.sequence()),
-             msg->sequence < replica_.sequence() ? "the map restarted" : "updates were lost");
+             msg->sequence == 1 ? "the map restarted" : "updates were lost");
     resync();
   }
 }
@@ -121,7 +124,7 @@ void PlannerNode::frontiersCallback(const sensor_msgs::PointCloud2ConstPtr& msg)
 void PlannerNode::objectsCallback(const semantic_exploration::ObjectArrayConstPtr& msg) {
   std::size_t dropped = 0;
   objects_ = toObjectSummaries(*msg, dropped);
-  if (dropped > 0) drops_.drop("bad_object", "object with a non-finite box or centroid ignored", dropped);
+  if (dropped > 0) drops_.drop("bad_object", "object with a non-finite box, centroid or share ignored", dropped);
 }
 
 void PlannerNode::statsCallback(const semantic_exploration::MapStatsConstPtr& msg) {
@@ -165,9 +168,7 @@ void PlannerNode::timerCallback(const ros::TimerEvent&) {
 }
 
 bool PlannerNode::planOnce(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  std::string message;
-  res.success = iterate(message);
-  res.message = message;
+  res.success = iterate(res.message);
   return true;
 }
 
@@ -281,16 +282,7 @@ void PlannerNode::publishWinner(const semexp::IterationResult& r, const ros::Tim
   expected_duration_s_ = w.path_time_s;
   executing_since_ = now;
   // One line per iteration: what won and why, so a run's log shows where the MAV went and for which gain.
-  const bool object = w.sample.source == semexp::CandidateSource::kObject;
-  ROS_INFO("planner: iteration %u: %s candidate%s%s (%d of %zu planned, %d reachable) at (%.2f, %.2f, %.2f) yaw %.2f: "
-           "gain %.3f (entropy %.3f, bg %.3f, obj %.3f), %s path %.1f s, utility %.4f; %zu active frontier voxels "
-           "(%zu retired), background seen from <= d_bg %.3f",
-           iteration_, semexp::candidateSourceName(w.sample.source), object ? " of object " : "",
-           object ? std::to_string(w.sample.object_id).c_str() : "", r.candidates_planned, r.candidates.size(),
-           r.candidates_reachable,
-           w.position_W.x(), w.position_W.y(), w.position_W.z(), w.yaw_rad, w.gain, w.gain_entropy, w.gain_bg,
-           w.gain_obj, semexp::PlannedPath::name(w.plan.status), w.path_time_s, w.utility, r.active_frontiers,
-           r.retired_frontiers_W.size(), background_share_);
+  ROS_INFO("planner: iteration %u: %s", iteration_, winnerSummary(r, background_share_).c_str());
 }
 
 void PlannerNode::publishResult(const semexp::IterationResult& r, const ros::Time& stamp, double current_yaw) {

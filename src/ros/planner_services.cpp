@@ -38,6 +38,24 @@ std::vector<semexp::GainSet> PlannerServices::gains(const std::vector<Eigen::Vec
   std::vector<semexp::GainSet> out = toBackgroundGains(r, positions.size(), w, h);
   if (config_.a_obj <= 0) return out;  // classic mode: no object raycast needed
 
+  // Object gains are optional: whatever goes wrong with them, plan without.
+  try {
+    addObjectGains(bg, positions, objects, background_resolution_m, out);
+  } catch (const std::exception& e) {
+    for (auto& g : out) g.object = semexp::GainImage();
+    drops_.drop("bad_object_gains", std::string(e.what()) + "; planning without object gains");
+    addNote(std::string("object gains unusable (") + e.what() + "): planned without object gains");
+  }
+  return out;
+}
+
+void PlannerServices::addObjectGains(const semantic_exploration::ComputeGains& bg,
+                                     const std::vector<Eigen::Vector3d>& positions,
+                                     const std::vector<semexp::ObjectSummary>& objects,
+                                     double background_resolution_m, std::vector<semexp::GainSet>& out) {
+  const int w = config_.raycast_width, h = config_.raycast_height;
+  const auto& r = bg.response;
+  std::string why;
   // Object gains, occluded by the background (semexp::objectRayLimitsBatch).
   semantic_exploration::ComputeGains obj;
   obj.request = bg.request;
@@ -52,18 +70,17 @@ std::vector<semexp::GainSet> PlannerServices::gains(const std::vector<Eigen::Vec
   }
   if (caller_.call("object_map/compute_gains", obj, why) != ServiceCaller::Result::kOk) {
     addNote(why + ": planned without object gains");
-    return out;
+    return;
   }
   if (obj.response.distance_gain.size() != positions.size()) {
     drops_.drop("no_object_gains", "object_map/compute_gains returned " +
                                        std::to_string(obj.response.distance_gain.size()) + " images for " +
                                        std::to_string(positions.size()) + " positions; planning without object gains");
     addNote("object_map/compute_gains answered with the wrong number of images");
-    return out;
+    return;
   }
   for (std::size_t i = 0; i < positions.size(); ++i)
     out[i].object = toGainImage(obj.response.distance_gain[i], w, h, "object gain");
-  return out;
 }
 
 std::vector<std::vector<std::uint8_t>> PlannerServices::history(const std::vector<Eigen::Vector3d>& positions) {

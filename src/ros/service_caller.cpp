@@ -6,7 +6,9 @@ namespace semexp_ros {
 
 ServiceCaller::ServiceCaller(const ros::NodeHandle& nh, double timeout_s, DropCounter& drops)
     : nh_(nh), timeout_s_(timeout_s), drops_(drops) {
-  if (!(timeout_s_ > 0)) throw semexp::ConfigError("planner/service_timeout_s", "must be > 0 s");
+  // ros::Duration throws past its range, inside a worker thread: keep it finite.
+  if (!(timeout_s_ > 0 && timeout_s_ <= 3600))
+    throw semexp::ConfigError("planner/service_timeout_s", "must be in (0, 3600] s");
 }
 
 ServiceCaller::~ServiceCaller() {

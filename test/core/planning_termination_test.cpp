@@ -244,3 +244,23 @@ TEST(FrontierRetirement, APoseCountsAsAViewOnlyInsideTheFieldOfViewAndRange) {
   const CollisionQuery wall = [](const Eigen::Vector3d& q, double) { return std::abs(q.x() - 1.0) > 0.05; };
   EXPECT_FALSE(fr.sees({{0.0, 0.0, 1.0}, 0.0}, p, wall));  // a wall in between
 }
+
+TEST(FrontierRetirement, SettingsThatWouldRetireEveryFrontierAreRefused) {
+  // No view point could exist: every frontier would be retired at the first iteration.
+  const auto parameter = [](const FrontierRetirementConfig& c, const Bounds& b) -> std::string {
+    try {
+      FrontierRetirement(c, camera(), b, kClearance, 0.04);
+    } catch (const ConfigError& e) {
+      return e.parameter();
+    }
+    return "";
+  };
+  FrontierRetirementConfig c;
+  EXPECT_EQ(parameter(c, box(5.0, 3.0)), "");
+  c.min_view_distance_m = c.view_range_m;
+  EXPECT_EQ(parameter(c, box(5.0, 3.0)), "frontier_retirement/min_view_distance_m");
+  c = FrontierRetirementConfig();
+  c.fov_margin_rad = 0.5 * camera().vfov_rad();
+  EXPECT_EQ(parameter(c, box(5.0, 3.0)), "frontier_retirement/fov_margin_rad");
+  EXPECT_EQ(parameter(FrontierRetirementConfig(), box(5.0, 0.3)), "bounds/max_m");  // < 2 x 0.165 m tall
+}

@@ -109,7 +109,9 @@ TEST(ToGainImage, ConvertsAndRefusesOtherSizes) {
 
 TEST(ToObjectSummaries, CountsObjectsWithNonFiniteGeometry) {
   semantic_exploration::ObjectArray arr;
-  arr.objects.resize(2);
+  arr.objects.resize(3);
+  arr.objects[2].id = 6;
+  arr.objects[2].observed_fraction = std::numeric_limits<float>::quiet_NaN();
   arr.objects[0].id = 4;
   arr.objects[0].bbox_max.x = 1.0;
   arr.objects[0].observed_fraction = 0.5f;
@@ -118,7 +120,7 @@ TEST(ToObjectSummaries, CountsObjectsWithNonFiniteGeometry) {
   std::size_t dropped = 0;
   const auto objs = toObjectSummaries(arr, dropped);
   ASSERT_EQ(objs.size(), 1u);
-  EXPECT_EQ(dropped, 1u);
+  EXPECT_EQ(dropped, 2u);
   EXPECT_EQ(objs[0].id, 4u);
   EXPECT_EQ(objs[0].bbox_max_W.x(), 1.0);
   EXPECT_DOUBLE_EQ(objs[0].observed_fraction, 0.5);

@@ -21,7 +21,7 @@ from nav_msgs.msg import Path
 from sensor_msgs.msg import CameraInfo, Image, PointCloud2, PointField
 from std_srvs.srv import Trigger
 
-from semantic_exploration.msg import CandidateViewArray, ExplorationStatus, MapBlocks
+from semantic_exploration.msg import CandidateViewArray, ExplorationStatus, MapBlocks, MapStats
 from semantic_exploration.srv import ComputeGains, ComputeGainsResponse, GetHistoryMasks, GetMap, GetMapResponse
 
 PKG = "semantic_exploration"
@@ -218,6 +218,12 @@ class PlannerNodeTest(unittest.TestCase):
         self.assertTrue(self.wait_for(lambda: self.get_map_calls > before), "no get_map call after a gap")
 
     def test_3_no_frontiers_terminates(self):
+        # Semantic mode: "explored" also needs the background seen from <= d_bg
+        # (termination/background_observed_share 0.9) and no object left; the
+        # background map reports the share in its stats.
+        stats_pub = rospy.Publisher("/background_map/stats", MapStats, queue_size=1, latch=True)
+        self.assertTrue(self.wait_for(lambda: stats_pub.get_num_connections() > 0))
+        stats_pub.publish(MapStats(explored_volume_m3=10.0, surface_voxels=1000, surface_observed_share=0.95))
         self.frontier_pub.publish(cloud([]))
         time.sleep(0.5)
         res = self.plan_once()
@@ -225,6 +231,9 @@ class PlannerNodeTest(unittest.TestCase):
         self.assertTrue(self.wait_for(lambda: any(s.state == ExplorationStatus.STATE_FINISHED for s in self.status)))
         fin = [s for s in self.status if s.state == ExplorationStatus.STATE_FINISHED][-1]
         self.assertEqual(fin.termination_reason, "explored")
+        self.assertTrue(fin.frontiers_done and fin.background_done and fin.objects_done)
+        self.assertAlmostEqual(fin.background_observed_share, 0.95, places=5)
+        self.assertEqual(fin.active_frontiers, 0)
 
     def test_4_depth_history_marks_invalid_pixel(self):
         # Table I camera; pixel (u 159, v 119) is half a pixel left of and above

@@ -58,7 +58,8 @@ std::vector<std::vector<std::uint8_t>> toHistoryMasks(const std::vector<sensor_m
 std::string toMapUpdate(const semantic_exploration::MapBlocks& msg, semexp::MapReplica::Update& update);
 
 /// The objects of the object map as the planner sees them; objects with a
-/// non-finite box or centroid are left out and counted in `dropped`.
+/// non-finite box or centroid, or an observed fraction outside [0, 1] (a NaN
+/// would pass as observed), are left out and counted in `dropped`.
 std::vector<semexp::ObjectSummary> toObjectSummaries(const semantic_exploration::ObjectArray& msg,
                                                      std::size_t& dropped);
 

@@ -96,8 +96,8 @@ semexp::PlannerConfig loadPlanner(const ParamReader& p);              ///< `plan
 semexp::DetectorConfig loadDetector(const ParamReader& p, const semexp::ClassTable& classes);
 FrameNames loadFrames(const ParamReader& p);                          ///< `frames/*`
 TfSettings loadTf(const ParamReader& p);                              ///< `tf_timeout_s`, `max_tf_gap_s`
-PlannerNodeConfig loadPlannerNode(const ParamReader& p);
+PlannerNodeConfig loadPlannerNode(const ParamReader& p);  ///< `planner/{service_timeout_s,retry_period_s,goal_timeout_factor}`
 semexp::TerminationConfig loadTermination(const ParamReader& p);               ///< `termination/*`
-semexp::FrontierRetirementConfig loadFrontierRetirement(const ParamReader& p);  ///< `frontier_retirement/*`  ///< `planner/{service_timeout_s,retry_period_s,goal_timeout_factor}`
+semexp::FrontierRetirementConfig loadFrontierRetirement(const ParamReader& p);  ///< `frontier_retirement/*`
 
 }  // namespace semexp_ros

@@ -1,9 +1,11 @@
 #pragma once
 /// @file planner_markers.hpp
-/// rviz markers of one planning iteration (`planner/candidate_markers`).
+/// rviz markers and the log line of one planning iteration (`planner/candidate_markers`).
 
 #include <std_msgs/Header.h>
 #include <visualization_msgs/MarkerArray.h>
+
+#include <string>
 
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
 
@@ -19,5 +21,10 @@ namespace semexp_ros {
 /// map's frontier cloud). All in header.frame_id.
 visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& r, const std_msgs::Header& header,
                                                  double voxel_size_m);
+
+/// One line on the winner of an iteration for the log: its source, where,
+/// its gains, path and utility, and the frontiers and background share
+/// (background_share: seen from <= d_bg, negative if unknown).
+std::string winnerSummary(const semexp::IterationResult& r, double background_share);
 
 }  // namespace semexp_ros

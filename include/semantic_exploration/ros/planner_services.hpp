@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "semantic_exploration/ComputeGains.h"
 #include "semantic_exploration/GetMap.h"
 #include "semantic_exploration/core/camera.hpp"
 #include "semantic_exploration/core/planner_config.hpp"
@@ -50,6 +51,11 @@ class PlannerServices {
 
  private:
   void addNote(const std::string& note);
+  /// Chains object_map/compute_gains to the background's answer `bg` and fills
+  /// out[i].object; throws on malformed images (the caller goes on without).
+  void addObjectGains(const semantic_exploration::ComputeGains& bg, const std::vector<Eigen::Vector3d>& positions_W,
+                      const std::vector<semexp::ObjectSummary>& objects, double background_resolution_m,
+                      std::vector<semexp::GainSet>& out);
 
   semexp::PlannerConfig config_;
   semexp::PinholeCamera camera_;

@@ -29,6 +29,10 @@ FrontierRetirement::FrontierRetirement(const FrontierRetirementConfig& config, c
   camera_.validate();
   bounds_.validate();
   require(std::isfinite(resolution_m_) && resolution_m_ > 0, "background_map/resolution_m", "must be > 0 m");
+  require(config_.fov_margin_rad < 0.5 * camera_.vfov_rad(), "frontier_retirement/fov_margin_rad",
+          "must be < half the camera's vertical field of view");
+  require(bounds_.max_m.z() - bounds_.min_m.z() >= 2.0 * clearance_radius_m_, "bounds/max_m",
+          "leaves no camera height: the box must be at least 2 x (R + clearance margin) tall");
 }
 
 std::uint64_t FrontierRetirement::key(const Eigen::Vector3d& p) const {

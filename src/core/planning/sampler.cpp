@@ -104,8 +104,11 @@ std::vector<CandidateSample> CandidateSampler::sample_free_space(const Collision
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int k = 0; k < 20 * planner_.n_candidates && static_cast<int>(out.size()) < planner_.n_candidates; ++k) {
     Eigen::Vector3d p;
-    for (int i = 0; i < 3; ++i) p[i] = bounds_.min_m[i] + unit(rng_) * (bounds_.max_m[i] - bounds_.min_m[i]);
-    p = clamp_to_bounds(p);
+    // Uniform in the box shrunk by R (clamping draws from the full box would pile them on its faces).
+    for (int i = 0; i < 3; ++i) {
+      const double lo = bounds_.min_m[i] + planner_.mav_radius_m, hi = bounds_.max_m[i] - planner_.mav_radius_m;
+      p[i] = lo < hi ? lo + unit(rng_) * (hi - lo) : 0.5 * (bounds_.min_m[i] + bounds_.max_m[i]);
+    }
     if (!is_free(p, planner_.clearance_radius_m())) continue;
     CandidateSample s;
     s.source = CandidateSource::kFreeSpace;

@@ -62,6 +62,9 @@ struct FrontierRetirementConfig {
             "must be >= 0 m");
     require(std::isfinite(fov_margin_rad) && fov_margin_rad >= 0, ns + "fov_margin_rad", "must be >= 0 rad");
     require(recheck_iterations > 0, ns + "recheck_iterations", "must be > 0");
+    // Otherwise no view point exists anywhere and every frontier would be retired at once.
+    require(min_view_distance_m < view_range_m, ns + "min_view_distance_m", "must be < view_range_m");
+    require(view_range_m <= 20.0, ns + "view_range_m", "must be <= 20 m (view points per cluster grow with it)");
   }
 };
 
@@ -75,7 +78,8 @@ class FrontierRetirement {
  public:
   /// Where a camera centre can be: inside `bounds`, with no occupied voxel
   /// within clearance_radius_m (m). The camera gives the fields of view. Throws
-  /// ConfigError on an invalid config.
+  /// ConfigError on an invalid config, a fov_margin_rad that leaves no
+  /// vertical field of view or bounds too low for a camera centre.
   FrontierRetirement(const FrontierRetirementConfig& config, const PinholeCamera& camera, const Bounds& bounds,
                      double clearance_radius_m, double map_resolution_m);
 
