@@ -70,7 +70,8 @@ def object_snapshots(out, gt, args):
     from semantic_exploration.eval.truth import GroundTruthIndex
     doc = metrics.load_ground_truth(gt["gt_dir"])
     return ObjectSnapshots(GroundTruthIndex(doc, args.classes), lambda d: call_save("/object_map/save", d),
-                           os.path.join(out, "snapshot", "objects"), args.snapshot_period_s)
+                           os.path.join(out, "snapshot", "objects"), args.snapshot_period_s,
+                           keep_dir=os.path.join(out, "snapshot", "series"))
 
 
 def launch_command(args, ply, overrides, port, start):
@@ -158,10 +159,15 @@ def evaluate(out, gt, classes, saved):
                                "completeness": m.score.completeness if m.score else None,
                                "observable_fraction": ev.observable_fraction.get(m.gt_id)} for m in ev.matches]
         occ = [f for f in saved.get("background_map", {}).get("files", []) if f.endswith("occupied.ply")]
-        if occ:
-            b = index.evaluate_background(metrics.read_ply_vertices(occ[0]))
+        b = index.evaluate_background(metrics.read_ply_vertices(occ[0])) if occ else None
+        if b is not None:
             res["background"] = {"rmse_m": b.rmse_m, "completeness": b.completeness,
                                  "n_reconstructed": b.n_reconstructed, "observable_fraction": b.observable_fraction}
+        series = os.path.join(out, "snapshot", "series")
+        if os.path.isdir(series):  # the time series' accuracy and completeness, from the run's snapshots
+            from semantic_exploration.eval.snapshots import finish_series
+            rec = metrics.load_reconstruction(rec_dir) if "found" in res else None
+            res["timeseries"] = finish_series(index, series, os.path.join(out, "timeseries.csv"), rec, b)
     except Exception as e:  # a failed evaluation must not lose the rest of the report
         res["error"] = "%s: %s" % (type(e).__name__, e)
     return res
@@ -211,6 +217,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
         "dropped_input": mon.drop_summary(),
         "invalid_depth_pixels": stats.invalid_depth_pixels if stats else 0,
         "saved": saved, "detector": detector, "snapshots": getattr(args, "snapshot_summary", None),
+        "background_snapshots": getattr(args, "background_snapshot_summary", None),
     }
     free = os.path.join(gt["gt_dir"], "free_space.json")
     if os.path.exists(free):
@@ -276,12 +283,15 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
                                                100 * b.get("observable_fraction", 1.0), b["n_reconstructed"])]
     if ev.get("error"):
         lines += ["", "evaluation: %s" % ev["error"]]
-    sn = summary.get("snapshots")
-    if sn:
-        lines += ["", "time series: objects found matched as above at %d object-map snapshots, one every %g s of "
-                  "sim time (%d failed), which took %.1f s of wall time (%s of the run)" % (
-                      sn["count"], sn["period_s"], sn["failed"], sn["wall_s"],
-                      "%.1f%%" % (100 * sn["share_of_wall"]) if sn["share_of_wall"] is not None else "-")]
+    sn, sb, ts = summary.get("snapshots"), summary.get("background_snapshots"), ev.get("timeseries")
+    if sn or sb:
+        share = sum(x["share_of_wall"] or 0.0 for x in (sn, sb) if x)
+        lines += ["", "time series: %s%s took %.1f s of wall time during the run (%.1f%%)%s" % (
+            "%d object-map snapshots (every %g s of sim time; objects found matched as above)" % (
+                sn["count"], sn["period_s"]) if sn else "",
+            "%s%d background-map snapshots (every %g s)" % (", " if sn else "", sb["count"], sb["period_s"])
+            if sb else "", sum(x["wall_s"] for x in (sn, sb) if x), 100 * share,
+            "; scoring them afterwards %.1f s" % ts["scoring_wall_s"] if ts else "")]
     lines += ["", "## Dropped input", ""] + mon.drop_report_lines()
     lines += ["", "## Files", ""]
     for name, s in saved.items():
@@ -314,6 +324,9 @@ def parse_args(argv=None):
                     "(scripts/rviz_screenshot.py)")
     ap.add_argument("--progress-period-s", type=float, default=10.0)
     ap.add_argument("--period-s", type=float, default=1.0, help="timeseries.csv row period, s of sim time")
+    ap.add_argument("--background-snapshot-period-s", type=float, default=20.0,
+                    help="background map snapshot period, s of sim time, for the time series' background "
+                    "accuracy and completeness (scored after the run); 0 = none")
     ap.add_argument("--snapshot-period-s", type=float, default=5.0,
                     help="object map snapshot period, s of sim time: objects found in timeseries.csv "
                     "(ground_truth_found) are matched as in the report at each snapshot; 0 = none")
@@ -376,6 +389,11 @@ def main(argv=None):
         gt_objs = [o for o in gt["objects"] if o["class"] in args.classes]
         n_gt = len(gt_objs)
         snaps = object_snapshots(out, gt, args)
+        occupied = None
+        if args.background_snapshot_period_s > 0:
+            from semantic_exploration.eval.snapshots import OccupiedSnapshots, grab_occupied
+            occupied = OccupiedSnapshots(grab_occupied, os.path.join(out, "snapshot", "series"),
+                                         args.background_snapshot_period_s)
         series = open(os.path.join(out, "timeseries.csv"), "w")
         writer = None
         next_print = next_row = 0.0
@@ -384,6 +402,8 @@ def main(argv=None):
             sim = rospy.get_time()
             if snaps is not None and snaps.due(sim):
                 snaps.take(sim, mon)
+            if occupied is not None and occupied.due(sim) and sim > 0:
+                occupied.take(sim)
             if sim >= next_row:  # one row every --period-s of sim time
                 row = mon.row(sim, wall, gt_objs)
                 if writer is None:
@@ -428,6 +448,8 @@ def main(argv=None):
         series.close()
         if snaps is not None:
             args.snapshot_summary = snaps.summary(wall_end)
+        if occupied is not None:
+            args.background_snapshot_summary = occupied.summary(wall_end)
         # The evaluation reads only the saved files: stop the simulator and
         # the nodes first instead of letting them run on beside it.
         stop_launch(launch)

@@ -57,9 +57,18 @@ def chair_mesh(gt):
     return trimesh.load(os.path.join(gt["dir"], chair["mesh"]), force="mesh").subdivide_to_size(0.02)
 
 
-def map_objects(*centroids):
-    """What object_map/objects holds for the proxy: class and centroid per map object."""
-    return NS(objects=[NS(class_name="chair", centroid=NS(x=c[0], y=c[1], z=c[2])) for c in centroids])
+def map_objects(*centroids, voxels=100, observed=0.5):
+    """What object_map/objects holds: class, centroid, surface voxels and their share observed from <= d_obj."""
+    return NS(objects=[NS(class_name="chair", centroid=NS(x=c[0], y=c[1], z=c[2]), voxel_count=voxels,
+                          observed_fraction=observed) for c in centroids])
+
+
+def test_object_observed_share_weighs_objects_by_their_voxels():
+    log = RunLog()
+    assert log.row(0.0, 0.0, [])["object_observed_share"] == ""
+    a, b = map_objects((0, 0, 0), voxels=100, observed=0.5), map_objects((1, 1, 1), voxels=300, observed=0.9)
+    log.objects = NS(objects=a.objects + b.objects)
+    assert log.row(1.0, 1.0, [])["object_observed_share"] == pytest.approx((50 + 270) / 400)
 
 
 def test_time_series_counts_what_the_report_counts(gt, tmp_path):

@@ -156,6 +156,16 @@ class Observability:
 
     def _directions(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """(n, K, 3) unit directions from the point towards the camera, stratified over the band."""
+        return self._unit(*self._angles(n, rng))
+
+    @staticmethod
+    def _unit(sz: np.ndarray, az: np.ndarray) -> np.ndarray:
+        """Unit vectors of elevation sines sz and azimuths az (rad), shape (..., 3)."""
+        r = np.sqrt(np.clip(1 - sz * sz, 0, 1))
+        return np.stack([r * np.cos(az), r * np.sin(az), sz], -1)
+
+    def _angles(self, n: int, rng: np.random.Generator):
+        """_directions' elevation sines and azimuths, (n, K) each."""
         k = self.view.directions
         n_el = max(1, int(round(np.sqrt(k / 6.0))))
         n_az = int(np.ceil(k / n_el))
@@ -165,8 +175,7 @@ class Observability:
         i_az = np.tile(np.arange(n_az), n_el)[:k]
         sz = s_lo + (s_hi - s_lo) * (i_el[None] + rng.random((n, k))) / n_el
         az = 2 * np.pi * (i_az[None] + rng.random((n, k))) / n_az + rng.random((n, 1)) * 2 * np.pi
-        r = np.sqrt(np.clip(1 - sz * sz, 0, 1))
-        return np.stack([r * np.cos(az), r * np.sin(az), sz], -1)
+        return sz, az
 
     def _first_camera_position(self, p: np.ndarray, u: np.ndarray, t0: np.ndarray, t1: np.ndarray,
                                max_steps: int = 200) -> np.ndarray:
@@ -235,19 +244,19 @@ class Observability:
         cos_max = np.cos(self.view.max_incidence_rad) - 1e-9
         for a in range(0, len(points), chunk):
             p = points[a:a + chunk]
-            dirs = self._directions(len(p), rng)[:, order]
-            # Directions within the incidence limit of each point's normal (all without normals).
-            steep = (np.abs(np.einsum("ijk,ik->ij", dirs, normals[a:a + chunk])) >= cos_max
-                     if normals is not None else np.ones(dirs.shape[:2], bool))
+            sz, az = self._angles(len(p), rng)
+            sz, az = sz[:, order], az[:, order]
             seen = np.zeros(len(p), bool)
             for r in range(0, k, round_rays):
                 todo = np.flatnonzero(~seen)
                 if len(todo) == 0:
                     break
-                sel = steep[todo, r:r + round_rays]
+                # This round's directions of the points not seen yet, those within the incidence limit.
+                dirs = self._unit(sz[todo, r:r + round_rays], az[todo, r:r + round_rays])
+                sel = (np.abs(np.einsum("ijk,ik->ij", dirs, normals[a:a + chunk][todo])) >= cos_max
+                       if normals is not None else np.ones(dirs.shape[:2], bool))
                 owner = np.repeat(todo, sel.sum(1))
-                u = dirs[todo, r:r + round_rays][sel]
-                seen[owner[self._sees(p[owner], u)]] = True
+                seen[owner[self._sees(p[owner], dirs[sel])]] = True
             out[a:a + chunk] = seen
         return out
 

@@ -113,6 +113,13 @@ class RunLog:
         self.faults = dict(zip(msg.reasons, (int(c) for c in msg.counts)))
 
     # ------------------------------------------------------------ output
+    def object_observed_share(self):
+        """Share of the map objects' surface voxels observed from <= d_obj (the object map's
+        own figure, per object in ObjectInfo), over all map objects; "" before any voxel."""
+        objs = self.objects.objects if self.objects else []
+        n = sum(o.voxel_count for o in objs)
+        return round(sum(o.observed_fraction * o.voxel_count for o in objs) / n, 4) if n else ""
+
     def set_found(self, gt_ids, sim_s: float) -> None:
         """The ground-truth ids a snapshot of the object map matches (GroundTruthIndex.found), taken at sim_s."""
         if not self._frozen:
@@ -144,6 +151,7 @@ class RunLog:
                 "ground_truth_found": len(self.found_ids) if self.found_ids is not None else "",
                 "found_at_s": round(self.found_at_s, 2) if self.found_at_s is not None else "",
                 "ground_truth_found_proxy": len(self.found_proxy(gt_objs)),
+                "object_observed_share": self.object_observed_share(),
                 "path_length_m": round(self.path_length_m, 3), "collisions": self.collisions,
                 "planning_time_s": round(self.status.planning_time_s, 4) if self.status else 0.0,
                 "integration_time_ms": round(st.integration_time_ms, 3) if st else 0.0,

@@ -205,15 +205,46 @@ class GroundTruthIndex:
                     best, best_frac = g["id"], frac
         return (best if best_frac > 0.5 else None), best_frac
 
-    def found(self, rec: Dict) -> List[int]:
-        """Ground-truth ids some map object of `rec` (metrics.load_reconstruction) matches;
-        no observability needed."""
-        out = set()
+    def matched(self, rec: Dict) -> List:
+        """(ground-truth id, vertices) of each map object of `rec` (metrics.load_reconstruction)
+        that matches one; no observability needed."""
+        out = []
         for o in rec.get("objects", []):
-            gid, _ = self.match(o["class_name"], read_ply_vertices(os.path.join(rec["dir"], o["mesh"])))
+            verts = read_ply_vertices(os.path.join(rec["dir"], o["mesh"]))
+            gid, _ = self.match(o["class_name"], verts)
             if gid is not None:
-                out.add(gid)
-        return sorted(out)
+                out.append((gid, verts))
+        return out
+
+    def found(self, rec: Dict) -> List[int]:
+        """Ground-truth ids some map object of `rec` matches; no observability needed."""
+        return sorted({gid for gid, _ in self.matched(rec)})
+
+    def object_summary(self, matched) -> Dict:
+        """Accuracy and completeness of all matched map objects together, for a
+        time series: {"object_rmse_m": RMSE over the vertices of every matched
+        map object (nan if none), "object_completeness": mean over the
+        ground-truth objects of interest of the share of their observable
+        surface within the threshold of a vertex of a map object matched to
+        them (0 for one not found)}. matched: [(ground-truth id, vertices)]."""
+        d2, n = 0.0, 0
+        by_gt: Dict[int, List[np.ndarray]] = {}
+        for gid, verts in matched:
+            d = metrics.nearest_distance(self.objects[gid].tree, verts)
+            d2, n = d2 + float(np.sum(d ** 2)), n + len(d)
+            by_gt.setdefault(gid, []).append(verts)
+        comp = []
+        for g in self.gt_objects:
+            s = self.objects[g["id"]]
+            vis = s.visible_or_wait(self)
+            if g["id"] not in by_gt or not vis.any():
+                comp.append(0.0 if vis.any() else np.nan)
+                continue
+            tree = kd_tree(np.vstack(by_gt[g["id"]]))
+            comp.append(float(np.mean(within(tree, s.samples[vis], self.threshold_m))))
+        comp = [c for c in comp if np.isfinite(c)]
+        return {"object_rmse_m": float(np.sqrt(d2 / n)) if n else float("nan"),
+                "object_completeness": float(np.mean(comp)) if comp else float("nan")}
 
     def evaluate_objects(self, rec: Dict, score: bool = True) -> ObjectEvaluation:
         """See metrics.evaluate_objects."""
