@@ -68,8 +68,9 @@ def object_snapshots(out, gt, args):
     from semantic_exploration.eval import metrics
     from semantic_exploration.eval.snapshots import ObjectSnapshots
     from semantic_exploration.eval.truth import GroundTruthIndex
-    doc = metrics.load_ground_truth(gt["gt_dir"])
-    return ObjectSnapshots(GroundTruthIndex(doc, args.classes), lambda d: call_save("/object_map/save", d),
+    index = GroundTruthIndex(metrics.load_ground_truth(gt["gt_dir"]), args.classes)
+    index.objects  # sampled before the mission starts
+    return ObjectSnapshots(index, lambda d: call_save("/object_map/save", d),
                            os.path.join(out, "snapshot", "objects"), args.snapshot_period_s,
                            keep_dir=os.path.join(out, "snapshot", "series"))
 
@@ -324,7 +325,7 @@ def parse_args(argv=None):
                     "(scripts/rviz_screenshot.py)")
     ap.add_argument("--progress-period-s", type=float, default=10.0)
     ap.add_argument("--period-s", type=float, default=1.0, help="timeseries.csv row period, s of sim time")
-    ap.add_argument("--background-snapshot-period-s", type=float, default=20.0,
+    ap.add_argument("--background-snapshot-period-s", type=float, default=30.0,
                     help="background map snapshot period, s of sim time, for the time series' background "
                     "accuracy and completeness (scored after the run); 0 = none")
     ap.add_argument("--snapshot-period-s", type=float, default=5.0,
@@ -361,6 +362,7 @@ def main(argv=None):
     env.setdefault("ROS_HOME", os.path.join(out, "ros_home"))
     os.environ.update(ROS_MASTER_URI=env["ROS_MASTER_URI"], ROS_HOSTNAME="127.0.0.1", ROS_HOME=env["ROS_HOME"])
     cmd = launch_command(args, ply, overrides, port, gt["start"])
+    snaps = object_snapshots(out, gt, args)  # the ground truth's object samples, before the mission starts
     log_path = os.path.join(out, "roslaunch.log")
     print("[mission] %s  (log: %s)" % (" ".join(cmd), log_path), flush=True)
     log = open(log_path, "w")
@@ -388,7 +390,6 @@ def main(argv=None):
         mon = Monitor()
         gt_objs = [o for o in gt["objects"] if o["class"] in args.classes]
         n_gt = len(gt_objs)
-        snaps = object_snapshots(out, gt, args)
         occupied = None
         if args.background_snapshot_period_s > 0:
             from semantic_exploration.eval.snapshots import OccupiedSnapshots, grab_occupied

@@ -175,14 +175,25 @@ def cloud_xyz(msg) -> np.ndarray:
 
 
 def grab_occupied(topic: str = "/background_map/occupied", timeout_s: float = 5.0) -> Optional[np.ndarray]:
-    """One ~occupied cloud of the background map (live, needs rospy.init_node): subscribing
-    makes the node send the current one; None if none came within timeout_s of ROS time."""
+    """The background map's current ~occupied cloud (live, needs rospy.init_node): subscribing
+    makes the node send one; a cloud stamped before the call (what the latched topic
+    kept from an earlier subscription) is skipped. None if none came within timeout_s of wall time."""
+    import threading
     import rospy
     from sensor_msgs.msg import PointCloud2
+    since = rospy.get_rostime() - rospy.Duration(0.5)  # a frame or so: the node stamps the cloud with its last frame
+    got, ready = [], threading.Event()
+
+    def on_cloud(msg):
+        if msg.header.stamp >= since and not got:
+            got.append(msg)
+            ready.set()
+    sub = rospy.Subscriber(topic, PointCloud2, on_cloud, queue_size=2)
     try:
-        return cloud_xyz(rospy.wait_for_message(topic, PointCloud2, timeout=timeout_s))
-    except rospy.ROSException:
-        return None
+        ready.wait(timeout_s)
+    finally:
+        sub.unregister()
+    return cloud_xyz(got[0]) if got else None
 
 
 def finish_series(index: GroundTruthIndex, directory: str, csv_path: str, rec: Optional[Dict],

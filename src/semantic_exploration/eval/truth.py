@@ -23,6 +23,7 @@ class TruthSurface:
 
     def __init__(self, samples: np.ndarray, visible_fn, path: str = "", faces: Optional[np.ndarray] = None):
         self.samples = samples
+        self.lo, self.hi = (samples.min(0), samples.max(0)) if len(samples) else (np.zeros(3), np.zeros(3))
         self.path, self.faces = path, faces  # the mesh and each sample's face in it
         self._visible_fn = visible_fn
         self._visible = None
@@ -197,10 +198,14 @@ class GroundTruthIndex:
         matched if that is more than half of them."""
         best, best_frac = None, 0.0
         if len(vertices):
+            lo, hi = vertices.min(0), vertices.max(0)
             for g in self.gt_objects:
                 if g["class"] != class_name:
                     continue
-                frac = float(np.mean(within(self.objects[g["id"]].tree, vertices, self.threshold_m)))
+                s = self.objects[g["id"]]
+                if np.any(lo > s.hi + self.threshold_m) or np.any(hi < s.lo - self.threshold_m):
+                    continue  # no vertex within the threshold of its samples: a fraction of 0
+                frac = float(np.mean(within(s.tree, vertices, self.threshold_m)))
                 if frac > best_frac:
                     best, best_frac = g["id"], frac
         return (best if best_frac > 0.5 else None), best_frac
