@@ -1,5 +1,7 @@
 #!/usr/bin/env python3
 """rostest: bad camera_info to instance_matching and depth_history (see camera_info_bad_input.test)."""
+import os
+import sys
 import threading
 import time
 import unittest
@@ -8,11 +10,15 @@ import numpy as np
 import rospy
 import rostest
 import tf2_ros
-from geometry_msgs.msg import TransformStamped
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import CameraInfo, Image
 
 from semantic_exploration.msg import Detection, Detections, DropCounts, FrameIntegrated, MatchedDetections
+
+# test_object_map_bad_input.py lies beside this file's real path (a catkin devel-space relay runs this file from elsewhere).
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+from test_object_map_bad_input import start_camera_broadcast  # noqa: E402
+
 
 PKG = "semantic_exploration"
 W, H = 320, 240
@@ -76,19 +82,8 @@ class BadCameraInfo(unittest.TestCase):
         rospy.Subscriber("/rosout", Log, on_log, queue_size=100)
         cls.stop = False
 
-        def broadcast():  # camera 1 m above the origin looking along world +x
-            r = rospy.Rate(50)
-            while not rospy.is_shutdown() and not cls.stop:
-                t = TransformStamped()
-                t.header.stamp = rospy.Time.now()
-                t.header.frame_id, t.child_frame_id = "world", "camera"
-                t.transform.translation.z = 1.0
-                r_ = t.transform.rotation
-                r_.x, r_.y, r_.z, r_.w = -0.5, 0.5, -0.5, 0.5
-                cls.tf.sendTransform(t)
-                r.sleep()
-
-        threading.Thread(target=broadcast, daemon=True).start()
+        cls.camera_xyz = (0.0, 0.0, 1.0)  # looking along world +x
+        start_camera_broadcast(cls)
         end = time.monotonic() + 30
         while time.monotonic() < end and not (cls.pub_depth.get_num_connections() >= 2 and
                                               cls.pub_det.get_num_connections() >= 1 and

@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
 """rostest: oversized service requests are refused, naming the limit, and frames go on
 (see gain_requests_bad_input.test)."""
+import os
+import sys
 import threading
 import time
 import unittest
@@ -9,13 +11,17 @@ import numpy as np
 import rospy
 import rostest
 import tf2_ros
-from geometry_msgs.msg import Point, TransformStamped
+from geometry_msgs.msg import Point
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import CameraInfo, Image
 
 from semantic_exploration.msg import DropCounts, FrameIntegrated, MatchedDetections
 from semantic_exploration.srv import ComputeGains, ComputeGainsRequest, GetHistoryMasks, GetHistoryMasksRequest, \
     RenderInstances, RenderInstancesRequest
+
+# test_object_map_bad_input.py lies beside this file's real path (a catkin devel-space relay runs this file from elsewhere).
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+from test_object_map_bad_input import start_camera_broadcast  # noqa: E402
 
 PKG = "semantic_exploration"
 W, H = 320, 240
@@ -71,19 +77,8 @@ class TooLargeRequests(unittest.TestCase):
         rospy.Subscriber("/rosout", Log, on_log, queue_size=100)
         cls.stop = False
 
-        def broadcast():  # camera 1 m above the origin looking along world +x
-            r = rospy.Rate(50)
-            while not rospy.is_shutdown() and not cls.stop:
-                t = TransformStamped()
-                t.header.stamp = rospy.Time.now()
-                t.header.frame_id, t.child_frame_id = "world", "camera"
-                t.transform.translation.z = 1.0
-                q = t.transform.rotation
-                q.x, q.y, q.z, q.w = -0.5, 0.5, -0.5, 0.5
-                cls.tf.sendTransform(t)
-                r.sleep()
-
-        threading.Thread(target=broadcast, daemon=True).start()
+        cls.camera_xyz = (0.0, 0.0, 1.0)  # looking along world +x
+        start_camera_broadcast(cls)
         cls.pub_info.publish(camera_info(W, H))
         end = time.monotonic() + 30
         while time.monotonic() < end and cls.pub_depth.get_num_connections() < 3:

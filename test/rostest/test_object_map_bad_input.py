@@ -31,6 +31,30 @@ def image(arr, encoding, stamp):
     return m
 
 
+
+def start_camera_broadcast(owner):
+    """Broadcasts tf world -> camera at 50 Hz on owner.tf until owner.stop:
+    the camera at owner.camera_xyz (world, m) looking along world +x (optical
+    frame: z forward = world x, x right = world -y, y down = world -z).
+    Shared by the camera-fed bad-input rostests."""
+    def broadcast():
+        r = rospy.Rate(50)
+        while not rospy.is_shutdown() and not owner.stop:
+            t = TransformStamped()
+            t.header.stamp = rospy.Time.now()
+            t.header.frame_id, t.child_frame_id = "world", "camera"
+            tr = t.transform.translation
+            tr.x, tr.y, tr.z = owner.camera_xyz
+            q = t.transform.rotation
+            q.x, q.y, q.z, q.w = -0.5, 0.5, -0.5, 0.5
+            owner.tf.sendTransform(t)
+            r.sleep()
+
+    thread = threading.Thread(target=broadcast, daemon=True)
+    thread.start()
+    return thread
+
+
 class BadInput(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -69,23 +93,7 @@ class BadInput(unittest.TestCase):
         cls.stop = False
         cls.camera_xyz = (0.0, 0.0, 1.0)  # where the broadcast puts the camera, world, m
 
-        def broadcast():
-            r = rospy.Rate(50)
-            while not rospy.is_shutdown() and not cls.stop:
-                t = TransformStamped()
-                t.header.stamp = rospy.Time.now()
-                t.header.frame_id = "world"
-                t.child_frame_id = "camera"
-                tr = t.transform.translation
-                tr.x, tr.y, tr.z = cls.camera_xyz
-                # optical frame: z forward = world x, x right = world -y, y down = world -z
-                q = (-0.5, 0.5, -0.5, 0.5)  # x, y, z, w
-                t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z, t.transform.rotation.w = q
-                cls.tf.sendTransform(t)
-                r.sleep()
-
-        cls.thread = threading.Thread(target=broadcast, daemon=True)
-        cls.thread.start()
+        cls.thread = start_camera_broadcast(cls)
         for topic in ("/camera/depth/image_raw", "/detections"):
             end = time.monotonic() + 30
             while time.monotonic() < end:
