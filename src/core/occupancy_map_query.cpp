@@ -365,20 +365,44 @@ OccupancyMap::SurfaceObservation OccupancyMap::surfaceObservedWithin(double d_m)
   // Distances are stored in whole mm, rounded (see the integrator): compare in mm.
   const double d_mm = std::floor(d_m * 1000.0 + 0.5);
   const auto within = [d_mm](std::uint16_t d) { return d != kNoDist && d <= d_mm; };
+  const auto isFree = [](std::int16_t v) { return v != kUnknown && v < 0; };
+  const int m = bs_ - 1;
+  // Whether voxel (x, y, z) of the grid has a free 6-neighbour: the voxel bounds observed free space, so it
+  // is surface, not the inside of a wall that noisy far returns marked occupied.
+  const auto exposed = [&](int x, int y, int z) {
+    return isFree(voxelValue(x + 1, y, z)) || isFree(voxelValue(x - 1, y, z)) || isFree(voxelValue(x, y + 1, z)) ||
+           isFree(voxelValue(x, y - 1, z)) || isFree(voxelValue(x, y, z + 1)) || isFree(voxelValue(x, y, z - 1));
+  };
   for (int cell = 0; cell < static_cast<int>(cell_block_.size()); ++cell) {
     const Summary& s = levels_[0].s[cell];
     if (!s.known_any || s.max_l < 0) continue;  // nothing occupied below
+    const int bz = cell / (nb_.x() * nb_.y()), by = (cell / nb_.x()) % nb_.y(), bx = cell % nb_.x();
+    const int gx0 = bx * bs_, gy0 = by * bs_, gz0 = bz * bs_;
     const int b = cell_block_[cell];
-    if (b < 0) {  // a uniform occupied cell
-      out.occupied_voxels += static_cast<std::size_t>(bs3_);
-      if (within(cell_dist_[cell])) out.within_voxels += static_cast<std::size_t>(bs3_);
+    if (b < 0) {  // a uniform occupied cell: only voxels on its faces can touch free space
+      const bool near = within(cell_dist_[cell]);
+      for (int z = 0; z < bs_; ++z)
+        for (int y = 0; y < bs_; ++y)
+          for (int x = 0; x < bs_; ++x) {
+            if (x != 0 && x != m && y != 0 && y != m && z != 0 && z != m) continue;
+            if (!exposed(gx0 + x, gy0 + y, gz0 + z)) continue;
+            ++out.occupied_voxels;
+            out.within_voxels += near;
+          }
       continue;
     }
     const std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
     const std::uint16_t* D =
         block_surf_[b] >= 0 ? block_dist_.data() + static_cast<std::size_t>(block_surf_[b]) * bs3_ : nullptr;
+    const int s1 = bs_, s2 = bs_ * bs_;
     for (int i = 0; i < bs3_; ++i) {
       if (L[i] == kUnknown || L[i] < 0) continue;
+      const int x = i & m, y = (i >> bshift_) & m, z = i >> (2 * bshift_);
+      const bool inner = x > 0 && x < m && y > 0 && y < m && z > 0 && z < m;
+      const bool ex = inner ? isFree(L[i + 1]) || isFree(L[i - 1]) || isFree(L[i + s1]) || isFree(L[i - s1]) ||
+                                  isFree(L[i + s2]) || isFree(L[i - s2])
+                            : exposed(gx0 + x, gy0 + y, gz0 + z);
+      if (!ex) continue;
       ++out.occupied_voxels;
       if (D && within(D[i])) ++out.within_voxels;
     }

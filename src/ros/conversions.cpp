@@ -1,6 +1,7 @@
 #include "semantic_exploration/ros/conversions.hpp"
 
 #include <sensor_msgs/image_encodings.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
 
 #include <cmath>
 #include <cstring>
@@ -225,6 +226,24 @@ semantic_exploration::ExplorationStatus toExplorationStatus(const semexp::Iterat
   s.objects_done = r.termination.objects_done;
   s.last_condition = r.termination.last_condition;
   return s;
+}
+
+sensor_msgs::PointCloud2 toPointCloud(const std::vector<Eigen::Vector3d>& points_W, const ros::Time& stamp,
+                                      const std::string& frame) {
+  sensor_msgs::PointCloud2 cloud;
+  cloud.header.stamp = stamp;
+  cloud.header.frame_id = frame;
+  sensor_msgs::PointCloud2Modifier mod(cloud);
+  mod.setPointCloud2FieldsByString(1, "xyz");
+  mod.resize(points_W.size());
+  sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
+  for (const auto& p : points_W) {
+    *x = static_cast<float>(p.x());
+    *y = static_cast<float>(p.y());
+    *z = static_cast<float>(p.z());
+    ++x, ++y, ++z;
+  }
+  return cloud;
 }
 
 }  // namespace semexp_ros

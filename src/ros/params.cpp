@@ -335,6 +335,19 @@ semexp::TerminationConfig loadTermination(const ParamReader& p) {
   return c;
 }
 
+semexp::FrontierEvidenceConfig loadFrontierEvidence(const ParamReader& p) {
+  semexp::FrontierEvidenceConfig c;
+  const std::string n = "frontier_evidence/";
+  p.get(n + "enabled", c.enabled);
+  p.get(n + "view_range_m", c.view_range_m);
+  p.get(n + "looks_to_retire", c.looks_to_retire);
+  p.get(n + "min_look_separation_m", c.min_look_separation_m);
+  p.get(n + "min_look_rotation_rad", c.min_look_rotation_rad);
+  p.get(n + "occlusion_margin_m", c.occlusion_margin_m);
+  c.validate(n);
+  return c;
+}
+
 semexp::FrontierRetirementConfig loadFrontierRetirement(const ParamReader& p) {
   semexp::FrontierRetirementConfig c;
   const std::string n = "frontier_retirement/";

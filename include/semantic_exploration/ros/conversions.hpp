@@ -68,6 +68,9 @@ std::vector<semexp::ObjectSummary> toObjectSummaries(const semantic_exploration:
 /// them, 0 included, row_step < width x point_step, or data other than
 /// row_step x height bytes), in which case `points_W` is untouched.
 std::string frontiersFromCloud(const sensor_msgs::PointCloud2& msg, std::vector<Eigen::Vector3d>& points_W);
+/// A float32 x, y, z cloud of `points_W` (m) in `frame` (the inverse of frontiersFromCloud).
+sensor_msgs::PointCloud2 toPointCloud(const std::vector<Eigen::Vector3d>& points_W, const ros::Time& stamp,
+                                      const std::string& frame);
 
 /// The candidates of an iteration, with their paths; the winner's path
 /// carries the winner's per-vertex yaws, the others start at current_yaw_rad

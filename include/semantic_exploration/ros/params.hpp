@@ -21,6 +21,7 @@
 #include "semantic_exploration/core/exploration_config.hpp"
 #include "semantic_exploration/core/object_map_config.hpp"
 #include "semantic_exploration/core/planner_config.hpp"
+#include "semantic_exploration/core/frontier_evidence.hpp"
 #include "semantic_exploration/core/planning/frontier_retirement.hpp"
 #include "semantic_exploration/core/planning/termination.hpp"
 
@@ -99,5 +100,6 @@ TfSettings loadTf(const ParamReader& p);                              ///< `tf_t
 PlannerNodeConfig loadPlannerNode(const ParamReader& p);  ///< `planner/{service_timeout_s,retry_period_s,goal_timeout_factor}`
 semexp::TerminationConfig loadTermination(const ParamReader& p);               ///< `termination/*`
 semexp::FrontierRetirementConfig loadFrontierRetirement(const ParamReader& p);  ///< `frontier_retirement/*`
+semexp::FrontierEvidenceConfig loadFrontierEvidence(const ParamReader& p);      ///< `frontier_evidence/*`
 
 }  // namespace semexp_ros
