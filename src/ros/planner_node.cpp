@@ -133,6 +133,7 @@ void PlannerNode::statsCallback(const semantic_exploration::MapStatsConstPtr& ms
   if (std::isfinite(msg->surface_observed_share) && msg->surface_observed_share >= 0 &&
       msg->surface_observed_share <= 1)
     background_share_ = msg->surface_observed_share;
+  map_retired_frontiers_ = msg->retired_frontier_count;
 }
 
 // ---------------------------------------------------------------- triggers
@@ -282,7 +283,7 @@ void PlannerNode::publishWinner(const semexp::IterationResult& r, const ros::Tim
   expected_duration_s_ = w.path_time_s;
   executing_since_ = now;
   // One line per iteration: what won and why, so a run's log shows where the MAV went and for which gain.
-  ROS_INFO("planner: iteration %u: %s", iteration_, winnerSummary(r, background_share_).c_str());
+  ROS_INFO("planner: iteration %u: %s", iteration_, winnerSummary(r, background_share_, map_retired_frontiers_).c_str());
 }
 
 void PlannerNode::publishResult(const semexp::IterationResult& r, const ros::Time& stamp, double current_yaw) {

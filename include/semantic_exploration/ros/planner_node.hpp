@@ -96,6 +96,7 @@ class PlannerNode {
   bool have_frontiers_ = false;
   double explored_volume_m3_ = -1.0;  ///< from background_map/stats; negative until received
   double background_share_ = -1.0;    ///< surface share seen from <= d_bg, from background_map/stats; negative until received
+  std::size_t map_retired_frontiers_ = 0;  ///< frontier voxels the background map retired by evidence (its stats)
   semexp::TerminationConfig termination_;
   semexp::FrontierRetirementConfig retirement_;
 
