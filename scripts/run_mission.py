@@ -456,13 +456,16 @@ def main(argv=None):
         mon.freeze()
         wall_end = time.time() - t0
         sim_end = sim_end if args.deterministic else rospy.get_time()
-        if args.rviz_screenshot and launch.poll() is None:
-            print("[mission] rviz screenshot (headless)", flush=True)
-            saved["rviz"] = rviz_screenshot(out, env, gt)
-            print("[mission] %s" % saved["rviz"]["message"], flush=True)
-        print("[mission] stopping: %s; saving maps" % reason, flush=True)
-        saved["background_map"] = call_save("/background_map/save", os.path.join(out, "map"))
-        saved["object_map"] = call_save("/object_map/save", os.path.join(out, "objects"))
+        # Deterministic: the maps first, while the simulator still waits at the stop frame.
+        for step in (["maps", "rviz"] if args.deterministic else ["rviz", "maps"]):
+            if step == "rviz" and args.rviz_screenshot and launch.poll() is None:
+                print("[mission] rviz screenshot (headless)", flush=True)
+                saved["rviz"] = rviz_screenshot(out, env, gt)
+                print("[mission] %s" % saved["rviz"]["message"], flush=True)
+            elif step == "maps":
+                print("[mission] stopping: %s; saving maps" % reason, flush=True)
+                saved["background_map"] = call_save("/background_map/save", os.path.join(out, "map"))
+                saved["object_map"] = call_save("/object_map/save", os.path.join(out, "objects"))
         if writer is not None:  # the last row: found as the report counts it, from the saved object map
             if snaps is not None and saved["object_map"]["success"]:
                 from semantic_exploration.eval.metrics import load_reconstruction
