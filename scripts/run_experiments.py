@@ -112,8 +112,9 @@ def describe_setup(args, sim_overrides: str, describe_yaml) -> list:
     scenes = ", ".join(s["file"] and os.path.basename(s["file"]) or "generated seed %d" % s["seed"]
                        for s in args.scenes)
     return ["scenes: %s (generated houses %g x %g x %g m)" % (scenes, *args.size),
-            "protocol %s: %d runs per method and scene (planner seeds 1-%d), classes %s, %g s sim per run" % (
-                args.protocol, args.runs, args.runs, " ".join(args.classes), args.sim_limit_s),
+            "protocol %s: %d run%s per method and scene (planner seeds 1-%d), classes %s, %g s sim per run" % (
+                args.protocol, args.runs, "s" if args.runs != 1 else "", args.runs, " ".join(args.classes),
+                args.sim_limit_s),
             "planner: %s" % ("deterministic (OMPL stops after planner/ompl_iterations; run_mission.py "
                              "--deterministic)" if args.ompl_termination == "iterations"
                              else "OMPL wall-time budget (planner/time_budget_s): runs are not repeatable"),
