@@ -56,6 +56,7 @@ from semantic_exploration.msg import Detection, Detections, DropCounts, FrameInt
 
 from .config import ConfigError, SimConfig, from_dict
 from .faults import FaultInjector
+from .planner_lockstep import PlannerLockstep
 from .scene import SceneError, export_ground_truth
 from .simulator import (PathError, Simulator, load_simulator, path_pose_count, quaternion_from_matrix,
                         waypoints_from_poses)
@@ -140,11 +141,21 @@ class MavSimNode:
         # cannot report that frame (e.g. still connecting at start-up), so it does not wait for them
         self._absent = (None, set())  # (frame stamp ns, names)
         self._node_names = (0.0, set())  # (wall time of the query, short names of the master's nodes)
+        self._planner_lockstep = PlannerLockstep(
+            rospy.resolve_name("planner/plan_once"), c.lockstep_planner_retry_s, c.lockstep_timeout_s,
+            c.lockstep_startup_timeout_s) if c.lockstep and c.lockstep_planner else None
         self.pub_coll.publish(UInt32(0))
         self._publish_fault_counts(0)
 
     # ------------------------------------------------------------- callbacks
     def _on_path(self, raw: rospy.AnyMsg) -> None:
+        try:
+            self._take_path(raw)
+        finally:
+            if self._planner_lockstep is not None:
+                self._planner_lockstep.path_handled()
+
+    def _take_path(self, raw: rospy.AnyMsg) -> None:
         """Checks a path once, here: the physics loop only swaps it in."""
         limit = self.cfg.mav.max_path_poses
         try:
@@ -321,7 +332,9 @@ class MavSimNode:
             if self.pub_depth.get_num_connections() == 0:
                 waiting.append("a subscriber of %s" % self.pub_depth.resolved_name)
             waiting += ["%s on %s" % (n, t) for t, n in self._unconnected_subscribers()]
-            waiting += ["lockstep node %s" % n for n in self._lockstep_nodes if self._node_exists(n)
+            # With lockstep_planner (deterministic runs) every lockstep node must be there before frame 0.
+            strict = self._planner_lockstep is not None
+            waiting += ["lockstep node %s" % n for n in self._lockstep_nodes if (strict or self._node_exists(n))
                         and not self._depth_connected(n)]
             now = time.monotonic()
             if not waiting:
@@ -425,6 +438,10 @@ class MavSimNode:
                         self._wait_for_subscribers()
                     else:
                         self._wait_lockstep(last_frame)
+                    pl = self._planner_lockstep
+                    if not first and pl is not None and pl.due(t_ns, not sim.follower.active):
+                        pl.plan(t_ns, lambda level, text: getattr(rospy, "log" + level)("mav_sim: " + text))
+                        continue  # the path (if any) is swapped in at the top; then this frame
                     anchor_wall, anchor_ns = time.monotonic(), t_ns
                 if first:
                     # The frame's time first, so that its stamp is not "before the first /clock" anywhere.
@@ -446,7 +463,10 @@ class MavSimNode:
             ev = sim.step(dt_ns / NS)
             t_ns += dt_ns
             self.pub_clock.publish(Clock(clock=_stamp(t_ns)))
-            if ev["goal_reached"]:
+            if ev["goal_reached"] and self._planner_lockstep is not None:
+                self._planner_lockstep.goal_reached(t_ns)
+                rospy.loginfo("mav_sim: goal reached at (%.2f, %.2f, %.2f, yaw %.2f)", *sim.pose)
+            elif ev["goal_reached"]:
                 self.pub_goal.publish(self._pose_msg(t_ns))
                 rospy.loginfo("mav_sim: goal reached at (%.2f, %.2f, %.2f, yaw %.2f)", *sim.pose)
             col = ev["collision"]
