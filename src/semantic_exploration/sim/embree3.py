@@ -139,19 +139,18 @@ class TriangleScene:
             up(self._prim), up(self._geom), (_u * _MAX_INSTANCE_LEVELS)(*[up(self._inst)] * _MAX_INSTANCE_LEVELS))
 
     def first_hit(self, origin, directions: np.ndarray) -> np.ndarray:
-        """Index of the first triangle each ray origin + t directions[i] (t > 0) meets, -1 for none.
-
-        directions: (N, 3) or (3, N) array; returns (N,) int32."""
-        d = np.asarray(directions)
-        n = d.shape[1] if d.shape[0] == 3 and d.ndim == 2 and d.shape[1] != 3 else len(d)
-        if n != self._n:
-            self._buffers(n)
+        """Index of the first triangle that each ray origin + t directions[i] (t > 0) meets, -1 for
+        none; directions (N, 3). Returns (N,) int32."""
+        d = np.asarray(directions).reshape(-1, 3)
+        if len(d) != self._n:
+            self._buffers(len(d))
         self.org[:] = np.asarray(origin, np.float32).reshape(3, 1)
-        self.dir[:] = d if d.shape == (3, n) else d.T
+        self.dir[:] = d.T
         return self.trace()
 
     def trace(self) -> np.ndarray:
-        """first_hit() of the rays already written into ``org`` and ``dir`` ((3, N) float32)."""
+        """first_hit() of the rays already written into ``org`` and ``dir`` ((3, N) float32; first_hit()
+        allocates them for N rays)."""
         self._tfar.fill(np.inf)
         self._geom.fill(_INVALID_ID)
         self._lib.rtcIntersectNp(self._scene, ctypes.byref(self._context), ctypes.byref(self._rayhit), self._n)
