@@ -58,21 +58,22 @@ def main(argv=None):
     for T in poses[:10]:  # warm-up
         renderer.render(T)
         reference.render(T)
-    times, ref_times = [], []
+    times, ref_times, cpu, ref_cpu = [], [], [], []
     for T in poses:
-        for r, ts in ((renderer, times), (reference, ref_times)):
-            t0 = time.perf_counter()
+        for r, ts, cs in ((renderer, times, cpu), (reference, ref_times, ref_cpu)):
+            t0, c0 = time.perf_counter(), time.thread_time()
             out = r.render(T)
             ts.append(time.perf_counter() - t0)
+            cs.append(time.thread_time() - c0)  # CPU time: what the frame costs however loaded the machine is
             assert out["depth"].shape == (240, 320)
     med, ref_med = float(np.median(times)), float(np.median(ref_times))
     fps, ref_fps = 1.0 / med, 1.0 / ref_med
     print("sim render (depth+rgb+instance+class, noise on) %dx%d, house %gx%gx%g m, %d triangles, one core:"
           % (320, 240, *a.size, len(scene.faces)))
-    print("  renderer (%s):   median %.2f ms/frame = %.1f fps (p90 %.2f ms)"
-          % (renderer.backend, med * 1e3, fps, float(np.percentile(times, 90)) * 1e3))
-    print("  reference (9440b49): median %.2f ms/frame = %.1f fps (p90 %.2f ms)"
-          % (ref_med * 1e3, ref_fps, float(np.percentile(ref_times, 90)) * 1e3))
+    print("  renderer (%s):   median %.2f ms/frame = %.1f fps (p90 %.2f ms), CPU %.2f ms/frame"
+          % (renderer.backend, med * 1e3, fps, float(np.percentile(times, 90)) * 1e3, float(np.median(cpu)) * 1e3))
+    print("  reference (9440b49): median %.2f ms/frame = %.1f fps (p90 %.2f ms), CPU %.2f ms/frame"
+          % (ref_med * 1e3, ref_fps, float(np.percentile(ref_times, 90)) * 1e3, float(np.median(ref_cpu)) * 1e3))
     print("  speed-up %.2fx (target >= 2)" % (fps / ref_fps))
     lines = [{"name": "sim_render_320x240_house_fps", "value": round(fps, 2), "unit": "Hz",
               "peer": "reference_renderer (9440b49)", "peer_value": round(ref_fps, 2)},
