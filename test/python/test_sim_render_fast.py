@@ -155,3 +155,17 @@ def test_unknown_backend_is_refused():
     scene = Scene(np.eye(3), [[0, 1, 2]], [0])
     with pytest.raises(ValueError, match="backend"):
         Renderer(scene, CameraConfig(), ClassTable(), backend="optix")
+
+
+def test_auto_backend_falls_back_to_embreex_when_embree3_fails(monkeypatch):
+    import semantic_exploration.sim.embree3 as embree3
+
+    def refuse(self, vertices, faces):
+        raise embree3.EmbreeError("no device")
+    monkeypatch.setattr(embree3, "library", lambda: object())  # as if libembree3 were installed
+    monkeypatch.setattr(embree3.TriangleScene, "__init__", refuse)
+    scene = Scene(np.array([[2, -1, -1], [2, 1, -1], [2, 0, 1]], float), [[0, 1, 2]], [0])
+    r = Renderer(scene, CameraConfig(), ClassTable())
+    assert r.backend == "embreex" and r.render(T_WC([0, 0, 0]))["depth"][120, 160] == pytest.approx(2.0)
+    with pytest.raises(embree3.EmbreeError):
+        Renderer(scene, CameraConfig(), ClassTable(), backend="embree3")

@@ -71,10 +71,14 @@ def _backend(scene: Scene, n_rays: int, backend: str):
     if backend not in ("auto", "embree3", "embreex"):
         raise ValueError("unknown ray casting backend %r (auto, embree3 or embreex)" % backend)
     if backend != "embreex":
-        from .embree3 import library
+        from .embree3 import EmbreeError, library
         if library() is not None or backend == "embree3":
-            return _Embree3(scene, n_rays)
-    return _Embreex(scene, n_rays)
+            try:
+                return _Embree3(scene, n_rays)
+            except EmbreeError:
+                if backend == "embree3":
+                    raise
+    return _Embreex(scene, n_rays)  # slower, same images (but for ties between coplanar faces)
 
 
 class Renderer:
