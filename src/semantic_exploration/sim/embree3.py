@@ -116,16 +116,17 @@ class TriangleScene:
     def _buffers(self, n: int) -> None:
         """Ray and hit arrays for n rays, and the pointer struct Embree reads them through."""
         self._n = n
-        self.org = np.zeros((3, n), np.float32)
-        self.dir = np.zeros((3, n), np.float32)
+        rows = lambda k: np.zeros((k, -(-n // 4) * 4), np.float32)[:, :n]  # noqa: E731 (rows 16-byte aligned)
+        self.org = rows(3)
+        self.dir = rows(3)
         self._tnear = np.zeros(n, np.float32)
         self._time = np.zeros(n, np.float32)
         self._tfar = np.empty(n, np.float32)
-        self._mask = np.full(n, _INVALID_ID, np.uint32)
+        self._mask = np.full(n, 0xFFFFFFFF, np.uint32)  # every mask bit: no ray is masked out
         self._id = np.arange(n, dtype=np.uint32)
         self._flags = np.zeros(n, np.uint32)
-        self._ng = np.zeros((3, n), np.float32)
-        self._uv = np.zeros((2, n), np.float32)
+        self._ng = rows(3)
+        self._uv = rows(2)
         self._prim = np.empty(n, np.uint32)
         self._geom = np.empty(n, np.uint32)
         self._inst = np.empty(n, np.uint32)
