@@ -84,8 +84,8 @@ def test_embree3_backend_differs_from_the_reference_only_where_triangles_tie(hou
         diff = np.flatnonzero(a["face"].ravel() != b["face"].ravel())
         n_diff += len(diff)
         # Where the backends disagree, they hit coplanar overlapping faces at the same depth (parts of
-        # one object, or of two generated chairs that overlap) or the ray passes within 1e-4 (relative) of an edge of the
-        # triangle each one hit (a tie between neighbours): which triangle wins a tie is the BVH's choice.
+        # one object, or of two generated chairs that overlap) or the ray passes within 1e-4 (relative)
+        # of an edge of the triangle each one hit (a tie between neighbours): the BVH picks the winner.
         dirs = new._dirs_C[diff] @ T[:3, :3].T
         fa, fb = a["face"].ravel()[diff], b["face"].ravel()[diff]
         assert np.all(fa < len(tri)) and np.all(fb < len(tri))  # the house is closed: every ray hits

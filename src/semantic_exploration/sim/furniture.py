@@ -34,7 +34,8 @@ def armchair(b: MeshBuilder, pose):
     b.box_minmax(oid, fab, (-0.38, -0.38, 0.0), (0.38, 0.38, 0.42), pose)
     b.box_minmax(oid, fab, (-0.38, -0.38, 0.42), (-0.2, 0.38, 0.9), pose)
     for sy in (-1, 1):
-        b.box_minmax(oid, vary_colour(rng, fab, 8), (-0.2, sy * 0.38 - 0.07, 0.42), (0.38, sy * 0.38 + 0.07, 0.62), pose)
+        b.box_minmax(oid, vary_colour(rng, fab, 8), (-0.2, sy * 0.38 - 0.07, 0.42),
+                     (0.38, sy * 0.38 + 0.07, 0.62), pose)
     return oid, (0.38, 0.45)
 
 
@@ -45,7 +46,8 @@ def table(b: MeshBuilder, pose, length=1.4, width=0.85, height=0.75, label="tabl
     b.box(oid, wood, (0, 0, height - 0.02), (width, length, 0.04), pose)
     for sx in (-1, 1):
         for sy in (-1, 1):
-            b.box(oid, vary_colour(rng, wood, 6), (sx * (width / 2 - 0.06), sy * (length / 2 - 0.06), (height - 0.04) / 2),
+            b.box(oid, vary_colour(rng, wood, 6),
+                  (sx * (width / 2 - 0.06), sy * (length / 2 - 0.06), (height - 0.04) / 2),
                   (0.05, 0.05, height - 0.04), pose)
     return oid, (width / 2, length / 2)
 

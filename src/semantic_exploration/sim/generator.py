@@ -257,7 +257,8 @@ def _floor_and_ceiling(b: "MeshBuilder", rng, X: float, Y: float, H: float):
     """Floor and ceiling slabs over an X x Y footprint of height H; returns the wall object id and wall colour."""
     wall_col = vary_colour(rng, (225, 220, 205), 10)
     floor_id, ceil_id, wall_id = b.new_object("floor"), b.new_object("ceiling"), b.new_object("wall")
-    b.box_minmax(floor_id, vary_colour(rng, (150, 120, 90), 15), (-WALL_T, -WALL_T, -0.05), (X + WALL_T, Y + WALL_T, 0.0))
+    b.box_minmax(floor_id, vary_colour(rng, (150, 120, 90), 15), (-WALL_T, -WALL_T, -0.05),
+                 (X + WALL_T, Y + WALL_T, 0.0))
     b.box_minmax(ceil_id, (240, 240, 240), (-WALL_T, -WALL_T, H), (X + WALL_T, Y + WALL_T, H + 0.05))
     return wall_id, wall_col
 
