@@ -28,7 +28,7 @@ DEBIAN_PKGS=(
   python3-std-msgs python3-sensor-msgs python3-geometry-msgs
   python3-nav-msgs python3-visualization-msgs python3-std-srvs
   python3-tf2-msgs python3-numpy python3-yaml python3-scipy
-  python3-matplotlib
+  python3-matplotlib libembree3-3
   rviz xvfb xauth imagemagick libgl1-mesa-dri
 )
 
@@ -42,7 +42,7 @@ NOETIC_PKGS=(
   ros-noetic-visualization-msgs ros-noetic-std-srvs ros-noetic-rosbag
   libeigen3-dev libopencv-dev libopencv-dnn-dev libgtest-dev
   python3-colcon-common-extensions python3-numpy python3-yaml python3-scipy
-  python3-matplotlib
+  python3-matplotlib libembree3-3
   ros-noetic-rviz xvfb xauth imagemagick libgl1-mesa-dri
 )
 

@@ -206,11 +206,19 @@ class CollisionChecker:
         order = np.argsort(keys, kind="stable")
         self._tris = tri_of[order]
         self._keys, self._start, self._count = np.unique(keys[order], return_index=True, return_counts=True)
+        self._last = (b"", np.empty(0, np.int64))  # (cell range, its triangles): reused for many steps
 
     def _candidates(self, p: np.ndarray, r: float) -> np.ndarray:
         c0 = np.floor((p - r - self.origin) / self.cell).astype(np.int64)
         c1 = np.floor((p + r - self.origin) / self.cell).astype(np.int64)
         c0, c1 = np.maximum(c0, 0), np.minimum(c1, self.dims - 1)
+        key = c0.tobytes() + c1.tobytes()
+        if key != self._last[0]:
+            self._last = (key, self._cells_candidates(c0, c1))
+        return self._last[1]
+
+    def _cells_candidates(self, c0: np.ndarray, c1: np.ndarray) -> np.ndarray:
+        """Triangles binned into the cells c0..c1 (inclusive, clipped to the grid)."""
         if np.any(c1 < c0):
             return np.empty(0, np.int64)
         g = np.stack(np.meshgrid(*[np.arange(a, b + 1) for a, b in zip(c0, c1)], indexing="ij"), -1).reshape(-1, 3)
