@@ -30,6 +30,7 @@ def test_exploration_launch():
 def test_sim_launch():
     assert nodes("sim.launch") == MAPPING | {"/planner", "/mav_sim"}
     assert nodes("sim.launch", "rviz:=true", "mode:=classic") == MAPPING | {"/planner", "/mav_sim", "/rviz"}
+    assert nodes("sim.launch", "follow:=setpoints") == MAPPING | {"/planner", "/mav_sim", "/setpoint_streamer"}
 
 
 def test_onboard_launch():
@@ -38,6 +39,8 @@ def test_onboard_launch():
         MAPPING | {"/planner", "/pose_to_tf"}
     assert nodes("onboard.launch", "detector:=true", "detector_model:=/tmp/m.onnx") == \
         MAPPING | {"/planner", "/T_BC", "/detector"}
+    assert nodes("onboard.launch", "setpoints:=true", "pose_topic:=/mavros/local_position/pose") == \
+        MAPPING | {"/planner", "/T_BC", "/pose_to_tf", "/setpoint_streamer"}
 
 
 def test_detector_launch():
