@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <utility>
 
 namespace semexp_ros {
 
@@ -295,6 +296,47 @@ std::string fromTrajectoryMsg(const trajectory_msgs::MultiDOFJointTrajectory& ms
   } catch (const std::invalid_argument& e) {
     return e.what();
   }
+  return "";
+}
+
+std::string cutCloudAboveZ(const sensor_msgs::PointCloud2& in, double max_z_m, sensor_msgs::PointCloud2& out) {
+  const sensor_msgs::PointField* z = nullptr;
+  for (const auto& f : in.fields)
+    if (f.name == "z") z = &f;
+  if (!z || z->datatype != sensor_msgs::PointField::FLOAT32 || z->offset + 4 > in.point_step)
+    return "the cloud has no FLOAT32 field z within its point_step";
+  const std::size_t n = static_cast<std::size_t>(in.width) * in.height;
+  if (in.row_step < static_cast<std::size_t>(in.width) * in.point_step ||
+      in.data.size() < static_cast<std::size_t>(in.row_step) * in.height)
+    return "the cloud's data is shorter than its width x height x point_step";
+  out.header = in.header;
+  out.fields = in.fields;
+  out.is_bigendian = in.is_bigendian;
+  out.point_step = in.point_step;
+  out.is_dense = in.is_dense;
+  out.height = 1;
+  out.data.clear();
+  out.data.reserve(n * in.point_step);
+  std::size_t kept = 0;
+  for (std::uint32_t row = 0; row < in.height; ++row) {
+    for (std::uint32_t col = 0; col < in.width; ++col) {
+      const std::uint8_t* p = &in.data[static_cast<std::size_t>(row) * in.row_step +
+                                       static_cast<std::size_t>(col) * in.point_step];
+      std::uint8_t b[4];
+      std::memcpy(b, p + z->offset, 4);
+      if (static_cast<bool>(in.is_bigendian) != (__BYTE_ORDER__ == __ORDER_BIG_ENDIAN__)) {
+        std::swap(b[0], b[3]);
+        std::swap(b[1], b[2]);
+      }
+      float v;
+      std::memcpy(&v, b, 4);
+      if (!std::isfinite(v) || v > max_z_m) continue;
+      out.data.insert(out.data.end(), p, p + in.point_step);
+      ++kept;
+    }
+  }
+  out.width = static_cast<std::uint32_t>(kept);
+  out.row_step = out.width * out.point_step;
   return "";
 }
 

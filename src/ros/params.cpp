@@ -387,4 +387,11 @@ SetpointStreamerConfig loadSetpointStreamer(const ParamReader& p) {
   return c;
 }
 
+double loadDisplayCut(const ParamReader& p) {
+  double max_z_m = 2.0;
+  p.get("display_cut/max_z_m", max_z_m);
+  if (!std::isfinite(max_z_m)) throw semexp::ConfigError("display_cut/max_z_m", "must be a finite height, m");
+  return max_z_m;
+}
+
 }  // namespace semexp_ros

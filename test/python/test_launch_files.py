@@ -8,7 +8,8 @@ import subprocess
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-MAPPING = {"/background_map", "/instance_matching", "/object_map", "/depth_history"}
+# the mapping nodes and the display cut for rviz
+MAPPING = {"/background_map", "/instance_matching", "/object_map", "/depth_history", "/display_cut"}
 
 pytestmark = pytest.mark.skipif(shutil.which("roslaunch") is None or "ROS_PACKAGE_PATH" not in os.environ
                                 and "CMAKE_PREFIX_PATH" not in os.environ,

@@ -99,4 +99,10 @@ trajectory_msgs::MultiDOFJointTrajectory toTrajectoryMsg(const std::vector<semex
 std::string fromTrajectoryMsg(const trajectory_msgs::MultiDOFJointTrajectory& msg, const std::string& frame,
                               semexp::SampledTrajectory& out);
 
+/// The display cut (display_cut node): copies the points of `in` whose z
+/// (a FLOAT32 field "z") is finite and <= max_z_m into `out`, with the same
+/// fields, header and endianness, as one row. Returns "" or why it cannot
+/// (no FLOAT32 z, data shorter than width x height x point_step).
+std::string cutCloudAboveZ(const sensor_msgs::PointCloud2& in, double max_z_m, sensor_msgs::PointCloud2& out);
+
 }  // namespace semexp_ros

@@ -114,4 +114,7 @@ struct SetpointStreamerConfig {
 };
 SetpointStreamerConfig loadSetpointStreamer(const ParamReader& p);  ///< `setpoint_streamer/*`
 
+/// `display_cut/max_z_m`: the display_cut node shows the map up to this height in world, m.
+double loadDisplayCut(const ParamReader& p);
+
 }  // namespace semexp_ros
