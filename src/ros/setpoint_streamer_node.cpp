@@ -81,17 +81,19 @@ void SetpointStreamerNode::trajectoryCallback(const trajectory_msgs::MultiDOFJoi
                                               std::to_string((now - pose_msg_.header.stamp).toSec()) + " s)"
                                         : "no pose received yet");
   }
-  const semexp::SampledTrajectory::Sample current = streaming_ ? setpoint(now) : pose_;
   if (tr.empty()) {
-    hold_ = current;
+    hold_ = streaming_ ? setpoint(now) : pose_;
     active_ = goal_pending_ = false;
+    anchored_ = true;
     ROS_INFO("setpoint_streamer: empty trajectory: holding at %s", fmt3(hold_.position_W).c_str());
     return;
   }
-  const double offset = (tr.front().position_W - current.position_W).norm();
+  // Measured from the MAV, not from the setpoint: a trajectory planned from where the MAV is stays
+  // acceptable when the MAV did not reach the previous setpoint.
+  const double offset = (tr.front().position_W - pose_.position_W).norm();
   if (offset > config_.max_start_offset_m) {
     char buf[160];
-    std::snprintf(buf, sizeof(buf), "it starts %.2f m from the current setpoint (setpoint_streamer/"
+    std::snprintf(buf, sizeof(buf), "it starts %.2f m from the MAV (setpoint_streamer/"
                   "max_start_offset_m = %.2f m)", offset, config_.max_start_offset_m);
     return reject("far_start", buf);
   }
@@ -119,13 +121,15 @@ void SetpointStreamerNode::tick(const ros::TimerEvent&) {
   }
   if (!streaming_) {
     streaming_ = true;
-    hold_ = pose_;
-    ROS_INFO("setpoint_streamer: streaming setpoints, holding at %s (yaw %.2f)", fmt3(hold_.position_W).c_str(),
-             hold_.yaw_rad);
+    anchored_ = false;
+    ROS_INFO("setpoint_streamer: streaming setpoints, holding at the pose %s (yaw %.2f) until a trajectory "
+             "arrives", fmt3(pose_.position_W).c_str(), pose_.yaw_rad);
   }
+  if (!active_ && !anchored_) hold_ = pose_;
   semexp::SampledTrajectory::Sample sp = setpoint(now);
   if (active_ && (now - start_).toSec() >= trajectory_.duration_s()) {
     active_ = false;
+    anchored_ = true;
     hold_ = sp = trajectory_.at(trajectory_.duration_s());
   }
   if (goal_pending_ && !active_ && (pose_.position_W - hold_.position_W).norm() <= config_.goal_tolerance_m &&

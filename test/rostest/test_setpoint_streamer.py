@@ -9,15 +9,16 @@ the remapping is tested too.
 
 Expected (rate 20 Hz, pose_timeout_s 0.52 s (not 0.5: no tick falls on the limit), max_start_offset_m 0.5 m):
 - one setpoint per 0.05 s of ROS time, stamped at the tick;
-- before any trajectory: the pose at which streaming started, held even when
-  the pose moves;
+- before any trajectory: the current pose (a flight controller switched to
+  offboard stays where it is);
 - along a trajectory (0,0,1) -> (1,0,1) -> (1,1,1) over 2 s, yaw 0 -> pi/2
   -> pi/2: the linear interpolation at each setpoint's stamp; after its end,
-  (1,1,1) at yaw pi/2, and mav/goal_reached once the pose is there;
+  (1,1,1) at yaw pi/2, held while the pose is elsewhere, and
+  mav/goal_reached once the pose is there;
 - a trajectory yawing from 3.0 to -3.0 rad: setpoint yaws pass through pi;
 - poses older than 0.52 s: no more setpoints and a log line "stopped streaming";
-  poses again: setpoints resume, holding at the new pose;
-- a trajectory starting 3 m away, in another frame, or with decreasing
+  poses again: setpoints resume at the new pose;
+- a trajectory starting 3 m from the MAV, in another frame, or with decreasing
   times: refused on mav/path_rejected saying why, setpoints unchanged.
 """
 import math
@@ -142,11 +143,11 @@ class SetpointStreamerTest(unittest.TestCase):
 
     # -------------------------------------------------------------- tests
     def test_streamer(self):
-        # Hold: streaming starts at the first fresh pose and holds there though the pose drifts.
+        # Before any trajectory: the current pose.
         sp = self.tick(pose=(0.0, 0.0, 1.0, 0.0))
         self.assertSetpoint(sp, 0.0, 0.0, 1.0, 0.0)
-        for k in range(5):
-            self.assertSetpoint(self.tick(pose=(0.02 * k, 0.0, 1.0, 0.0)), 0.0, 0.0, 1.0, 0.0)
+        for k in range(1, 5):
+            self.assertSetpoint(self.tick(pose=(0.02 * k, 0.0, 1.0, 0.1 * k)), 0.02 * k, 0.0, 1.0, 0.1 * k)
 
         # Rate: one setpoint per period, stamped at the tick, none in between.
         with self.lock:
@@ -225,9 +226,9 @@ class SetpointStreamerTest(unittest.TestCase):
         self.tick(expect_setpoint=False)
         self.tick(expect_setpoint=False)
         self.wait_for("the log line", lambda: any("stopped streaming" in m.msg for m in self.logs))
-        # Poses again: streaming resumes, holding at the new pose (the trajectory was dropped).
+        # Poses again: streaming resumes at the pose (the trajectory was dropped).
         self.assertSetpoint(self.tick(pose=(1.5, 0.5, 1.2, 0.3)), 1.5, 0.5, 1.2, 0.3)
-        self.assertSetpoint(self.tick(pose=(1.6, 0.5, 1.2, 0.3)), 1.5, 0.5, 1.2, 0.3)
+        self.assertSetpoint(self.tick(pose=(1.6, 0.5, 1.2, 0.3)), 1.6, 0.5, 1.2, 0.3)
 
 
 if __name__ == "__main__":

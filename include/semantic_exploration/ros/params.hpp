@@ -108,7 +108,7 @@ semexp::TrajectoryConfig loadTrajectory(const ParamReader& p);
 struct SetpointStreamerConfig {
   double rate_hz = 20.0;                ///< `rate_hz`: setpoints per second (of ROS time), Hz
   double pose_timeout_s = 0.5;          ///< `pose_timeout_s`: stop streaming when the newest pose is older, s
-  double max_start_offset_m = 0.5;      ///< `max_start_offset_m`: refuse a trajectory starting farther from the held setpoint, m
+  double max_start_offset_m = 0.5;      ///< `max_start_offset_m`: refuse a trajectory starting farther from the MAV, m
   double goal_tolerance_m = 0.1;        ///< `goal_tolerance_m`: goal reached within this distance of the end, m
   double goal_yaw_tolerance_rad = 0.1;  ///< `goal_yaw_tolerance_rad`: and this yaw error, rad
 };

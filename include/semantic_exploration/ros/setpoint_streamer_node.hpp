@@ -20,15 +20,17 @@
 ///   of arrival), so a trajectory planned while the MAV hovered starts at its
 ///   beginning. A trajectory with no points cancels the active one.
 /// - With no active trajectory it holds position: at the end of the last
-///   trajectory, or at the pose at which streaming (re)started.
+///   trajectory; before the first one since streaming (re)started, the
+///   setpoint is the current pose, so that a flight controller switched to
+///   offboard then stays where it is.
 /// - When the newest pose is older than `pose_timeout_s` (by its stamp) it
 ///   stops streaming and drops the active trajectory, with one log line; a
 ///   flight controller in offboard mode then falls back to its own failsafe.
-///   When poses come back it streams again, holding at the new pose.
+///   When poses come back it streams again, at the new pose.
 /// - A trajectory is refused (counted in /dropped_input, published on
 ///   mav/path_rejected) if it is malformed (conversions.hpp
 ///   fromTrajectoryMsg), arrives without a fresh pose, or starts more than
-///   `max_start_offset_m` from the current setpoint.
+///   `max_start_offset_m` from the MAV's pose.
 
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
@@ -64,6 +66,7 @@ class SetpointStreamerNode {
   bool streaming_ = false;    ///< setpoints are being published (a fresh pose)
   bool active_ = false;       ///< a trajectory is being followed
   bool goal_pending_ = false; ///< the last trajectory ended, its goal not yet reported
+  bool anchored_ = false;     ///< hold_ is fixed (a trajectory ended); else it is the current pose
   semexp::SampledTrajectory trajectory_;
   ros::Time start_;
   semexp::SampledTrajectory::Sample hold_;  ///< the setpoint while no trajectory is active
