@@ -20,8 +20,9 @@ DisplayCutNode::DisplayCutNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(
 
 void DisplayCutNode::update(Relay& r) {
   if (r.pub.getNumSubscribers() > 0 && !r.sub) {
-    r.sub = nh_.subscribe<sensor_msgs::PointCloud2>(
-        r.from, 1, [this, &r](const sensor_msgs::PointCloud2ConstPtr& msg) { cloud(r, msg); });
+    const boost::function<void(const sensor_msgs::PointCloud2ConstPtr&)> cb =
+        [this, &r](const sensor_msgs::PointCloud2ConstPtr& msg) { cloud(r, msg); };
+    r.sub = nh_.subscribe<sensor_msgs::PointCloud2>(r.from, 1, cb);
   } else if (r.pub.getNumSubscribers() == 0 && r.sub) {
     r.sub.shutdown();
   }

@@ -11,6 +11,7 @@
 #include "semantic_exploration/core/planning/trajectory.hpp"
 
 using semexp::SampledTrajectory;
+using Samples = std::vector<semexp::SampledTrajectory::Sample>;
 using semexp::Trajectory;
 using semexp::TrajectoryConfig;
 
@@ -184,7 +185,7 @@ TEST(TrajectoryConfig, ValidateNamesTheParameter) {
 }
 
 TEST(SampledTrajectory, InterpolatesPositionAndYawTheShortWay) {
-  SampledTrajectory tr({{0.0, {0, 0, 1}, 3.1}, {1.0, {1, 2, 1}, -3.1}, {3.0, {1, 2, 3}, -3.1}});
+  SampledTrajectory tr(Samples{{0.0, {0, 0, 1}, 3.1}, {1.0, {1, 2, 1}, -3.1}, {3.0, {1, 2, 3}, -3.1}});
   EXPECT_EQ(tr.duration_s(), 3.0);
   const auto m = tr.at(0.5);
   EXPECT_TRUE(m.position_W.isApprox(Eigen::Vector3d(0.5, 1, 1)));
@@ -197,7 +198,7 @@ TEST(SampledTrajectory, InterpolatesPositionAndYawTheShortWay) {
 
 TEST(SampledTrajectory, FollowsTheExactTrajectoryWithinTheInterpolationError) {
   const Trajectory exact({{0, 0, 1}, {4, 1, 1}, {4, 3, 1.5}}, {0.0, 2.0, -2.5}, kV, kOmega, limits());
-  std::vector<SampledTrajectory::Sample> s;
+  Samples s;
   for (const auto& x : exact.sample(0.1)) s.push_back({x.t_s, x.position_W, x.yaw_rad});
   const SampledTrajectory table(s);
   EXPECT_EQ(table.duration_s(), exact.duration_s());
@@ -210,12 +211,12 @@ TEST(SampledTrajectory, FollowsTheExactTrajectoryWithinTheInterpolationError) {
 }
 
 TEST(SampledTrajectory, RefusesBadSamplesNamingThePoint) {
-  EXPECT_THROW(SampledTrajectory({}), std::invalid_argument);
+  EXPECT_THROW(SampledTrajectory(Samples{}), std::invalid_argument);
   try {
-    SampledTrajectory({{0.0, {0, 0, 0}, 0}, {1.0, {0, 0, 0}, 0}, {1.0, {1, 0, 0}, 0}});
+    SampledTrajectory(Samples{{0.0, {0, 0, 0}, 0}, {1.0, {0, 0, 0}, 0}, {1.0, {1, 0, 0}, 0}});
     FAIL() << "repeated time accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("point 2"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(SampledTrajectory({{0.0, {0, 0, 0}, NAN}}), std::invalid_argument);
+  EXPECT_THROW(SampledTrajectory(Samples{{0.0, {0, 0, 0}, NAN}}), std::invalid_argument);
 }

@@ -14,6 +14,7 @@ namespace {
 
 trajectory_msgs::MultiDOFJointTrajectory straightLine() {
   semexp::TrajectoryConfig c;
+  c.a_max_mps2 = 1.0;
   const semexp::Trajectory tr({{0, 0, 1}, {6, 0, 1}}, {3.0, -3.0}, 1.5, 0.75, c);
   return toTrajectoryMsg(tr.sample(0.1), "world", "body", ros::Time(5.0));
 }
