@@ -57,12 +57,15 @@ class PathFollower:
         return bool(self.path)
 
     def set_setpoint(self, target: Sequence[float], velocity: Sequence[float] = (0.0, 0.0, 0.0),
-                     yaw_rate: float = 0.0) -> None:
+                     yaw_rate: float = 0.0, age_s: float = 0.0) -> None:
         """Tracks the setpoint (x, y, z, yaw), moving at `velocity` (m/s) and `yaw_rate` (rad/s),
-        instead of a path (which it replaces). Never reports a goal reached."""
+        instead of a path (which it replaces); `age_s`: how long ago it was sent (it has moved on
+        since, for at most SETPOINT_HOLD_S). Never reports a goal reached."""
         self.path = []
-        self._setpoint = [np.array(target[:3], float), float(target[3]), np.array(velocity[:3], float),
-                          float(yaw_rate), 0.0]
+        age = min(max(float(age_s), 0.0), self.SETPOINT_HOLD_S)
+        v = np.array(velocity[:3], float)
+        self._setpoint = [np.array(target[:3], float) + v * age, wrap_angle(float(target[3]) + yaw_rate * age), v,
+                          float(yaw_rate), age]
 
     def _step_setpoint(self, dt: float) -> None:
         c = self.cfg

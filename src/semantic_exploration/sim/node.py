@@ -215,7 +215,7 @@ class MavSimNode:
             yaw_rate = wrap_angle(yaw - last[4]) / dt
         self._last_setpoint = (t, x, y, z, yaw)
         with self._lock:
-            self._pending_setpoint = ((x, y, z, yaw), velocity, yaw_rate)
+            self._pending_setpoint = ((x, y, z, yaw), velocity, yaw_rate, t)
 
     def _on_hide(self, msg: UInt32MultiArray) -> None:
         self._hidden = [int(i) for i in msg.data]
@@ -447,8 +447,9 @@ class MavSimNode:
             with self._lock:
                 pending, self._pending_path = self._pending_path, None
                 setpoint, self._pending_setpoint = self._pending_setpoint, None
-            if setpoint is not None:
-                sim.follower.set_setpoint(*setpoint)
+            if setpoint is not None:  # sent at its stamp; sim time may have run on since (no lockstep wait for it)
+                target, velocity, yaw_rate, stamp_s = setpoint
+                sim.follower.set_setpoint(target, velocity, yaw_rate, t_ns / NS - stamp_s)
             if pending is not None:
                 path, checked_by = pending
                 try:
