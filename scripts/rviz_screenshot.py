@@ -380,6 +380,8 @@ def main(argv=None):
     ap.add_argument("--size", type=float, nargs=3, default=[6.0, 5.0, 3.0], metavar=("X", "Y", "H"))
     ap.add_argument("--min-explored-m3", type=float, default=10.0,
                     help="take the screenshot once the background map has explored this much, m^3")
+    ap.add_argument("--min-objects", type=int, default=0,
+                    help="and once the object map holds this many objects")
     ap.add_argument("--timeout-s", type=float, default=90.0, help="limit for the simulation and for each screenshot, s")
     ap.add_argument("--control", action="store_true",
                     help="also rviz_no_map.png: the same view with the occupied map display on an unused topic")
@@ -409,7 +411,7 @@ def main(argv=None):
                "output:=log"]
         launch = subprocess.Popen(cmd, env=env, stdout=open(os.path.join(logs, "roslaunch.log"), "w"),
                                   stderr=subprocess.STDOUT, start_new_session=True)
-        explored = wait_explored(env, args.min_explored_m3, t0 + args.timeout_s, launch)
+        explored = wait_explored(env, args.min_explored_m3, t0 + args.timeout_s, launch, args.min_objects)
         import rospy
         print("[rviz] background map explored %.1f m3 after %.0f s" % (explored, time.time() - t0), flush=True)
         shots = screenshot_scene(env, os.path.join(out, "rviz.png"), gt["bounds_min"], gt["bounds_max"], logs,
@@ -427,9 +429,10 @@ def main(argv=None):
     return 0
 
 
-def wait_explored(env, min_m3, deadline, launch):
-    """Waits until background_map/stats reports min_m3 explored (m^3); returns
-    the explored volume. Makes this process a rospy node on env's master."""
+def wait_explored(env, min_m3, deadline, launch, min_objects=0):
+    """Waits until background_map/stats reports min_m3 explored (m^3) and
+    object_map/objects holds min_objects objects; returns the explored volume.
+    Makes this process a rospy node on env's master."""
     os.environ.update(ROS_MASTER_URI=env["ROS_MASTER_URI"], ROS_HOSTNAME=env["ROS_HOSTNAME"],
                       ROS_HOME=env["ROS_HOME"])
     import rosgraph
@@ -438,21 +441,27 @@ def wait_explored(env, min_m3, deadline, launch):
             raise RuntimeError("roslaunch did not come up")
         time.sleep(0.3)
     import rospy
-    from semantic_exploration.msg import MapStats
+    from semantic_exploration.msg import MapStats, ObjectArray
     rospy.init_node("rviz_screenshot", anonymous=True, disable_signals=True)
     latest = [0.0]
+    objects = [0]
 
     def on_stats(msg):
         latest[0] = msg.explored_volume_m3
 
     sub = rospy.Subscriber("/background_map/stats", MapStats, on_stats, queue_size=2)
-    while latest[0] < min_m3:
+    obj_sub = rospy.Subscriber("/object_map/objects", ObjectArray, lambda m: objects.__setitem__(0, len(m.objects)),
+                               queue_size=2)
+    while latest[0] < min_m3 or objects[0] < min_objects:
         if launch.poll() is not None:
-            raise RuntimeError("the simulation stopped before the map explored %.1f m3" % min_m3)
+            raise RuntimeError("the simulation stopped before the map explored %.1f m3 with %d objects"
+                               % (min_m3, min_objects))
         if time.time() > deadline:
-            raise RuntimeError("the map explored only %.1f m3 before the timeout" % latest[0])
+            raise RuntimeError("the map explored only %.1f m3 with %d objects before the timeout"
+                               % (latest[0], objects[0]))
         time.sleep(0.2)
     sub.unregister()
+    obj_sub.unregister()
     return latest[0]
 
 

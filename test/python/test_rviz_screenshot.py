@@ -89,7 +89,7 @@ ROS_SOURCED = shutil.which("roslaunch") is not None and (
 def test_rviz_shows_the_map(tmp_path):
     out = tmp_path / "shot"
     proc = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "rviz_screenshot.py"), "--out", str(out),
-                           "--control", "--uncut", "--timeout-s", "75"], stdout=subprocess.PIPE,
+                           "--control", "--uncut", "--min-objects", "1", "--timeout-s", "75"], stdout=subprocess.PIPE,
                           stderr=subprocess.STDOUT, universal_newlines=True, timeout=330)
     print(proc.stdout)
     assert proc.returncode == 0, proc.stdout

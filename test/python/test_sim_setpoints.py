@@ -17,7 +17,7 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 sys.path.insert(0, os.path.join(ROOT, "src"))
 
 from semantic_exploration.sim.config import MavConfig  # noqa: E402
-from semantic_exploration.sim.mav import PathFollower, wrap_angle  # noqa: E402
+from semantic_exploration.sim.mav import PathFollower, SetpointMotion, wrap_angle  # noqa: E402
 
 RATE_HZ = 20.0
 
@@ -35,22 +35,20 @@ def trapezoid_x(t, length=6.0, v=1.5, a=0.8):
 
 
 def stream(cfg, setpoint_at, t_end, start=(0.0, 0.0, 1.0, 0.0)):
-    """Streams setpoint_at(t) -> (x, y, z, yaw) at RATE_HZ with the finite-difference velocity, physics
-    at cfg.physics_rate_hz; returns the log of (t, p, v, yaw, setpoint) and whether a goal was reported."""
+    """Streams setpoint_at(t) -> (x, y, z, yaw) at RATE_HZ with the motion mav_sim estimates
+    (SetpointMotion), physics at cfg.physics_rate_hz; returns the log of (t, p, v, yaw, setpoint) and
+    whether a goal was reported."""
     f = PathFollower(cfg, start)
+    motion = SetpointMotion()
     dt = 1.0 / cfg.physics_rate_hz
     per = int(round(cfg.physics_rate_hz / RATE_HZ))
-    log, goal, last = [], False, None
+    log, goal = [], False
     for k in range(int(t_end / dt)):
         t = k * dt
         if k % per == 0:
             sp = setpoint_at(t)
-            vel, rate = (0.0, 0.0, 0.0), 0.0
-            if last is not None:
-                vel = tuple((a - b) * RATE_HZ for a, b in zip(sp[:3], last[:3]))
-                rate = wrap_angle(sp[3] - last[3]) * RATE_HZ
-            f.set_setpoint(sp, vel, rate)
-            last = sp
+            vel, rate, acc, yaw_acc = motion.update(t, sp)
+            f.set_setpoint(sp, vel, rate, 0.0, acc, yaw_acc)
         goal |= f.step(dt)
         log.append((t + dt, f.p.copy(), f.v.copy(), f.yaw, setpoint_at(t + dt)))
     return log, goal

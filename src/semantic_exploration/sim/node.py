@@ -60,7 +60,7 @@ from semantic_exploration.msg import Detection, Detections, DropCounts, FrameInt
 from .config import ConfigError, SimConfig, from_dict
 from .faults import FaultInjector
 from .scene import SceneError, export_ground_truth
-from .mav import PathFollower, wrap_angle
+from .mav import PathFollower, SetpointMotion
 from .simulator import (PathError, Simulator, load_simulator, path_pose_count, quaternion_from_matrix,
                         waypoints_from_poses)
 
@@ -138,7 +138,7 @@ class MavSimNode:
         if self.follow not in ("path", "setpoints"):
             rospy.logfatal("mav_sim: ~follow must be \"path\" or \"setpoints\" (is %r)", self.follow)
             raise ConfigError("follow: must be \"path\" or \"setpoints\"")
-        self._last_setpoint = None  # (stamp s, x, y, z, yaw) of the previous setpoint, for its velocity
+        self._setpoint_motion = SetpointMotion(2 * PathFollower.SETPOINT_HOLD_S)  # the setpoints' velocity
         if self.follow == "setpoints":
             rospy.Subscriber("setpoint_position/local", PoseStamped, self._on_setpoint, queue_size=5)
         else:
@@ -206,16 +206,9 @@ class MavSimNode:
             rospy.logerr_throttle(5.0, "mav_sim: ignored setpoint %s; keeping the previous one" % e)
             return
         t = msg.header.stamp.to_sec()
-        x, y, z, yaw = wp[0]
-        velocity, yaw_rate = (0.0, 0.0, 0.0), 0.0
-        last = self._last_setpoint
-        if last is not None and 0.0 < t - last[0] <= 2 * PathFollower.SETPOINT_HOLD_S:
-            dt = t - last[0]
-            velocity = ((x - last[1]) / dt, (y - last[2]) / dt, (z - last[3]) / dt)
-            yaw_rate = wrap_angle(yaw - last[4]) / dt
-        self._last_setpoint = (t, x, y, z, yaw)
+        velocity, yaw_rate, accel, yaw_accel = self._setpoint_motion.update(t, wp[0])
         with self._lock:
-            self._pending_setpoint = ((x, y, z, yaw), velocity, yaw_rate, t)
+            self._pending_setpoint = (wp[0], velocity, yaw_rate, t, accel, yaw_accel)
 
     def _on_hide(self, msg: UInt32MultiArray) -> None:
         self._hidden = [int(i) for i in msg.data]
@@ -448,8 +441,8 @@ class MavSimNode:
                 pending, self._pending_path = self._pending_path, None
                 setpoint, self._pending_setpoint = self._pending_setpoint, None
             if setpoint is not None:  # sent at its stamp; sim time may have run on since (no lockstep wait for it)
-                target, velocity, yaw_rate, stamp_s = setpoint
-                sim.follower.set_setpoint(target, velocity, yaw_rate, t_ns / NS - stamp_s)
+                target, velocity, yaw_rate, stamp_s, accel, yaw_accel = setpoint
+                sim.follower.set_setpoint(target, velocity, yaw_rate, t_ns / NS - stamp_s, accel, yaw_accel)
             if pending is not None:
                 path, checked_by = pending
                 try:
