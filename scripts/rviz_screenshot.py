@@ -381,7 +381,7 @@ def main(argv=None):
     ap.add_argument("--min-explored-m3", type=float, default=10.0,
                     help="take the screenshot once the background map has explored this much, m^3")
     ap.add_argument("--min-objects", type=int, default=0,
-                    help="and once the object map holds this many objects")
+                    help="and once the object map holds this many objects with a surface")
     ap.add_argument("--timeout-s", type=float, default=90.0, help="limit for the simulation and for each screenshot, s")
     ap.add_argument("--control", action="store_true",
                     help="also rviz_no_map.png: the same view with the occupied map display on an unused topic")
@@ -450,8 +450,9 @@ def wait_explored(env, min_m3, deadline, launch, min_objects=0):
         latest[0] = msg.explored_volume_m3
 
     sub = rospy.Subscriber("/background_map/stats", MapStats, on_stats, queue_size=2)
-    obj_sub = rospy.Subscriber("/object_map/objects", ObjectArray, lambda m: objects.__setitem__(0, len(m.objects)),
-                               queue_size=2)
+    # objects with a surface: object_map draws their mesh, box and label
+    obj_sub = rospy.Subscriber("/object_map/objects", ObjectArray, lambda m: objects.__setitem__(
+        0, sum(1 for o in m.objects if o.voxel_count > 0)), queue_size=2)
     while latest[0] < min_m3 or objects[0] < min_objects:
         if launch.poll() is not None:
             raise RuntimeError("the simulation stopped before the map explored %.1f m3 with %d objects"
