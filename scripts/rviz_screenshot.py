@@ -39,9 +39,12 @@ SCREEN = (1400, 900)  # px, the config's window geometry
 BACKGROUND_RGB = (48, 48, 48)  # the config's Background Color
 ERROR_RGB = (192, 32, 32)  # rviz's colour for a display's error status text
 # object_map's colour of class id 1 (chair: classColour in src/ros/object_map_node.cpp, hue 0.618 * 6 = 3.708):
-# each object's box edges and "<class> #<id>" label; unlit, so drawn in exactly this colour where visible.
+# each object's box edges and "<class> #<id>" label. rviz lightens the lines (drawn as (51, 102-112, 255)), so
+# an object pixel is any strong blue of that kind: B >= 200, R <= 90, 60 <= G <= 130. That leaves out tf's z
+# axes (G < 60), frontiers, path, map and candidate views, but not the winner path line of the candidate
+# markers (0.2, 0.4, 1.0): --no-candidates takes that display off for the object count.
 CHAIR_RGB = (0, 74, 255)
-OBJECT_TOLERANCE = 16  # per channel, for antialiased edges
+CANDIDATES_TOPIC = "/planner/candidate_markers"
 # The config's map displays pointed at the uncut clouds (the --uncut screenshot: the map's roof).
 UNCUT_TOPICS = {OCCUPIED_TOPIC: "/background_map/occupied", "/display_cut/frontiers": "/background_map/frontiers"}
 
@@ -82,8 +85,9 @@ def write_view_config(src, dst, bounds_min, bounds_max, occupied_topic=None, top
     if occupied_topic is not None:
         replace[OCCUPIED_TOPIC] = occupied_topic
     for d in cfg["Visualization Manager"]["Displays"]:
-        if d.get("Topic") in replace:
-            d["Topic"] = replace[d["Topic"]]
+        for key in ("Topic", "Marker Topic"):
+            if d.get(key) in replace:
+                d[key] = replace[d[key]]
     with open(dst, "w") as f:
         yaml.safe_dump(cfg, f, sort_keys=False)
     return dst
@@ -271,7 +275,7 @@ def map_pixels(png):
     res["view_pixels"] = int(v.shape[0] * v.shape[1])
     res["map_pixels"] = int(is_map.sum())
     res["map_fraction"] = res["map_pixels"] / res["view_pixels"]
-    res["object_pixels"] = int((np.abs(v - np.array(CHAIR_RGB, dtype=v.dtype)).max(axis=2) <= OBJECT_TOLERANCE).sum())
+    res["object_pixels"] = int(((v[:, :, 2] >= 200) & (v[:, :, 0] <= 90) & (v[:, :, 1] >= 60) & (v[:, :, 1] <= 130)).sum())
     return res
 
 
@@ -334,12 +338,14 @@ def take(rviz, png, config, watch, timeout_s, wait_topic=OCCUPIED_TOPIC):
         rviz.stop_rviz()
 
 
-def screenshot_scene(env, png, bounds_min, bounds_max, log_dir, timeout_s=90.0, control_png=None, uncut_png=None):
+def screenshot_scene(env, png, bounds_min, bounds_max, log_dir, timeout_s=90.0, control_png=None, uncut_png=None,
+                     hide=None):
     """The screenshot of a running exploration (the master in env, a rospy
     node in this process): rviz with the project's config, its view fitted to
     [bounds_min, bounds_max] (m), on Xvfb, into png. With control_png, a second
     one with the occupied map display on an unused topic; with uncut_png, one
-    of the whole map (UNCUT_TOPICS: the ceiling left in). Returns
+    of the whole map (UNCUT_TOPICS: the ceiling left in); hide: display topics put
+    on an unused one in every screenshot. Returns
     {png: map_pixels()}; logs go to log_dir."""
     os.makedirs(log_dir, exist_ok=True)
     work = tempfile.mkdtemp(prefix="rviz_screenshot.")
@@ -350,6 +356,7 @@ def screenshot_scene(env, png, bounds_min, bounds_max, log_dir, timeout_s=90.0, 
             shots = [(png, None, None)] + ([(control_png, "/rviz_screenshot/no_map", None)] if control_png else []) \
                 + ([(uncut_png, None, UNCUT_TOPICS)] if uncut_png else [])
             for i, (path, topic, topics) in enumerate(shots):
+                topics = dict(topics or {}, **{t: "/rviz_screenshot/hidden" for t in hide or []})
                 cfg = write_view_config(find_config(), os.path.join(work, "view%d.rviz" % i), bounds_min,
                                         bounds_max, topic, topics)
                 wait = topic or (topics or {}).get(OCCUPIED_TOPIC, OCCUPIED_TOPIC)
@@ -385,6 +392,8 @@ def main(argv=None):
     ap.add_argument("--timeout-s", type=float, default=90.0, help="limit for the simulation and for each screenshot, s")
     ap.add_argument("--control", action="store_true",
                     help="also rviz_no_map.png: the same view with the occupied map display on an unused topic")
+    ap.add_argument("--no-candidates", action="store_true",
+                    help="candidate views off (their winner path line has the objects' blue)")
     ap.add_argument("--uncut", action="store_true",
                     help="also rviz_uncut.png: the same view of the whole map (no display cut: the ceiling shows)")
     args = ap.parse_args(argv)
@@ -416,7 +425,8 @@ def main(argv=None):
         print("[rviz] background map explored %.1f m3 after %.0f s" % (explored, time.time() - t0), flush=True)
         shots = screenshot_scene(env, os.path.join(out, "rviz.png"), gt["bounds_min"], gt["bounds_max"], logs,
                                  args.timeout_s, os.path.join(out, "rviz_no_map.png") if args.control else None,
-                                 os.path.join(out, "rviz_uncut.png") if args.uncut else None)
+                                 os.path.join(out, "rviz_uncut.png") if args.uncut else None,
+                                 [CANDIDATES_TOPIC] if args.no_candidates else None)
         for png, m in shots.items():
             print("[rviz] %s: 3D view %s, %d of %d pixels show the map (%.1f%%), %d error-coloured pixels, "
                   "%d object pixels" % (png, m["view"], m["map_pixels"], m["view_pixels"], 100 * m["map_fraction"],

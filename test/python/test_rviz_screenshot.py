@@ -5,7 +5,8 @@ an unused topic (everything else live: frontiers, path, TF, candidates) does
 not pass the same check, nor does a blank screen. Through the display cut
 (display_cut: the map below 2 m) the chairs' boxes and labels, drawn with
 their meshes, are visible; in the same view of the whole map (--uncut) the
-ceiling hides them. The pixel measure itself is
+ceiling hides them. The candidate views are off in these screenshots
+(--no-candidates): their winner path line has the boxes' blue. The pixel measure itself is
 checked on synthetic screenshots first. The full run is skipped where rviz,
 Xvfb or ImageMagick are missing or the package is not built and sourced."""
 import os
@@ -23,7 +24,7 @@ import rviz_screenshot as rs  # noqa: E402
 PIL = pytest.importorskip("PIL.Image")
 
 MIN_MAP_FRACTION = 0.03  # of the 3D view; measured 8-28% with the map, 0.2-0.4% without
-MIN_OBJECT_PIXELS = 200  # chair box and label pixels in the 3D view
+MIN_OBJECT_PIXELS = 50  # chair box and label pixels in the 3D view; measured 176 through the cut, 0 uncut
 
 
 def shows_map(m):
@@ -71,8 +72,8 @@ def test_measure_on_synthetic_screens(tmp_path):
     assert m["error_pixels"] == 1200 and not shows_map(m)
 
     def chair_and_tf(view, _):
-        view[300:302, 100:400] = rs.CHAIR_RGB  # a chair's box edge
-        view[400:402, 100:400] = (0, 0, 255)   # the z axis of a TF frame: not an object
+        view[300:302, 100:400] = (51, 110, 255)  # a chair's box edge as rviz draws it
+        view[400:402, 100:400] = (0, 0, 255)     # the z axis of a TF frame: not an object
     m = rs.map_pixels(_screen(tmp_path, "chair.png", chair_and_tf))
     assert m["object_pixels"] == 600
 
@@ -89,7 +90,7 @@ ROS_SOURCED = shutil.which("roslaunch") is not None and (
 def test_rviz_shows_the_map(tmp_path):
     out = tmp_path / "shot"
     proc = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "rviz_screenshot.py"), "--out", str(out),
-                           "--control", "--uncut", "--min-objects", "1", "--timeout-s", "75"], stdout=subprocess.PIPE,
+                           "--control", "--uncut", "--no-candidates", "--min-objects", "1", "--timeout-s", "75"], stdout=subprocess.PIPE,
                           stderr=subprocess.STDOUT, universal_newlines=True, timeout=330)
     print(proc.stdout)
     assert proc.returncode == 0, proc.stdout
