@@ -140,7 +140,8 @@ class MavSimNode:
             rospy.logfatal("mav_sim: ~follow must be \"path\" or \"setpoints\" (is %r)", self.follow)
             raise ConfigError("follow: must be \"path\" or \"setpoints\"")
         self._setpoint_motion = SetpointMotion(2 * PathFollower.SETPOINT_HOLD_S)  # the setpoints' velocity
-        self._setpoint_stamp = None  # (stamp s, interval s) of the newest setpoint; None: do not wait for one
+        self._setpoint_stamp = None  # (stamp s, lead s) of the newest setpoint; None: do not wait for one
+        self._setpoint_intervals = []  # the last stamp intervals, s
         if self.follow == "setpoints":
             rospy.Subscriber("setpoint_position/local", PoseStamped, self._on_setpoint, queue_size=5)
         else:
@@ -208,8 +209,12 @@ class MavSimNode:
             rospy.logerr_throttle(5.0, "mav_sim: ignored setpoint %s; keeping the previous one" % e)
             return
         t = msg.header.stamp.to_sec()
+        # Sim time may run 1.5 of the longest recent intervals past a setpoint: the streamer ticks on a
+        # fixed grid of sim time, so a late tick is followed by a short interval, never a longer one.
         last = self._setpoint_stamp
-        self._setpoint_stamp = (t, t - last[0] if last is not None and 0 < t - last[0] < 1.0 else 0.1)
+        if last is not None and 0 < t - last[0] < 1.0:
+            self._setpoint_intervals = (self._setpoint_intervals + [t - last[0]])[-20:]
+        self._setpoint_stamp = (t, 1.5 * max(self._setpoint_intervals or [0.1]))
         velocity, yaw_rate, accel, yaw_accel = self._setpoint_motion.update(t, wp[0])
         with self._lock:
             self._pending_setpoint = (wp[0], velocity, yaw_rate, t, accel, yaw_accel)
@@ -310,19 +315,21 @@ class MavSimNode:
 
     def _wait_setpoint(self, t_ns: int) -> None:
         """Lockstep with the setpoint stream (follow "setpoints" and lockstep): sim time runs at most 1.5
-        setpoint intervals past the newest setpoint's stamp, as a flight controller gets its setpoints in
-        real time; waits at most lockstep_timeout_s wall s, then not again until the next setpoint."""
+        setpoint intervals (the longest of the last 20) past the newest setpoint's stamp, as a flight
+        controller gets its setpoints in real time; waits at most 1 wall s (lockstep_timeout_s if less),
+        then not again until the next setpoint."""
         last = self._setpoint_stamp
-        if last is None or t_ns / NS - last[0] <= 1.5 * last[1]:
+        if last is None or t_ns / NS - last[0] <= last[1]:
             return
-        deadline = time.monotonic() + self.cfg.lockstep_timeout_s
+        timeout_s = min(self.cfg.lockstep_timeout_s, 1.0)
+        deadline = time.monotonic() + timeout_s
         while not rospy.is_shutdown():
             last = self._setpoint_stamp
-            if last is not None and t_ns / NS - last[0] <= 1.5 * last[1]:
+            if last is None or t_ns / NS - last[0] <= last[1]:
                 return
             if time.monotonic() > deadline:
-                rospy.logwarn("mav_sim: lockstep: no setpoint for %.2f s of sim time after %.1f s; not waiting for "
-                              "setpoints until the next one", t_ns / NS - last[0], self.cfg.lockstep_timeout_s)
+                rospy.logwarn_throttle(10.0, "mav_sim: lockstep: no setpoint for %.2f s of sim time after %.1f s; not "
+                                       "waiting for setpoints until the next one" % (t_ns / NS - last[0], timeout_s))
                 self._setpoint_stamp = None
                 return
             time.sleep(0.001)
