@@ -5,8 +5,7 @@ Topics (relative names, resolved in the node's namespace):
   sub  planner/path (nav_msgs/Path, yaw in orientation), or with ~follow "setpoints"
        setpoint_position/local (geometry_msgs/PoseStamped in world, from setpoint_streamer; the MAV
        tracks it with the setpoints' velocity as feed-forward and reports no goal: the streamer
-       does; in lockstep mode sim time also waits for the setpoints: it runs at most 1.5 setpoint
-       intervals past the newest one), frame_integrated (FrameIntegrated, lockstep),
+       does), frame_integrated (FrameIntegrated, lockstep),
        ~load_scene (std_msgs/String: "mesh" or "mesh;labels" of a scene to switch to),
        ~hide_detections (std_msgs/UInt32MultiArray: scene object ids the detector stops reporting
        from the next frame on, replacing detector/hidden_object_ids; [] = hide none)
@@ -140,8 +139,6 @@ class MavSimNode:
             rospy.logfatal("mav_sim: ~follow must be \"path\" or \"setpoints\" (is %r)", self.follow)
             raise ConfigError("follow: must be \"path\" or \"setpoints\"")
         self._setpoint_motion = SetpointMotion(2 * PathFollower.SETPOINT_HOLD_S)  # the setpoints' velocity
-        self._setpoint_stamp = None  # (stamp s, lead s) of the newest setpoint; None: do not wait for one
-        self._setpoint_intervals = []  # the last stamp intervals, s
         if self.follow == "setpoints":
             rospy.Subscriber("setpoint_position/local", PoseStamped, self._on_setpoint, queue_size=5)
         else:
@@ -209,12 +206,6 @@ class MavSimNode:
             rospy.logerr_throttle(5.0, "mav_sim: ignored setpoint %s; keeping the previous one" % e)
             return
         t = msg.header.stamp.to_sec()
-        # Sim time may run 1.5 of the longest recent intervals past a setpoint: the streamer ticks on a
-        # fixed grid of sim time, so a late tick is followed by a short interval, never a longer one.
-        last = self._setpoint_stamp
-        if last is not None and 0 < t - last[0] < 1.0:
-            self._setpoint_intervals = (self._setpoint_intervals + [t - last[0]])[-20:]
-        self._setpoint_stamp = (t, 1.5 * max(self._setpoint_intervals or [0.1]))
         velocity, yaw_rate, accel, yaw_accel = self._setpoint_motion.update(t, wp[0])
         with self._lock:
             self._pending_setpoint = (wp[0], velocity, yaw_rate, t, accel, yaw_accel)
@@ -312,27 +303,6 @@ class MavSimNode:
                                      class_name=d["class_name"], confidence=d["confidence"])
                            for d in out["detections"]]
         self.pub_det.publish(dets)
-
-    def _wait_setpoint(self, t_ns: int) -> None:
-        """Lockstep with the setpoint stream (follow "setpoints" and lockstep): sim time runs at most 1.5
-        setpoint intervals (the longest of the last 20) past the newest setpoint's stamp, as a flight
-        controller gets its setpoints in real time; waits at most 1 wall s (lockstep_timeout_s if less),
-        then not again until the next setpoint."""
-        last = self._setpoint_stamp
-        if last is None or t_ns / NS - last[0] <= last[1]:
-            return
-        timeout_s = min(self.cfg.lockstep_timeout_s, 1.0)
-        deadline = time.monotonic() + timeout_s
-        while not rospy.is_shutdown():
-            last = self._setpoint_stamp
-            if last is None or t_ns / NS - last[0] <= last[1]:
-                return
-            if time.monotonic() > deadline:
-                rospy.logwarn_throttle(10.0, "mav_sim: lockstep: no setpoint for %.2f s of sim time after %.1f s; not "
-                                       "waiting for setpoints until the next one" % (t_ns / NS - last[0], timeout_s))
-                self._setpoint_stamp = None
-                return
-            time.sleep(0.001)
 
     def _wait_lockstep(self, frame_ns: int) -> None:
         """Blocks (wall time) until every lockstep node has reported frame_ns."""
@@ -510,8 +480,6 @@ class MavSimNode:
                 self._publish_body(t_ns)
                 next_tf += tf_ns
             # Physics.
-            if c.lockstep and self.follow == "setpoints":
-                self._wait_setpoint(t_ns)
             ev = sim.step(dt_ns / NS)
             t_ns += dt_ns
             self.pub_clock.publish(Clock(clock=_stamp(t_ns)))
