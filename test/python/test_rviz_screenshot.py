@@ -4,9 +4,11 @@ project's config, on Xvfb during a short lockstep simulation of a generated
 an unused topic (everything else live: frontiers, path, TF, candidates) does
 not pass the same check, nor does a blank screen. Through the display cut
 (display_cut: the map below 2 m) the chairs' boxes and labels, drawn with
-their meshes, are visible; in the same view of the whole map (--uncut) the
-ceiling hides them. The candidate views are off in these screenshots
-(--no-candidates): their winner path line has the boxes' blue. The pixel measure itself is
+their meshes, are visible once a chair has a surface. The candidate views are
+off in these screenshots (--no-candidates): their winner path line has the
+boxes' blue. (The same view of the whole map, rviz_screenshot.py --uncut,
+hides them only once the ceiling above them is mapped: 0 px in one run, 107
+in another, so that is not asserted.) The pixel measure itself is
 checked on synthetic screenshots first. The full run is skipped where rviz,
 Xvfb or ImageMagick are missing or the package is not built and sourced."""
 import os
@@ -24,7 +26,7 @@ import rviz_screenshot as rs  # noqa: E402
 PIL = pytest.importorskip("PIL.Image")
 
 MIN_MAP_FRACTION = 0.03  # of the 3D view; measured 8-28% with the map, 0.2-0.4% without
-MIN_OBJECT_PIXELS = 50  # chair box and label pixels in the 3D view; measured 176 through the cut, 0 uncut
+MIN_OBJECT_PIXELS = 50  # chair box and label pixels in the 3D view; measured 109 and 176
 
 
 def shows_map(m):
@@ -90,7 +92,7 @@ ROS_SOURCED = shutil.which("roslaunch") is not None and (
 def test_rviz_shows_the_map(tmp_path):
     out = tmp_path / "shot"
     proc = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "rviz_screenshot.py"), "--out", str(out),
-                           "--control", "--uncut", "--no-candidates", "--min-objects", "1", "--timeout-s", "75"], stdout=subprocess.PIPE,
+                           "--control", "--no-candidates", "--min-objects", "1", "--timeout-s", "75"], stdout=subprocess.PIPE,
                           stderr=subprocess.STDOUT, universal_newlines=True, timeout=330)
     print(proc.stdout)
     assert proc.returncode == 0, proc.stdout
@@ -102,11 +104,8 @@ def test_rviz_shows_the_map(tmp_path):
     assert shows_map(with_map), with_map
     assert without["view"] == with_map["view"]  # same layout: the difference is the map
     assert not shows_map(without), without
-    # the objects inside the map are visible through the display cut, and hidden under the whole map's ceiling
-    uncut = rs.map_pixels(str(out / "rviz_uncut.png"))
-    print("the whole map (no display cut): %s" % uncut)
+    # the objects inside the map are visible through the display cut
     assert with_map["object_pixels"] >= MIN_OBJECT_PIXELS, with_map
-    assert uncut["object_pixels"] < MIN_OBJECT_PIXELS, uncut
     # no node of the simulation survives the script (their command lines name its log directory)
     left = subprocess.run(["pgrep", "-f", str(out)], stdout=subprocess.PIPE, universal_newlines=True).stdout.split()
     assert left == [], left
