@@ -375,4 +375,36 @@ PlannerNodeConfig loadPlannerNode(const ParamReader& p) {
   return c;
 }
 
+semexp::TrajectoryConfig loadTrajectory(const ParamReader& p) {
+  semexp::TrajectoryConfig c;
+  p.get("planner/a_max_mps2", c.a_max_mps2);
+  p.get("planner/alpha_max_radps2", c.alpha_max_radps2);
+  p.get("planner/trajectory_sample_period_s", c.trajectory_sample_period_s);
+  c.validate("planner/");
+  return c;
+}
+
+SetpointStreamerConfig loadSetpointStreamer(const ParamReader& p) {
+  SetpointStreamerConfig c;
+  const auto positive = [&](const char* name, double& v, double max, const char* unit) {
+    const std::string path = std::string("setpoint_streamer/") + name;
+    p.get(path, v);
+    if (!(v > 0 && v <= max))
+      throw semexp::ConfigError(path, "must be in (0, " + std::to_string(static_cast<int>(max)) + "] " + unit);
+  };
+  positive("rate_hz", c.rate_hz, 1000, "Hz");
+  positive("pose_timeout_s", c.pose_timeout_s, 3600, "s");
+  positive("max_start_offset_m", c.max_start_offset_m, 1000, "m");
+  positive("goal_tolerance_m", c.goal_tolerance_m, 1000, "m");
+  positive("goal_yaw_tolerance_rad", c.goal_yaw_tolerance_rad, 4, "rad");
+  return c;
+}
+
+double loadDisplayCut(const ParamReader& p) {
+  double max_z_m = 2.0;
+  p.get("display_cut/max_z_m", max_z_m);
+  if (!std::isfinite(max_z_m)) throw semexp::ConfigError("display_cut/max_z_m", "must be a finite height, m");
+  return max_z_m;
+}
+
 }  // namespace semexp_ros

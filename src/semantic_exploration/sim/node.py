@@ -2,7 +2,10 @@
 detector would, for a scene rendered by :class:`Simulator`.
 
 Topics (relative names, resolved in the node's namespace):
-  sub  planner/path (nav_msgs/Path, yaw in orientation), frame_integrated (FrameIntegrated, lockstep),
+  sub  planner/path (nav_msgs/Path, yaw in orientation), or with ~follow "setpoints"
+       setpoint_position/local (geometry_msgs/PoseStamped in world, from setpoint_streamer; the MAV
+       tracks it with the setpoints' velocity as feed-forward and reports no goal: the streamer
+       does), frame_integrated (FrameIntegrated, lockstep),
        ~load_scene (std_msgs/String: "mesh" or "mesh;labels" of a scene to switch to),
        ~hide_detections (std_msgs/UInt32MultiArray: scene object ids the detector stops reporting
        from the next frame on, replacing detector/hidden_object_ids; [] = hide none)
@@ -58,6 +61,7 @@ from .config import ConfigError, SimConfig, from_dict
 from .faults import FaultInjector
 from .planner_lockstep import PlannerLockstep
 from .scene import SceneError, export_ground_truth
+from .mav import PathFollower, SetpointMotion
 from .simulator import (PathError, Simulator, load_simulator, path_pose_count, quaternion_from_matrix,
                         waypoints_from_poses)
 
@@ -128,9 +132,19 @@ class MavSimNode:
         self._lock = threading.Condition()
         self._reported: Dict[str, int] = {}
         self._pending_path = None
+        self._pending_setpoint = None
         self._requests: "queue.Queue" = queue.Queue()
-        # Raw: a path's length is checked before it is deserialised (1e6 poses would hold the GIL for seconds).
-        rospy.Subscriber("planner/path", rospy.AnyMsg, self._on_path, queue_size=5)
+        # ~follow: what the MAV flies: "path" (planner/path) or "setpoints" (setpoint_position/local).
+        self.follow = rospy.get_param("~follow", "path")
+        if self.follow not in ("path", "setpoints"):
+            rospy.logfatal("mav_sim: ~follow must be \"path\" or \"setpoints\" (is %r)", self.follow)
+            raise ConfigError("follow: must be \"path\" or \"setpoints\"")
+        self._setpoint_motion = SetpointMotion(2 * PathFollower.SETPOINT_HOLD_S)  # the setpoints' velocity
+        if self.follow == "setpoints":
+            rospy.Subscriber("setpoint_position/local", PoseStamped, self._on_setpoint, queue_size=5)
+        else:
+            # Raw: a path's length is checked before it is deserialised (1e6 poses would hold the GIL for seconds).
+            rospy.Subscriber("planner/path", rospy.AnyMsg, self._on_path, queue_size=5)
         rospy.Subscriber("frame_integrated", FrameIntegrated, self._on_integrated, queue_size=50)
         rospy.Subscriber("~load_scene", String, lambda m: self._requests.put(m.data), queue_size=2)
         self._hidden = list(c.detector.hidden_object_ids)
@@ -187,6 +201,25 @@ class MavSimNode:
             return
         with self._lock:
             self._pending_path = (wps, sim)  # checked against `sim`
+
+    def _on_setpoint(self, msg: PoseStamped) -> None:
+        """A setpoint and its velocity from the previous one (the streamer samples a trajectory)."""
+        frame = msg.header.frame_id.lstrip("/")
+        sim = self.sim
+        try:
+            if frame and frame != self.cfg.frames.world:
+                raise PathError("in frame '%s' (expected '%s')" % (frame, self.cfg.frames.world))
+            p, q = msg.pose.position, msg.pose.orientation
+            wp = waypoints_from_poses([((p.x, p.y, p.z), (q.x, q.y, q.z, q.w))])
+            if sim is not None:
+                wp = sim.check_path(wp)
+        except PathError as e:
+            rospy.logerr_throttle(5.0, "mav_sim: ignored setpoint %s; keeping the previous one" % e)
+            return
+        t = msg.header.stamp.to_sec()
+        velocity, yaw_rate, accel, yaw_accel = self._setpoint_motion.update(t, wp[0])
+        with self._lock:
+            self._pending_setpoint = (wp[0], velocity, yaw_rate, t, accel, yaw_accel)
 
     def _on_hide(self, msg: UInt32MultiArray) -> None:
         self._hidden = [int(i) for i in msg.data]
@@ -420,6 +453,10 @@ class MavSimNode:
                 self.tf_static.sendTransform(self._transform(sim.T_BC, f.body, f.camera, t_ns))
             with self._lock:
                 pending, self._pending_path = self._pending_path, None
+                setpoint, self._pending_setpoint = self._pending_setpoint, None
+            if setpoint is not None:  # sent at its stamp; sim time may have run on since (no lockstep wait for it)
+                target, velocity, yaw_rate, stamp_s, accel, yaw_accel = setpoint
+                sim.follower.set_setpoint(target, velocity, yaw_rate, t_ns / NS - stamp_s, accel, yaw_accel)
             if pending is not None:
                 path, checked_by = pending
                 try:
