@@ -3,16 +3,19 @@
 /// Message <-> core conversions: points, poses and paths for every node, and
 /// what the planner reads and sends (gain images, MapBlocks for the map
 /// replica, object summaries, the frontier cloud, history masks, candidates,
-/// status). Each function that reads a message validates it and says why it
+/// status), and what the map nodes send (MapBlocks, ObjectInfo). Each function that reads a message validates it and says why it
 /// refused it, so a node can count the drop and go on.
 
 #include <geometry_msgs/Point.h>
+#include <geometry_msgs/Pose.h>
+#include <geometry_msgs/Transform.h>
 #include <geometry_msgs/Quaternion.h>
 #include <nav_msgs/Path.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <string>
 #include <vector>
 
@@ -21,6 +24,8 @@
 #include "semantic_exploration/ExplorationStatus.h"
 #include "semantic_exploration/MapBlocks.h"
 #include "semantic_exploration/ObjectArray.h"
+#include "semantic_exploration/core/object_map.hpp"
+#include "semantic_exploration/core/occupancy_map.hpp"
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
 #include "semantic_exploration/core/planning/interfaces.hpp"
 #include "semantic_exploration/core/planning/map_replica.hpp"
@@ -80,5 +85,30 @@ semantic_exploration::CandidateViewArray toCandidateViewArray(const semexp::Iter
 semantic_exploration::ExplorationStatus toExplorationStatus(const semexp::IterationResult& r, uint8_t state,
                                                             uint32_t iteration, const std::string& frame,
                                                             const ros::Time& stamp);
+
+// ---------------------------------------------------------------- map nodes
+
+/// geometry_msgs::Point -> vector, m.
+Eigen::Vector3d fromPoint(const geometry_msgs::Point& p);
+/// The positions of a gain request.
+std::vector<Eigen::Vector3d> fromPoints(const std::vector<geometry_msgs::Point>& points);
+
+/// Pose message of T (translation and unit quaternion).
+geometry_msgs::Pose toPose(const Eigen::Isometry3d& T);
+/// T of a pose message. Returns "" or why it is not a rigid transform (a
+/// quaternion of norm <= 0.5 or non-finite values); the quaternion is
+/// normalised. `T` is untouched on failure.
+std::string fromPose(const geometry_msgs::Pose& pose, Eigen::Isometry3d& T);
+/// T of a tf transform; the quaternion is normalised (not checked: tf2 has).
+Eigen::Isometry3d fromTransform(const geometry_msgs::Transform& t);
+
+/// The MapBlocks message of a map update or snapshot (background_map's
+/// ~map_update and ~get_map); toMapUpdate() reads it back.
+semantic_exploration::MapBlocks toMapBlocksMsg(const semexp::MapBlocksData& blocks, const ros::Time& stamp,
+                                               const std::string& frame);
+
+/// The ObjectInfo of an object with the summary of its surface (object_map's
+/// ~objects); toObjectSummaries() reads what the planner needs back.
+semantic_exploration::ObjectInfo toObjectInfo(const semexp::MappedObject& object, const semexp::TsdfSummary& surface);
 
 }  // namespace semexp_ros
