@@ -17,8 +17,9 @@ import yaml
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 CONFIG = os.path.join(ROOT, "config")
-# The nodes' YAML files (sim.yaml is the simulator's, read by its own config.py).
-NODE_YAMLS = ("semantic.yaml", "detector.yaml", "classic.yaml", "onboard.yaml", "detector_long_range.yaml")
+# The nodes' YAML files (sim.yaml and its override detector_long_range.yaml are the simulator's, read by
+# sim/config.py).
+NODE_YAMLS = ("semantic.yaml", "detector.yaml", "classic.yaml", "onboard.yaml")
 
 
 def load(name):

@@ -255,7 +255,7 @@ TEST(MapNodeConversions, PosesRoundTripAndBadOnesAreRefused) {
   // 90 deg about z, then at (1, 2, 3): the camera's x axis points along world +y.
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  T.translation() = {1.0, 2.0, 3.0};
+  T.translation() = Eigen::Vector3d(1.0, 2.0, 3.0);
   const geometry_msgs::Pose m = toPose(T);
   EXPECT_NEAR(m.orientation.w, std::sqrt(0.5), 1e-12);
   EXPECT_NEAR(m.orientation.z, std::sqrt(0.5), 1e-12);
@@ -286,7 +286,7 @@ TEST(MapNodeConversions, PosesRoundTripAndBadOnesAreRefused) {
   t.rotation = m.orientation;
   EXPECT_TRUE(fromTransform(t).isApprox(T, 1e-12));
 
-  const std::vector<geometry_msgs::Point> pts = {toPoint({1, 2, 3}), toPoint({-4, 5.5, 0})};
+  const std::vector<geometry_msgs::Point> pts = {toPoint(Eigen::Vector3d(1, 2, 3)), toPoint(Eigen::Vector3d(-4, 5.5, 0))};
   const auto v = fromPoints(pts);
   ASSERT_EQ(v.size(), 2u);
   EXPECT_EQ(v[1], Eigen::Vector3d(-4, 5.5, 0));
