@@ -9,7 +9,6 @@
 #include <cstring>
 #include <filesystem>
 
-#include "semantic_exploration/FrameIntegrated.h"
 #include "semantic_exploration/MapBlocks.h"
 #include "semantic_exploration/MapStats.h"
 #include "semantic_exploration/ros/conversions.hpp"
@@ -20,42 +19,15 @@ namespace {
 
 constexpr double kColourSyncTolerance_s = 0.005;  // colour and depth of one frame share (almost) one stamp
 
-semantic_exploration::MapBlocks toMsg(const semexp::MapBlocksData& d, const ros::Time& stamp, const std::string& frame) {
-  semantic_exploration::MapBlocks m;
-  m.header.stamp = stamp;
-  m.header.frame_id = frame;
-  m.sequence = d.sequence;
-  m.full = d.full;
-  m.resolution_m = static_cast<float>(d.resolution_m);
-  m.block_size = static_cast<std::uint8_t>(d.block_size);
-  m.origin.x = d.origin_m.x();
-  m.origin.y = d.origin_m.y();
-  m.origin.z = d.origin_m.z();
-  m.encoding = semantic_exploration::MapBlocks::ENCODING_LOG_ODDS_I8;
-  m.coords = d.coords;
-  m.payload.resize(d.payload.size());
-  if (!d.payload.empty()) std::memcpy(m.payload.data(), d.payload.data(), d.payload.size());
-  m.uniform_coords = d.uniform_coords;
-  m.uniform_values.resize(d.uniform_values.size());
-  if (!d.uniform_values.empty()) std::memcpy(m.uniform_values.data(), d.uniform_values.data(), d.uniform_values.size());
-  return m;
-}
-
 }  // namespace
 
-BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
-  const auto p = ParamReader::fromNodeHandle(pnh);
-  camera_ = loadCamera(p);
-  bounds_ = loadBounds(p);
-  config_ = loadBackgroundMap(p);
-  exploration_ = loadExploration(p);
-  frames_ = loadFrames(p);
-  poses_ = std::make_unique<PoseSource>(loadTf(p));
-  p.getAtLeast("background_map/frontier_period_s", frontier_period_s_, 0.0, "s");
-  p.getAtLeast("background_map/colour_wait_s", colour_wait_s_, 0.0, "s");
-  p.getAtLeast("background_map/start_free_radius_m", start_free_radius_m_, 0.0, "m");
-  map_ = std::make_unique<semexp::OccupancyMap>(config_, bounds_);
-  evidence_ = std::make_unique<semexp::FrontierEvidence>(loadFrontierEvidence(p));
+BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
+    : CameraNode(nh, pnh, BeforeCameraInfo::kRefuse, true),
+      config_(loadBackgroundMap(params())),
+      exploration_(loadExploration(params())),
+      node_config_(loadBackgroundMapNode(params())),
+      map_(std::make_unique<semexp::OccupancyMap>(config_, bounds_)),
+      evidence_(std::make_unique<semexp::FrontierEvidence>(loadFrontierEvidence(params()))) {
 
   occupied_pub_ = pnh.advertise<sensor_msgs::PointCloud2>(
       "occupied", 1, [this](const ros::SingleSubscriberPublisher& sub) { occupiedConnected(sub); },
@@ -64,29 +36,16 @@ BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) 
   retired_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("retired_frontiers", 1, true);
   update_pub_ = pnh.advertise<semantic_exploration::MapBlocks>("map_update", 50);
   stats_pub_ = pnh.advertise<semantic_exploration::MapStats>("stats", 10);
-  integrated_pub_ = nh.advertise<semantic_exploration::FrameIntegrated>("frame_integrated", 10);
   gains_srv_ = pnh.advertiseService("compute_gains", &BackgroundMapNode::computeGains, this);
   get_map_srv_ = pnh.advertiseService("get_map", &BackgroundMapNode::getMap, this);
   save_srv_ = pnh.advertiseService("save", &BackgroundMapNode::save, this);
-  info_sub_ = nh.subscribe("camera/camera_info", 1, &BackgroundMapNode::infoCallback, this);
   depth_sub_ = nh.subscribe("camera/depth/image_raw", 2, &BackgroundMapNode::depthCallback, this);
   if (config_.integrate_colour) rgb_sub_ = nh.subscribe("camera/rgb/image_raw", 5, &BackgroundMapNode::rgbCallback, this);
-  flush_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.005, 0.5 * colour_wait_s_)), &BackgroundMapNode::flushTimer, this);
+  flush_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.005, 0.5 * node_config_.colour_wait_s)), &BackgroundMapNode::flushTimer, this);
   last_header_.frame_id = frames_.world;
   ROS_INFO("background_map: resolution %.3f m, bounds [%.1f %.1f %.1f] - [%.1f %.1f %.1f] m, colour %s",
            config_.resolution_m, bounds_.min_m.x(), bounds_.min_m.y(), bounds_.min_m.z(), bounds_.max_m.x(),
            bounds_.max_m.y(), bounds_.max_m.z(), config_.integrate_colour ? "on" : "off");
-}
-
-void BackgroundMapNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
-  semexp::PinholeCamera c;
-  const auto err = camera_input_.accept(*msg, camera_.d_min_m, camera_.d_max_m, c);
-  if (!err.empty()) {
-    drops_.drop("bad_camera_info", err);
-    return;
-  }
-  camera_ = c;
-  have_info_ = true;
 }
 
 // ------------------------------------------------------------ frame pairing
@@ -128,7 +87,7 @@ void BackgroundMapNode::rgbCallback(const sensor_msgs::ImageConstPtr& msg) {
 }
 
 void BackgroundMapNode::flushTimer(const ros::WallTimerEvent&) {
-  if (pending_depth_ && (ros::WallTime::now() - pending_since_).toSec() >= colour_wait_s_) {
+  if (pending_depth_ && (ros::WallTime::now() - pending_since_).toSec() >= node_config_.colour_wait_s) {
     const auto d = pending_depth_;
     pending_depth_.reset();
     processFrame(d, nullptr);
@@ -139,34 +98,19 @@ void BackgroundMapNode::flushTimer(const ros::WallTimerEvent&) {
 
 // -------------------------------------------------------------- integration
 
-void BackgroundMapNode::reportFrame(const std_msgs::Header& header, bool integrated, double time_ms) {
-  semantic_exploration::FrameIntegrated done;
-  done.header = header;
-  done.node = "background_map";
-  done.integrated = integrated;
-  done.time_ms = static_cast<float>(time_ms);
-  integrated_pub_.publish(done);
-}
-
 void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, const sensor_msgs::ImageConstPtr& rgb_msg) {
-  const auto t0 = ros::WallTime::now();
-  auto fail = [&](const std::string& reason, const std::string& detail) {
-    drops_.drop(reason, detail);
+  const FrameTimer timer;
+  // Stats before the report: a listener woken by the report finds the drop counted.
+  const auto fail = [&](const Refusal& why) {
+    drops_.drop(why.reason, why.detail);
     publishStats(msg->header);
-    reportFrame(msg->header, false, (ros::WallTime::now() - t0).toSec() * 1e3);
+    reportFrame(msg->header, false, timer);
   };
   cv::Mat depth_m;
-  auto err = depthToMeters(*msg, depth_m);
-  if (!err.empty()) return fail("bad_encoding", err);
-  camera_input_.depthFrame(depth_m.cols, depth_m.rows);
-  if (!have_info_) return fail("no_camera_info", "depth received before any camera_info");
-  if (depth_m.cols != camera_.width || depth_m.rows != camera_.height)
-    return fail("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +
-                                     " but camera_info " + std::to_string(camera_.width) + "x" +
-                                     std::to_string(camera_.height));
+  if (const Refusal why = readDepth(*msg, depth_m)) return fail(why);
   cv::Mat rgb;
   if (rgb_msg) {
-    err = colourToRgb(*rgb_msg, rgb);
+    std::string err = colourToRgb(*rgb_msg, rgb);
     if (err.empty() && rgb.size() != depth_m.size()) err = "colour and depth differ in size";
     if (!err.empty()) {
       drops_.drop("bad_rgb", err + " (integrating depth without colour)");
@@ -174,23 +118,19 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
     }
   }
   Eigen::Isometry3d T_WC;
-  err = poses_->cameraPose(frames_, msg->header, T_WC);
-  if (!err.empty()) return fail("no_tf", err);
-  if (!bounds_.contains(T_WC.translation()))
-    return fail("out_of_bounds", "camera at (" + std::to_string(T_WC.translation().x()) + ", " +
-                                     std::to_string(T_WC.translation().y()) + ", " +
-                                     std::to_string(T_WC.translation().z()) + ") lies outside the map bounds");
+  if (const Refusal why = cameraPose(msg->header, T_WC)) return fail(why);
   const auto t_int = ros::WallTime::now();
   semexp::IntegrationStats st;
   try {
     st = map_->integrate(depth_m, rgb, camera_, T_WC);
   } catch (const std::exception& e) {
-    return fail("bad_input", e.what());
+    return fail({"bad_input", e.what()});
   }
-  if (frames_integrated_ == 0 && start_free_radius_m_ > 0) {
+  if (frames_integrated_ == 0 && node_config_.start_free_radius_m > 0) {
     // The paper assumes free space around the start: the camera cannot see the MAV's own position.
-    map_->markFreeSphere(T_WC.translation(), start_free_radius_m_);
-    ROS_INFO("background_map: unknown space within %.2f m of the first camera pose marked free", start_free_radius_m_);
+    map_->markFreeSphere(T_WC.translation(), node_config_.start_free_radius_m);
+    ROS_INFO("background_map: unknown space within %.2f m of the first camera pose marked free",
+             node_config_.start_free_radius_m);
   }
   last_integration_ms_ = static_cast<float>((ros::WallTime::now() - t_int).toSec() * 1e3);
   const auto t_fr = ros::WallTime::now();
@@ -205,11 +145,11 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
   ++frames_integrated_;
   last_header_ = msg->header;
   last_header_.frame_id = frames_.world;
-  if (map_->pendingUpdateCount() > 0) update_pub_.publish(toMsg(map_->takeUpdate(), msg->header.stamp, frames_.world));
+  if (map_->pendingUpdateCount() > 0) update_pub_.publish(toMapBlocksMsg(map_->takeUpdate(), msg->header.stamp, frames_.world));
   publishStats(msg->header);
   frontiers_dirty_ = occupied_dirty_ = true;
   publishClouds(msg->header.stamp);
-  reportFrame(msg->header, true, (ros::WallTime::now() - t0).toSec() * 1e3);
+  reportFrame(msg->header, true, timer);
 }
 
 void BackgroundMapNode::publishStats(const std_msgs::Header& header) {
@@ -228,12 +168,14 @@ void BackgroundMapNode::publishStats(const std_msgs::Header& header) {
   s.integration_time_ms = last_integration_ms_;
   s.frontier_time_ms = last_frontier_ms_;
   s.frames_integrated = frames_integrated_;
-  s.dropped_bad_encoding = drops_.count("bad_encoding");
+  s.dropped_bad_depth = drops_.count("bad_depth");
   s.dropped_size_mismatch = drops_.count("size_mismatch");
   s.dropped_no_tf = drops_.count("no_tf");
   s.dropped_out_of_bounds = drops_.count("out_of_bounds");
   s.dropped_no_camera_info = drops_.count("no_camera_info");
   s.invalid_depth_pixels = invalid_depth_pixels_;
+  s.frame_cpu_median_ms = static_cast<float>(cpuBudget().median_ms());
+  s.frame_cpu_p95_ms = static_cast<float>(cpuBudget().p95_ms());
   stats_pub_.publish(s);
 }
 
@@ -244,7 +186,7 @@ void BackgroundMapNode::publishClouds(const ros::Time& stamp) {
   const auto due = [&](const ros::WallTime& last, double period_s) {
     return last.isZero() || (now - last).toSec() >= period_s;
   };
-  if (frontiers_dirty_ && due(last_frontier_pub_, frontier_period_s_)) {
+  if (frontiers_dirty_ && due(last_frontier_pub_, node_config_.frontier_period_s)) {
     std::vector<Eigen::Vector3d> active, retired;
     active.reserve(map_->frontierCount());
     map_->forEachFrontier([&](const Eigen::Vector3d& c, double) {
@@ -317,9 +259,7 @@ bool BackgroundMapNode::computeGains(semantic_exploration::ComputeGains::Request
                                         std::to_string(n * per) + " (or none)");
     return false;
   }
-  std::vector<Eigen::Vector3d> pos;
-  pos.reserve(n);
-  for (const auto& p : req.positions) pos.emplace_back(p.x, p.y, p.z);
+  const std::vector<Eigen::Vector3d> pos = fromPoints(req.positions);
   semexp::SphericalGrid grid;
   grid.width = w;
   grid.height = h;
@@ -347,17 +287,12 @@ bool BackgroundMapNode::computeGains(semantic_exploration::ComputeGains::Request
 }
 
 bool BackgroundMapNode::getMap(semantic_exploration::GetMap::Request& req, semantic_exploration::GetMap::Response& res) {
-  res.map = toMsg(map_->snapshot(req.compact), last_header_.stamp, frames_.world);
+  res.map = toMapBlocksMsg(map_->snapshot(req.compact), last_header_.stamp, frames_.world);
   return true;
 }
 
 bool BackgroundMapNode::save(semantic_exploration::SaveMap::Request& req, semantic_exploration::SaveMap::Response& res) {
-  if (const std::string why = checkSaveDirectory(req.directory); !why.empty()) {
-    res.success = false;
-    res.message = "background_map: save refused: " + why;
-    ROS_ERROR("%s", res.message.c_str());
-    return true;
-  }
+  if (saveRefused(req.directory, res)) return true;
   try {
     namespace fs = std::filesystem;
     const fs::path dir(req.directory);

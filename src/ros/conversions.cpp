@@ -359,4 +359,85 @@ std::string cutCloudAboveZ(const sensor_msgs::PointCloud2& in, double max_z_m, s
   return "";
 }
 
+// ---------------------------------------------------------------- map nodes
+
+Eigen::Vector3d fromPoint(const geometry_msgs::Point& p) { return {p.x, p.y, p.z}; }
+
+std::vector<Eigen::Vector3d> fromPoints(const std::vector<geometry_msgs::Point>& points) {
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(points.size());
+  for (const auto& p : points) out.push_back(fromPoint(p));
+  return out;
+}
+
+geometry_msgs::Pose toPose(const Eigen::Isometry3d& T) {
+  geometry_msgs::Pose m;
+  m.position = toPoint(T.translation());
+  const Eigen::Quaterniond q(T.linear());
+  m.orientation.w = q.w();
+  m.orientation.x = q.x();
+  m.orientation.y = q.y();
+  m.orientation.z = q.z();
+  return m;
+}
+
+std::string fromPose(const geometry_msgs::Pose& pose, Eigen::Isometry3d& T) {
+  const auto& q = pose.orientation;
+  const Eigen::Quaterniond quat(q.w, q.x, q.y, q.z);
+  const Eigen::Vector3d t = fromPoint(pose.position);
+  if (!(quat.norm() > 0.5) || !t.allFinite()) return "pose is not a valid rigid transform";
+  T = Eigen::Isometry3d::Identity();
+  T.linear() = quat.normalized().toRotationMatrix();
+  T.translation() = t;
+  return "";
+}
+
+Eigen::Isometry3d fromTransform(const geometry_msgs::Transform& t) {
+  const auto& q = t.rotation;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized().toRotationMatrix();
+  T.translation() = Eigen::Vector3d(t.translation.x, t.translation.y, t.translation.z);
+  return T;
+}
+
+semantic_exploration::MapBlocks toMapBlocksMsg(const semexp::MapBlocksData& d, const ros::Time& stamp,
+                                               const std::string& frame) {
+  static_assert(semexp::MapBlocksData::kEncodingLogOddsI8 == semantic_exploration::MapBlocks::ENCODING_LOG_ODDS_I8,
+                "MapBlocksData and MapBlocks.msg disagree on the encoding");
+  semantic_exploration::MapBlocks m;
+  m.header.stamp = stamp;
+  m.header.frame_id = frame;
+  m.sequence = d.sequence;
+  m.full = d.full;
+  m.resolution_m = static_cast<float>(d.resolution_m);
+  m.block_size = static_cast<std::uint8_t>(d.block_size);
+  m.origin = toPoint(d.origin_m);
+  m.encoding = d.encoding;
+  m.coords = d.coords;
+  // int8 values travel as the message's bytes (same bits).
+  m.payload.resize(d.payload.size());
+  if (!d.payload.empty()) std::memcpy(m.payload.data(), d.payload.data(), d.payload.size());
+  m.uniform_coords = d.uniform_coords;
+  m.uniform_values.resize(d.uniform_values.size());
+  if (!d.uniform_values.empty()) std::memcpy(m.uniform_values.data(), d.uniform_values.data(), d.uniform_values.size());
+  return m;
+}
+
+semantic_exploration::ObjectInfo toObjectInfo(const semexp::MappedObject& o, const semexp::TsdfSummary& s) {
+  semantic_exploration::ObjectInfo info;
+  info.id = o.id;
+  info.class_id = static_cast<uint16_t>(o.class_id);
+  info.class_name = o.class_name;
+  info.resolution_m = static_cast<float>(o.resolution_m);
+  info.bbox_min = toPoint(s.bbox_min_W);
+  info.bbox_max = toPoint(s.bbox_max_W);
+  info.centroid = toPoint(s.centroid_W);
+  info.voxel_count = static_cast<uint32_t>(s.voxel_count);
+  info.observed_fraction = static_cast<float>(s.observed_fraction);
+  info.detection_count = o.detection_count;
+  info.undetected_count = o.undetected_count;
+  info.weight_sum = static_cast<float>(s.weight_sum);
+  return info;
+}
+
 }  // namespace semexp_ros

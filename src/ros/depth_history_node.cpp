@@ -5,113 +5,35 @@
 
 #include <algorithm>
 
-#include "semantic_exploration/FrameIntegrated.h"
+#include "semantic_exploration/ros/conversions.hpp"
+
 
 namespace semexp_ros {
 
-namespace {
-
-// The planner asks get_masks for its raycast images, and get_masks answers only its own size: a mismatch would
-// fail every planning iteration, so it fails here (every node loads the whole YAML, planner section included).
-void checkPlannerImageSize(const ParamReader& p, const semexp::DepthHistoryConfig& config) {
-  if (!p.has("planner")) return;  // no planner configured alongside
-  semexp::PlannerConfig planner;
-  p.get("planner/raycast_width", planner.raycast_width);
-  p.get("planner/raycast_height", planner.raycast_height);
-  if (config.width != planner.raycast_width)
-    throw semexp::ConfigError("depth_history/width", "is " + std::to_string(config.width) +
-                                                         " but planner/raycast_width is " +
-                                                         std::to_string(planner.raycast_width) + "; they must be equal");
-  if (config.height != planner.raycast_height)
-    throw semexp::ConfigError("depth_history/height", "is " + std::to_string(config.height) +
-                                                          " but planner/raycast_height is " +
-                                                          std::to_string(planner.raycast_height) +
-                                                          "; they must be equal");
-}
-
-}  // namespace
-
-DepthHistoryNode::DepthHistoryNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
-  const auto p = ParamReader::fromNodeHandle(pnh);
+DepthHistoryNode::DepthHistoryNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
+    : CameraNode(nh, pnh, BeforeCameraInfo::kUseParameters, true) {
+  const auto& p = params();
   config_ = loadDepthHistory(p);
-  checkPlannerImageSize(p, config_);
-  camera_ = loadCamera(p);
-  bounds_ = loadBounds(p);
-  frames_ = loadFrames(p);
-  poses_ = std::make_unique<PoseSource>(loadTf(p));
-  p.getAtLeast("depth_history/marker_period_s", marker_period_s_, 0.0, "s");
+  node_config_ = loadDepthHistoryNode(p, config_);
   markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("markers", 1, true);
-  integrated_pub_ = nh.advertise<semantic_exploration::FrameIntegrated>("frame_integrated", 10);
   masks_srv_ = pnh.advertiseService("get_masks", &DepthHistoryNode::getMasks, this);
-  info_sub_ = nh.subscribe("camera/camera_info", 1, &DepthHistoryNode::infoCallback, this);
   depth_sub_ = nh.subscribe("camera/depth/image_raw", 2, &DepthHistoryNode::depthCallback, this);
   ROS_INFO("depth_history: %.2f m cells, %dx%d images", config_.cell_size_m, config_.width, config_.height);
 }
 
-void DepthHistoryNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
-  semexp::PinholeCamera c;
-  const auto err = camera_input_.accept(*msg, camera_.d_min_m, camera_.d_max_m, c);
-  if (!err.empty()) {
-    drops_.drop("bad_camera_info", err);
-    return;
-  }
-  if (history_) return;  // the layout is fixed for the run
-  camera_ = c;  // the history is built at the first depth frame of this size
-  have_info_ = true;
-}
-
-void DepthHistoryNode::reportFrame(const std_msgs::Header& header, bool integrated, double time_ms) {
-  semantic_exploration::FrameIntegrated done;
-  done.header = header;
-  done.node = "depth_history";
-  done.integrated = integrated;
-  done.time_ms = static_cast<float>(time_ms);
-  integrated_pub_.publish(done);
-}
-
 void DepthHistoryNode::depthCallback(const sensor_msgs::ImageConstPtr& msg) {
-  const auto t0 = ros::WallTime::now();
+  const FrameTimer timer;
   cv::Mat depth_m;
-  auto err = depthToMeters(*msg, depth_m);
-  if (!err.empty()) {
-    drops_.drop("bad_depth", err);
-    reportFrame(msg->header, false, 0.0);
-    return;
-  }
-  camera_input_.depthFrame(depth_m.cols, depth_m.rows);
-  if (!history_) {
-    // Built from the camera whose size the depth stream confirms (its per-pixel rays are sized from it).
-    if (depth_m.cols != camera_.width || depth_m.rows != camera_.height) {
-      if (have_info_)
-        drops_.drop("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +
-                                         " but camera_info " + std::to_string(camera_.width) + "x" +
-                                         std::to_string(camera_.height));
-      else
-        drops_.drop("no_camera_info", "depth before any camera_info and not of the configured camera size");
-      reportFrame(msg->header, false, 0.0);
-      return;
-    }
-    history_ = std::make_unique<semexp::DepthHistory>(config_, bounds_, camera_);
-  }
-  if (depth_m.cols != camera_.width || depth_m.rows != camera_.height) {
-    drops_.drop("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +
-                                     " but camera " + std::to_string(camera_.width) + "x" +
-                                     std::to_string(camera_.height));
-    reportFrame(msg->header, false, 0.0);
-    return;
-  }
+  if (const Refusal why = readDepth(*msg, depth_m)) return refuse(msg->header, why, timer);
+  // Built from the camera whose size the depth stream confirms (its per-pixel rays are sized from it).
+  if (!history_) history_ = std::make_unique<semexp::DepthHistory>(config_, bounds_, camera_);
   Eigen::Isometry3d T_WC;
-  err = poses_->cameraPose(frames_, msg->header, T_WC);
-  if (!err.empty()) {
-    drops_.drop("no_tf", err);
-    reportFrame(msg->header, false, 0.0);
-    return;
-  }
+  if (const Refusal why = cameraPose(msg->header, T_WC, false)) return refuse(msg->header, why, timer);
   const std::size_t invalid = history_->integrate(depth_m, T_WC);
   ++frames_integrated_;
   markers_dirty_ = markers_dirty_ || invalid > 0;
-  reportFrame(msg->header, true, (ros::WallTime::now() - t0).toSec() * 1e3);
-  if (markers_dirty_ && (ros::WallTime::now() - last_markers_).toSec() >= marker_period_s_) publishMarkers(msg->header.stamp);
+  reportFrame(msg->header, true, timer);
+  if (markers_dirty_ && (ros::WallTime::now() - last_markers_).toSec() >= node_config_.marker_period_s) publishMarkers(msg->header.stamp);
 }
 
 void DepthHistoryNode::publishMarkers(const ros::Time& stamp) {
@@ -160,9 +82,7 @@ bool DepthHistoryNode::getMasks(semantic_exploration::GetHistoryMasks::Request& 
     drops_.drop("request_too_large", "get_masks: " + why);
     return false;
   }
-  std::vector<Eigen::Vector3d> ps;
-  ps.reserve(req.positions.size());
-  for (const auto& p : req.positions) ps.emplace_back(p.x, p.y, p.z);
+  const std::vector<Eigen::Vector3d> ps = fromPoints(req.positions);
   std::vector<std::vector<std::uint8_t>> masks;
   if (history_)
     masks = history_->masks(ps);

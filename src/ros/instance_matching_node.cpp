@@ -7,59 +7,24 @@
 
 #include "semantic_exploration/MatchedDetections.h"
 #include "semantic_exploration/core/instance_matching.hpp"
+#include "semantic_exploration/ros/conversions.hpp"
 
 namespace semexp_ros {
 
 namespace enc = sensor_msgs::image_encodings;
 
-namespace {
-
-// 16UC1 message -> CV_16UC1 copy; "" on success.
-std::string toMat16(const sensor_msgs::Image& im, cv::Mat& out) {
-  if (im.encoding != enc::TYPE_16UC1 && im.encoding != enc::MONO16)
-    return "encoding '" + im.encoding + "' (expected 16UC1)";
-  if (im.width == 0 || im.height == 0 || im.step < im.width * 2 ||
-      im.data.size() < static_cast<size_t>(im.step) * im.height || im.is_bigendian)
-    return "buffer does not match its size";
-  cv::Mat(im.height, im.width, CV_16UC1, const_cast<uint8_t*>(im.data.data()), im.step).copyTo(out);
-  return "";
-}
-
-}  // namespace
-
-InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
-  const auto p = ParamReader::fromNodeHandle(pnh);
+InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
+    : CameraNode(nh, pnh, BeforeCameraInfo::kUseParameters, false), nh_(nh) {
+  const auto& p = params();
   config_ = loadMatching(p);
   classes_ = loadClasses(p);
-  camera_ = loadCamera(p);
-  bounds_ = loadBounds(p);
-  frames_ = loadFrames(p);
-  poses_ = std::make_unique<PoseSource>(loadTf(p));
   matched_pub_ = nh.advertise<semantic_exploration::MatchedDetections>("matched_detections", 10);
-  info_sub_ = nh.subscribe("camera/camera_info", 1, &InstanceMatchingNode::infoCallback, this);
   detections_sub_.subscribe(nh, "detections", 5);
   depth_sub_.subscribe(nh, "camera/depth/image_raw", 5);
-  // Detections pair only with their own depth frame (see object_map_node.cpp).
-  double max_gap_s = 0.02;
-  p.getAtLeast("sync_max_interval_s", max_gap_s, 0.0, "s");
-  SyncPolicy policy(10);
-  policy.setMaxIntervalDuration(ros::Duration(max_gap_s));
-  sync_ = std::make_unique<message_filters::Synchronizer<SyncPolicy>>(static_cast<const SyncPolicy&>(policy), detections_sub_, depth_sub_);
+  sync_ = makeSync<SyncPolicy>(loadImageSync(p).max_interval_s, detections_sub_, depth_sub_);
   sync_->registerCallback(&InstanceMatchingNode::frameCallback, this);
   ROS_INFO("instance_matching: iou_threshold %.2f, min_mask_pixels %d, fragment_fraction %.2f",
            config_.iou_threshold, config_.min_mask_pixels, config_.fragment_fraction);
-}
-
-void InstanceMatchingNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
-  semexp::PinholeCamera c;
-  const auto err = camera_input_.accept(*msg, camera_.d_min_m, camera_.d_max_m, c);
-  if (!err.empty()) {
-    drops_.drop("bad_camera_info", err);
-    return;
-  }
-  camera_ = c;
-  camera_info_ = *msg;
-  have_info_ = true;
 }
 
 bool InstanceMatchingNode::callRender(semantic_exploration::RenderInstances& srv) {
@@ -93,27 +58,24 @@ void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsC
                                          const sensor_msgs::ImageConstPtr& depth_msg) {
   // The empty answer of a failed frame has the depth frame's size once it decoded (the camera's before).
   int empty_w = camera_.width, empty_h = camera_.height;
-  const auto fail = [&](const std::string& reason, const std::string& detail) {
-    drops_.drop(reason, detail);
+  const auto fail = [&](const Refusal& why) {
+    drops_.drop(why.reason, why.detail);
     publishEmpty(msg->header, empty_w, empty_h);
   };
   // Frames missing from the detector's stream, or whose depth never came (they never pair).
   countFrameGaps(frame_gaps_, drops_, msg->header.stamp, "detection");
   cv::Mat depth_m, instances;
-  std::string err = depthToMeters(*depth_msg, depth_m);
-  if (!err.empty()) return fail("bad_depth", err);
-  empty_w = depth_m.cols;
-  empty_h = depth_m.rows;
-  camera_input_.depthFrame(depth_m.cols, depth_m.rows);
-  if (depth_m.cols != camera_.width || depth_m.rows != camera_.height)
-    return fail("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +
-                                     " but camera " + std::to_string(camera_.width) + "x" +
-                                     std::to_string(camera_.height));
-  err = toMat16(msg->instance_image, instances);
-  if (!err.empty()) return fail("bad_instances", "instance image: " + err);
+  const Refusal depth_refused = readDepth(*depth_msg, depth_m);
+  if (!depth_m.empty()) {
+    empty_w = depth_m.cols;
+    empty_h = depth_m.rows;
+  }
+  if (depth_refused) return fail(depth_refused);
+  std::string err = uint16ToMat(msg->instance_image, instances);
+  if (!err.empty()) return fail({"bad_instances", "instance image: " + err});
   if (instances.size() != depth_m.size())
-    return fail("size_mismatch", "instance image " + std::to_string(instances.cols) + "x" +
-                                     std::to_string(instances.rows) + " differs from depth");
+    return fail({"size_mismatch", "instance image " + std::to_string(instances.cols) + "x" +
+                                      std::to_string(instances.rows) + " differs from depth"});
 
   // Only detections of classes with object maps take part; unknown classes are bad input.
   std::vector<std::uint16_t> ids;
@@ -150,19 +112,10 @@ void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsC
   if (unlisted) drops_.drop("unlisted_instance", std::to_string(unlisted) + " mask pixels of unlisted instance ids");
 
   Eigen::Isometry3d T_WC;
-  err = poses_->cameraPose(frames_, msg->header, T_WC);
-  if (!err.empty()) return fail("no_tf", err);
-  if (!bounds_.contains(T_WC.translation())) return fail("out_of_bounds", outOfBounds("camera", T_WC.translation()));
+  if (const Refusal why = cameraPose(msg->header, T_WC)) return fail(why);
 
   semantic_exploration::RenderInstances srv;
-  const Eigen::Quaterniond q(T_WC.linear());
-  srv.request.pose.position.x = T_WC.translation().x();
-  srv.request.pose.position.y = T_WC.translation().y();
-  srv.request.pose.position.z = T_WC.translation().z();
-  srv.request.pose.orientation.w = q.w();
-  srv.request.pose.orientation.x = q.x();
-  srv.request.pose.orientation.y = q.y();
-  srv.request.pose.orientation.z = q.z();
+  srv.request.pose = toPose(T_WC);
   if (have_info_) {
     srv.request.camera_info = camera_info_;
   } else {  // intrinsics from the parameters
@@ -173,11 +126,11 @@ void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsC
   }
   srv.request.camera_info.header = msg->header;
   srv.request.depth = *depth_msg;
-  if (!callRender(srv)) return fail("render_unavailable", "object_map/render_instances failed");
+  if (!callRender(srv)) return fail({"render_unavailable", "object_map/render_instances failed"});
   cv::Mat object_ids;
-  err = toMat16(srv.response.object_ids, object_ids);
+  err = uint16ToMat(srv.response.object_ids, object_ids);
   if (err.empty() && object_ids.size() != instances.size()) err = "size differs from the instance image";
-  if (!err.empty()) return fail("bad_render", "rendered object ids: " + err);
+  if (!err.empty()) return fail({"bad_render", "rendered object ids: " + err});
 
   cv::Mat cleaned;
   const semexp::MatchingOutput out = semexp::matchDetections(instances, ids, object_ids, config_, &cleaned);

@@ -4,6 +4,7 @@
 #include <tf2_msgs/TFMessage.h>
 
 #include "semantic_exploration/DropCounts.h"
+#include "semantic_exploration/ros/conversions.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -49,6 +50,14 @@ std::string depthToMeters(const sensor_msgs::Image& msg, cv::Mat& depth_m) {
     return "";
   }
   return "unsupported depth encoding '" + msg.encoding + "' (expected 32FC1 in m or 16UC1 in mm)";
+}
+
+std::string uint16ToMat(const sensor_msgs::Image& msg, cv::Mat& out) {
+  if (msg.encoding != enc::TYPE_16UC1 && msg.encoding != enc::MONO16)
+    return "encoding '" + msg.encoding + "' (expected 16UC1)";
+  if (auto err = checkLayout(msg, 2); !err.empty()) return err;
+  cv::Mat(msg.height, msg.width, CV_16UC1, const_cast<uint8_t*>(msg.data.data()), msg.step).copyTo(out);
+  return "";
 }
 
 std::string colourToRgb(const sensor_msgs::Image& msg, cv::Mat& rgb) {
@@ -281,12 +290,7 @@ std::string lookupPose(const tf2_ros::Buffer& tf, const std::string& target, con
     if (!gap.empty()) return gap;
   }
   try {
-    const auto t = tf.lookupTransform(target, source, stamp);
-    const auto& q = t.transform.rotation;
-    const auto& p = t.transform.translation;
-    T = Eigen::Isometry3d::Identity();
-    T.linear() = Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized().toRotationMatrix();
-    T.translation() = Eigen::Vector3d(p.x, p.y, p.z);
+    T = fromTransform(tf.lookupTransform(target, source, stamp).transform);
     if (!T.matrix().allFinite()) return "transform " + target + " <- " + source + " is not finite";
     return "";
   } catch (const std::exception& e) {

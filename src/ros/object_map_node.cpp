@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstring>
 
-#include "semantic_exploration/FrameIntegrated.h"
 #include "semantic_exploration/ObjectArray.h"
 #include "semantic_exploration/ros/conversions.hpp"
 
@@ -54,15 +53,12 @@ void boxEdges(const geometry_msgs::Point& lo, const geometry_msgs::Point& hi, st
 
 }  // namespace
 
-ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
-  const auto p = ParamReader::fromNodeHandle(pnh);
+ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
+    : CameraNode(nh, pnh, BeforeCameraInfo::kUseParameters, true) {
+  const auto& p = params();
   config_ = loadObjectMap(p);
   classes_ = loadClasses(p);
   exploration_ = loadExploration(p);
-  camera_ = loadCamera(p);
-  bounds_ = loadBounds(p);
-  frames_ = loadFrames(p);
-  poses_ = std::make_unique<PoseSource>(loadTf(p));
   map_ = std::make_unique<semexp::ObjectMap>(config_, classes_);
   // The maps must hold what a camera inside the bounds sees (it is refused outside them).
   if (const std::string why = map_->checkBounds(bounds_, camera_.d_max_m); !why.empty())
@@ -70,21 +66,13 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
 
   objects_pub_ = pnh.advertise<semantic_exploration::ObjectArray>("objects", 1, true);
   meshes_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("meshes", 1, true);
-  integrated_pub_ = nh.advertise<semantic_exploration::FrameIntegrated>("frame_integrated", 10);
   render_srv_ = pnh.advertiseService("render_instances", &ObjectMapNode::renderInstances, this);
   gains_srv_ = pnh.advertiseService("compute_gains", &ObjectMapNode::computeGains, this);
   save_srv_ = pnh.advertiseService("save", &ObjectMapNode::save, this);
-  info_sub_ = nh.subscribe("camera/camera_info", 1, &ObjectMapNode::infoCallback, this);
   matched_sub_.subscribe(nh, "matched_detections", 5);
   depth_sub_.subscribe(nh, "camera/depth/image_raw", 5);
   rgb_sub_.subscribe(nh, "camera/rgb/image_raw", 5);
-  // Frames pair only with their own images: a detection paired with the next
-  // depth frame would paint its mask onto whatever moved into it.
-  double max_gap_s = 0.02;
-  p.getAtLeast("sync_max_interval_s", max_gap_s, 0.0, "s");
-  SyncPolicy policy(10);
-  policy.setMaxIntervalDuration(ros::Duration(max_gap_s));
-  sync_ = std::make_unique<message_filters::Synchronizer<SyncPolicy>>(static_cast<const SyncPolicy&>(policy), matched_sub_, depth_sub_, rgb_sub_);
+  sync_ = makeSync<SyncPolicy>(loadImageSync(p).max_interval_s, matched_sub_, depth_sub_, rgb_sub_);
   sync_->registerCallback(&ObjectMapNode::frameCallback, this);
   std::string interest;
   for (const auto& c : classes_.of_interest) interest += (interest.empty() ? "" : ", ") + c;
@@ -92,57 +80,22 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
            config_.truncation_voxels);
 }
 
-void ObjectMapNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
-  semexp::PinholeCamera c;
-  const auto err = camera_input_.accept(*msg, camera_.d_min_m, camera_.d_max_m, c);
-  if (!err.empty()) {
-    drops_.drop("bad_camera_info", err);
-    return;
-  }
-  camera_ = c;
-}
-
-void ObjectMapNode::reportFrame(const std_msgs::Header& header, bool integrated, double time_ms) {
-  semantic_exploration::FrameIntegrated done;
-  done.header = header;
-  done.node = "object_map";
-  done.integrated = integrated;
-  done.time_ms = static_cast<float>(time_ms);
-  integrated_pub_.publish(done);
-}
-
 void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsConstPtr& matched,
                                   const sensor_msgs::ImageConstPtr& depth_msg,
                                   const sensor_msgs::ImageConstPtr& rgb_msg) {
-  const auto t0 = ros::WallTime::now();
-  const auto fail = [&](const std::string& reason, const std::string& detail) {
-    drops_.drop(reason, detail);
-    reportFrame(matched->header, false, (ros::WallTime::now() - t0).toSec() * 1e3);
-  };
+  const FrameTimer timer;
+  const auto fail = [&](const Refusal& why) { refuse(matched->header, why, timer); };
   cv::Mat depth_m, rgb, instances;
-  std::string err = depthToMeters(*depth_msg, depth_m);
-  if (!err.empty()) return fail("bad_depth", err);
-  camera_input_.depthFrame(depth_m.cols, depth_m.rows);
-  err = colourToRgb(*rgb_msg, rgb);
-  if (!err.empty()) return fail("bad_rgb", err);
-  if (depth_m.cols != camera_.width || depth_m.rows != camera_.height)
-    return fail("size_mismatch", "depth " + std::to_string(depth_m.cols) + "x" + std::to_string(depth_m.rows) +
-                                     " but camera " + std::to_string(camera_.width) + "x" +
-                                     std::to_string(camera_.height));
-  if (rgb.size() != depth_m.size()) return fail("size_mismatch", "colour and depth differ in size");
-  const auto& im = matched->instance_image;
-  if (im.encoding != sensor_msgs::image_encodings::TYPE_16UC1 && im.encoding != sensor_msgs::image_encodings::MONO16)
-    return fail("bad_instances", "instance image encoding '" + im.encoding + "' (expected 16UC1)");
-  if (static_cast<int>(im.width) != depth_m.cols || static_cast<int>(im.height) != depth_m.rows)
-    return fail("size_mismatch", "instance image differs from depth in size");
-  if (im.step < im.width * 2 || im.data.size() < static_cast<size_t>(im.step) * im.height || im.is_bigendian)
-    return fail("bad_instances", "instance image buffer does not match its size");
-  cv::Mat(im.height, im.width, CV_16UC1, const_cast<uint8_t*>(im.data.data()), im.step).copyTo(instances);
+  if (const Refusal why = readDepth(*depth_msg, depth_m)) return fail(why);
+  std::string err = colourToRgb(*rgb_msg, rgb);
+  if (!err.empty()) return fail({"bad_rgb", err});
+  if (rgb.size() != depth_m.size()) return fail({"size_mismatch", "colour and depth differ in size"});
+  err = uint16ToMat(matched->instance_image, instances);
+  if (!err.empty()) return fail({"bad_instances", "instance image: " + err});
+  if (instances.size() != depth_m.size()) return fail({"size_mismatch", "instance image differs from depth in size"});
 
   Eigen::Isometry3d T_WC;
-  err = poses_->cameraPose(frames_, matched->header, T_WC);
-  if (!err.empty()) return fail("no_tf", err);
-  if (!bounds_.contains(T_WC.translation())) return fail("out_of_bounds", outOfBounds("camera", T_WC.translation()));
+  if (const Refusal why = cameraPose(matched->header, T_WC)) return fail(why);
 
   std::vector<semexp::ObjectDetection> detections;
   for (const auto& d : matched->detections)
@@ -154,7 +107,7 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
     r = map_->integrateFrame(camera_, T_WC, depth_m, rgb, instances, detections, reuse ? &cached_render_.ids : nullptr);
     cached_render_.ids.release();
   } catch (const std::exception& e) {
-    return fail("integration_error", e.what());
+    return fail({"integration_error", e.what()});
   }
   if (r.dropped_unknown_class) drops_.drop("unknown_class", std::to_string(r.dropped_unknown_class) + " detection(s)");
   if (r.dropped_unknown_object)
@@ -166,10 +119,9 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
     ROS_INFO("object_map: new object %u (%s)", id, map_->object(id)->class_name.c_str());
   for (const auto& m : r.merged) ROS_INFO("object_map: object %u is part of object %u: merged", m.first, m.second);
   last_stamp_ = matched->header.stamp;
-  const double ms = (ros::WallTime::now() - t0).toSec() * 1e3;
   // Objects before the report: whoever waits for the report (lockstep) then has this frame's objects.
   if ((ros::WallTime::now() - last_publish_).toSec() >= config_.publish_period_s) publishObjects(last_stamp_);
-  reportFrame(matched->header, true, ms);
+  reportFrame(matched->header, true, timer);
 }
 
 void ObjectMapNode::publishObjects(const ros::Time& stamp) {
@@ -205,19 +157,7 @@ void ObjectMapNode::publishObjects(const ros::Time& stamp) {
   for (const auto& kv : map_->objects()) {
     const semexp::MappedObject& o = *kv.second;
     const semexp::TsdfSummary s = o.tsdf.summarize(exploration_.d_obj_m);
-    semantic_exploration::ObjectInfo info;
-    info.id = o.id;
-    info.class_id = static_cast<uint16_t>(o.class_id);
-    info.class_name = o.class_name;
-    info.resolution_m = static_cast<float>(o.resolution_m);
-    info.bbox_min = toPoint(s.bbox_min_W);
-    info.bbox_max = toPoint(s.bbox_max_W);
-    info.centroid = toPoint(s.centroid_W);
-    info.voxel_count = static_cast<uint32_t>(s.voxel_count);
-    info.observed_fraction = static_cast<float>(s.observed_fraction);
-    info.detection_count = o.detection_count;
-    info.undetected_count = o.undetected_count;
-    info.weight_sum = static_cast<float>(s.weight_sum);
+    const semantic_exploration::ObjectInfo info = toObjectInfo(o, s);
     arr.objects.push_back(info);
     if (!draw) continue;
     marker_ids_.insert(o.id);
@@ -272,16 +212,12 @@ bool ObjectMapNode::renderInstances(semantic_exploration::RenderInstances::Reque
     drops_.drop("bad_render_request", err);
     return false;
   }
-  const auto& q = req.pose.orientation;
-  const auto& t = req.pose.position;
-  Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
-  const Eigen::Quaterniond quat(q.w, q.x, q.y, q.z);
-  if (!(quat.norm() > 0.5) || !std::isfinite(t.x + t.y + t.z)) {
-    drops_.drop("bad_render_request", "pose is not a valid rigid transform");
+  Eigen::Isometry3d T_WC;
+  err = fromPose(req.pose, T_WC);
+  if (!err.empty()) {
+    drops_.drop("bad_render_request", err);
     return false;
   }
-  T_WC.linear() = quat.normalized().toRotationMatrix();
-  T_WC.translation() = Eigen::Vector3d(t.x, t.y, t.z);
   if (!bounds_.contains(T_WC.translation())) {
     drops_.drop("out_of_bounds", "render_instances: " + outOfBounds("camera", T_WC.translation()));
     return false;
@@ -323,14 +259,12 @@ bool ObjectMapNode::computeGains(semantic_exploration::ComputeGains::Request& re
   grid.width = req.width;
   grid.height = req.height;
   grid.vfov_rad = camera_.vfov_rad();
-  std::vector<Eigen::Vector3d> positions;
-  for (const auto& p : req.positions) {
-    positions.emplace_back(p.x, p.y, p.z);
-    if (!bounds_.contains(positions.back())) {
-      drops_.drop("out_of_bounds", "compute_gains: " + outOfBounds("position", positions.back()));
+  const std::vector<Eigen::Vector3d> positions = fromPoints(req.positions);
+  for (const auto& p_W : positions)
+    if (!bounds_.contains(p_W)) {
+      drops_.drop("out_of_bounds", "compute_gains: " + outOfBounds("position", p_W));
       return false;
     }
-  }
   std::vector<cv::Mat> gains, hits;
   try {
     map_->computeGains(positions, grid, req.max_depth_m, exploration_.d_obj_m, camera_.d_max_m, gains, hits);
@@ -349,12 +283,7 @@ bool ObjectMapNode::computeGains(semantic_exploration::ComputeGains::Request& re
 }
 
 bool ObjectMapNode::save(semantic_exploration::SaveMap::Request& req, semantic_exploration::SaveMap::Response& res) {
-  if (const std::string why = checkSaveDirectory(req.directory); !why.empty()) {
-    res.success = false;
-    res.message = "object_map: save refused: " + why;
-    ROS_ERROR("%s", res.message.c_str());
-    return true;
-  }
+  if (saveRefused(req.directory, res)) return true;
   std::string error;
   res.files = map_->save(req.directory, exploration_.d_obj_m, &error);
   res.success = error.empty();

@@ -29,6 +29,21 @@ const char* typeName(const XmlRpcValue& v) {
   throw ConfigError(path, std::string("must be ") + want + ", got " + typeName(v));
 }
 
+std::string text(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof(buf), "%.17g", v);
+  return buf;
+}
+std::string text(int v) { return std::to_string(v); }
+std::string text(bool v) { return v ? "true" : "false"; }
+std::string text(const std::string& v) { return "\"" + v + "\""; }
+template <typename T>
+std::string text(const std::vector<T>& v) {
+  std::string out = "[";
+  for (const auto& e : v) out += (out.size() > 1 ? ", " : "") + text(e);
+  return out + "]";
+}
+
 double asDouble(const std::string& path, const XmlRpcValue& v) {
   XmlRpcValue& m = const_cast<XmlRpcValue&>(v);  // XmlRpc's conversion operators are non-const
   if (v.getType() == XmlRpcValue::TypeDouble) return static_cast<double>(m);
@@ -60,11 +75,17 @@ const XmlRpcValue* ParamReader::find(const std::string& path) const {
 
 bool ParamReader::has(const std::string& path) const { return find(path) != nullptr; }
 
+void ParamReader::record(const std::string& path, std::string default_text) const {
+  if (log_) log_->push_back({path, std::move(default_text)});
+}
+
 void ParamReader::get(const std::string& path, double& out) const {
+  record(path, text(out));
   if (const auto* v = find(path)) out = asDouble(path, *v);
 }
 
 void ParamReader::get(const std::string& path, int& out) const {
+  record(path, text(out));
   const auto* v = find(path);
   if (!v) return;
   if (v->getType() != XmlRpcValue::TypeInt) wrongType(path, *v, "an integer");
@@ -72,6 +93,7 @@ void ParamReader::get(const std::string& path, int& out) const {
 }
 
 void ParamReader::get(const std::string& path, bool& out) const {
+  record(path, text(out));
   const auto* v = find(path);
   if (!v) return;
   if (v->getType() != XmlRpcValue::TypeBoolean) wrongType(path, *v, "true or false");
@@ -79,6 +101,7 @@ void ParamReader::get(const std::string& path, bool& out) const {
 }
 
 void ParamReader::get(const std::string& path, std::string& out) const {
+  record(path, text(out));
   const auto* v = find(path);
   if (!v) return;
   if (v->getType() != XmlRpcValue::TypeString) wrongType(path, *v, "a string");
@@ -86,6 +109,7 @@ void ParamReader::get(const std::string& path, std::string& out) const {
 }
 
 void ParamReader::get(const std::string& path, std::vector<std::string>& out) const {
+  record(path, text(out));
   const auto* v = find(path);
   if (!v) return;
   if (v->getType() != XmlRpcValue::TypeArray) wrongType(path, *v, "a list of strings");
@@ -99,6 +123,7 @@ void ParamReader::get(const std::string& path, std::vector<std::string>& out) co
 }
 
 void ParamReader::get(const std::string& path, std::vector<double>& out) const {
+  record(path, text(out));
   const auto* v = find(path);
   if (!v) return;
   if (v->getType() != XmlRpcValue::TypeArray) wrongType(path, *v, "a list of numbers");
@@ -122,9 +147,8 @@ void ParamReader::getAtLeast(const std::string& path, double& out, double min_va
 namespace {
 
 Eigen::Vector3d getVec3(const ParamReader& p, const std::string& path, const Eigen::Vector3d& def) {
-  std::vector<double> v;
+  std::vector<double> v = {def.x(), def.y(), def.z()};
   p.get(path, v);
-  if (v.empty()) return def;
   if (v.size() != 3) throw ConfigError(path, "must be a list of 3 numbers [x, y, z]");
   return {v[0], v[1], v[2]};
 }
@@ -276,9 +300,9 @@ semexp::DetectorConfig loadDetector(const ParamReader& p, const semexp::ClassTab
   semexp::DetectorConfig c;
   const std::string n = "detector/";
   p.get(n + "model_path", c.model_path);
-  std::vector<double> size;
+  std::vector<double> size = {static_cast<double>(c.input_size[0]), static_cast<double>(c.input_size[1])};
   p.get(n + "input_size", size);
-  if (!size.empty()) {
+  {
     if (size.size() != 2 || size[0] != std::floor(size[0]) || size[1] != std::floor(size[1]))
       throw ConfigError(n + "input_size", "must be [width, height] in whole px");
     c.input_size = {{static_cast<int>(size[0]), static_cast<int>(size[1])}};
@@ -405,6 +429,68 @@ double loadDisplayCut(const ParamReader& p) {
   p.get("display_cut/max_z_m", max_z_m);
   if (!std::isfinite(max_z_m)) throw semexp::ConfigError("display_cut/max_z_m", "must be a finite height, m");
   return max_z_m;
+}
+
+BackgroundMapNodeConfig loadBackgroundMapNode(const ParamReader& p) {
+  BackgroundMapNodeConfig c;
+  const std::string n = "background_map/";
+  p.getAtLeast(n + "frontier_period_s", c.frontier_period_s, 0.0, "s");
+  p.getAtLeast(n + "colour_wait_s", c.colour_wait_s, 0.0, "s");
+  p.getAtLeast(n + "start_free_radius_m", c.start_free_radius_m, 0.0, "m");
+  return c;
+}
+
+DepthHistoryNodeConfig loadDepthHistoryNode(const ParamReader& p, const semexp::DepthHistoryConfig& history) {
+  DepthHistoryNodeConfig c;
+  p.getAtLeast("depth_history/marker_period_s", c.marker_period_s, 0.0, "s");
+  // The planner asks get_masks for its raycast images, and get_masks answers only its own size: a mismatch would
+  // fail every planning iteration, so it fails here (every node loads the whole YAML, planner section included).
+  if (!p.has("planner")) return c;  // no planner configured alongside
+  semexp::PlannerConfig planner;
+  p.get("planner/raycast_width", planner.raycast_width);
+  p.get("planner/raycast_height", planner.raycast_height);
+  if (history.width != planner.raycast_width)
+    throw ConfigError("depth_history/width", "is " + std::to_string(history.width) + " but planner/raycast_width is " +
+                                                 std::to_string(planner.raycast_width) + "; they must be equal");
+  if (history.height != planner.raycast_height)
+    throw ConfigError("depth_history/height", "is " + std::to_string(history.height) +
+                                                  " but planner/raycast_height is " +
+                                                  std::to_string(planner.raycast_height) + "; they must be equal");
+  return c;
+}
+
+ImageSyncConfig loadImageSync(const ParamReader& p) {
+  ImageSyncConfig c;
+  p.getAtLeast("sync_max_interval_s", c.max_interval_s, 0.0, "s");
+  return c;
+}
+
+std::vector<std::pair<std::string, std::function<void(const ParamReader&)>>> allLoaders() {
+  return {
+      {"loadCamera", [](const ParamReader& p) { loadCamera(p); }},
+      {"loadBounds", [](const ParamReader& p) { loadBounds(p); }},
+      {"loadClasses", [](const ParamReader& p) { loadClasses(p); }},
+      {"loadExploration", [](const ParamReader& p) { loadExploration(p); }},
+      {"loadBackgroundMap", [](const ParamReader& p) { loadBackgroundMap(p); }},
+      {"loadObjectMap", [](const ParamReader& p) { loadObjectMap(p); }},
+      {"loadMatching", [](const ParamReader& p) { loadMatching(p); }},
+      {"loadDepthHistory", [](const ParamReader& p) { loadDepthHistory(p); }},
+      {"loadPlanner", [](const ParamReader& p) { loadPlanner(p); }},
+      {"loadDetector", [](const ParamReader& p) { loadDetector(p, semexp::ClassTable()); }},
+      {"loadFrames", [](const ParamReader& p) { loadFrames(p); }},
+      {"loadTf", [](const ParamReader& p) { loadTf(p); }},
+      {"loadPlannerNode", [](const ParamReader& p) { loadPlannerNode(p); }},
+      {"loadTermination", [](const ParamReader& p) { loadTermination(p); }},
+      {"loadFrontierRetirement", [](const ParamReader& p) { loadFrontierRetirement(p); }},
+      {"loadBackgroundMapNode", [](const ParamReader& p) { loadBackgroundMapNode(p); }},
+      {"loadDepthHistoryNode",
+       [](const ParamReader& p) { loadDepthHistoryNode(p, semexp::DepthHistoryConfig()); }},
+      {"loadImageSync", [](const ParamReader& p) { loadImageSync(p); }},
+      {"loadFrontierEvidence", [](const ParamReader& p) { loadFrontierEvidence(p); }},
+      {"loadTrajectory", [](const ParamReader& p) { loadTrajectory(p); }},
+      {"loadSetpointStreamer", [](const ParamReader& p) { loadSetpointStreamer(p); }},
+      {"loadDisplayCut", [](const ParamReader& p) { loadDisplayCut(p); }},
+  };
 }
 
 }  // namespace semexp_ros

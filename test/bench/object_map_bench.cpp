@@ -26,7 +26,7 @@ std::vector<Box> chairs(int n) {
     const int row = i / 5, col = i % 5;
     const double x = 2.0 + 0.7 * row;
     const double y = -1.4 + 0.7 * col + (row % 2 ? 0.35 : 0.0);
-    boxes.emplace_back(Eigen::Vector3d(x, y, 0.45), Eigen::Vector3d(0.225, 0.225, 0.45));
+    boxes.push_back(Box::around(Eigen::Vector3d(x, y, 0.45), Eigen::Vector3d(0.225, 0.225, 0.45)));
   }
   return boxes;
 }

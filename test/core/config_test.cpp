@@ -6,7 +6,9 @@
 #include "semantic_exploration/core/bounds.hpp"
 #include "semantic_exploration/core/camera.hpp"
 #include "semantic_exploration/core/class_table.hpp"
+#include "semantic_exploration/core/depth_history_config.hpp"
 #include "semantic_exploration/core/exploration_config.hpp"
+#include "semantic_exploration/core/matching_config.hpp"
 #include "semantic_exploration/core/object_map_config.hpp"
 #include "semantic_exploration/core/planner_config.hpp"
 

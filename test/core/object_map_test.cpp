@@ -258,7 +258,7 @@ TEST(ObjectMap, NewDetectionWithFewPixelsBesideKnownObjectsMakesNoObject) {
   PinholeCamera cam;
   ObjectMap map = twoObjects(cam);
   // A in front of a wall; the detection covers A plus a blob of wall beside it.
-  const Box wall(Eigen::Vector3d(0.8, 0.0, 1.0), Eigen::Vector3d(0.05, 3.0, 3.0));
+  const Box wall = Box::around(Eigen::Vector3d(0.8, 0.0, 1.0), Eigen::Vector3d(0.05, 3.0, 3.0));
   const auto T_WC = lookAt(Eigen::Vector3d(-1.0, 0.0, 1.2), kA.centre);
   cv::Mat depth, labels, ids;
   renderShapes(cam, T_WC, {&kA, &wall}, depth, labels);

@@ -8,12 +8,9 @@
 #include <vector>
 
 #include "semantic_exploration/core/camera.hpp"
+#include "test_shapes.hpp"
 
 namespace semexp_test {
-
-struct Box {
-  Eigen::Vector3d lo, hi;
-};
 
 /// The inside of `room` (walls, floor, ceiling) plus solid boxes in it.
 struct BoxRoom {

@@ -91,9 +91,9 @@ TEST(ObjectOcclusionDepths, AddTwoVoxelsAndKeepNonFinite) {
 TEST(ObjectOcclusionDepths, CloseViewOfAnObjectInTheBackgroundMapHasObjectGain) {
   BackgroundMapConfig cfg;  // 0.04 m voxels
   // Chair-sized box; its -x face at x = 1.745 lies 2.5 cm into the voxel [1.72, 1.76) (off the grid on purpose).
-  const Box chair(Eigen::Vector3d(2.0, 0.013, 0.5), Eigen::Vector3d(0.255, 0.25, 0.45));
+  const Box chair = Box::around(Eigen::Vector3d(2.0, 0.013, 0.5), Eigen::Vector3d(0.255, 0.25, 0.45));
   Maps m(cfg, bounds());
-  observe(m, {&chair}, chair.centre);
+  observe(m, {&chair}, chair.centre());
   ASSERT_EQ(m.objects.objects().size(), 1u);
 
   SphericalGrid grid;
@@ -129,11 +129,11 @@ TEST(ObjectOcclusionDepths, CloseViewOfAnObjectInTheBackgroundMapHasObjectGain) 
 
 TEST(ObjectOcclusionDepths, AWallBetweenViewAndObjectStillHidesIt) {
   BackgroundMapConfig cfg;
-  const Box chair(Eigen::Vector3d(2.0, 0.013, 0.5), Eigen::Vector3d(0.255, 0.25, 0.45));
+  const Box chair = Box::around(Eigen::Vector3d(2.0, 0.013, 0.5), Eigen::Vector3d(0.255, 0.25, 0.45));
   // A 4 cm thick wall 0.3 m in front of the chair, wider and taller than it.
-  const Box wall(Eigen::Vector3d(1.425, 0.013, 0.8), Eigen::Vector3d(0.02, 1.0, 0.8));
+  const Box wall = Box::around(Eigen::Vector3d(1.425, 0.013, 0.8), Eigen::Vector3d(0.02, 1.0, 0.8));
   Maps m(cfg, bounds());
-  observe(m, {&chair, &wall}, chair.centre);
+  observe(m, {&chair, &wall}, chair.centre());
   ASSERT_EQ(m.objects.objects().size(), 1u);
   SphericalGrid grid;
   grid.width = 36;

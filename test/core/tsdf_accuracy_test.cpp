@@ -81,7 +81,7 @@ void checkShape(const Shape& shape, double res) {
 TEST_P(TsdfAccuracy, Sphere) { checkShape(Sphere(Eigen::Vector3d(0.01, -0.02, 0.005), 0.3), GetParam()); }
 
 TEST_P(TsdfAccuracy, Box) {
-  checkShape(Box(Eigen::Vector3d(0.013, 0.004, -0.007), Eigen::Vector3d(0.25, 0.2, 0.15)), GetParam());
+  checkShape(Box::around(Eigen::Vector3d(0.013, 0.004, -0.007), Eigen::Vector3d(0.25, 0.2, 0.15)), GetParam());
 }
 
 INSTANTIATE_TEST_SUITE_P(Resolutions, TsdfAccuracy, ::testing::Values(0.01, 0.02, 0.04));

@@ -53,7 +53,7 @@ TEST(TsdfFixedPoint, MeshDiffersFromFloatLayoutByLessThanQuarterVoxel) {
   TsdfMap fixed(p);
   TsdfMapFloat flt(p);
   const Sphere sphere(Eigen::Vector3d(0.0, 0.0, 0.0), 0.25);
-  const Box box(Eigen::Vector3d(0.0, 0.0, -0.4), Eigen::Vector3d(0.3, 0.3, 0.15));
+  const Box box = Box::around(Eigen::Vector3d(0.0, 0.0, -0.4), Eigen::Vector3d(0.3, 0.3, 0.15));
   for (const auto& T_WC : ring(Eigen::Vector3d(0, 0, -0.2), 1.2, 0.6, 12)) {
     cv::Mat depth, labels;
     renderShapes(cam, T_WC, {&sphere, &box}, depth, labels);

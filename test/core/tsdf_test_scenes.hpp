@@ -10,57 +10,9 @@
 #include <vector>
 
 #include "semantic_exploration/core/camera.hpp"
+#include "test_shapes.hpp"
 
 namespace semexp_test {
-
-struct Shape {
-  virtual ~Shape() = default;
-  /// Exact signed distance (negative inside), m.
-  virtual double sdf(const Eigen::Vector3d& p_W) const = 0;
-  /// Smallest s > 0 with o + s d on the surface (d need not be unit).
-  virtual bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& s) const = 0;
-};
-
-struct Sphere : Shape {
-  Eigen::Vector3d centre;
-  double radius;
-  Sphere(const Eigen::Vector3d& c, double r) : centre(c), radius(r) {}
-  double sdf(const Eigen::Vector3d& p) const override { return (p - centre).norm() - radius; }
-  bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& s) const override {
-    const Eigen::Vector3d oc = o - centre;
-    const double a = d.squaredNorm(), b = 2.0 * oc.dot(d), c = oc.squaredNorm() - radius * radius;
-    const double disc = b * b - 4 * a * c;
-    if (disc < 0) return false;
-    s = (-b - std::sqrt(disc)) / (2 * a);
-    return s > 0;
-  }
-};
-
-struct Box : Shape {
-  Eigen::Vector3d centre, half;
-  Box(const Eigen::Vector3d& c, const Eigen::Vector3d& h) : centre(c), half(h) {}
-  double sdf(const Eigen::Vector3d& p) const override {
-    const Eigen::Vector3d q = (p - centre).cwiseAbs() - half;
-    return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
-  }
-  bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& s) const override {
-    double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
-    for (int i = 0; i < 3; ++i) {
-      const double lo = centre[i] - half[i], hi = centre[i] + half[i];
-      if (std::abs(d[i]) < 1e-12) {
-        if (o[i] < lo || o[i] > hi) return false;
-        continue;
-      }
-      double a = (lo - o[i]) / d[i], b = (hi - o[i]) / d[i];
-      if (a > b) std::swap(a, b);
-      t0 = std::max(t0, a);
-      t1 = std::min(t1, b);
-    }
-    if (t0 > t1 || t0 <= 0) return false;
-    s = t0;
-    return true;
-  }
-};
 
 /// Camera at eye_W looking at target_W (optical frame, world z up).
 inline Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye_W, const Eigen::Vector3d& target_W) {

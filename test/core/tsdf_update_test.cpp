@@ -76,7 +76,7 @@ TEST(TsdfUpdate, ColourMinDistanceAndSummary) {
 TEST(TsdfUpdate, BledMaskLosesForegroundWhenSeenOutsideTheMask) {
   PinholeCamera cam;
   TsdfMap map(params());
-  const Box table(Eigen::Vector3d(0.1, -0.05, -0.45), Eigen::Vector3d(0.5, 0.5, 0.2));
+  const Box table = Box::around(Eigen::Vector3d(0.1, -0.05, -0.45), Eigen::Vector3d(0.5, 0.5, 0.2));
   const auto poses = ring(kSphere.centre, 1.2, 0.5, 8);
   for (size_t i = 0; i < poses.size(); ++i) {
     cv::Mat depth, labels;

@@ -2,7 +2,8 @@
 file that includes a ROS header."""
 import os
 import subprocess
-import tempfile
+
+import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 CHECK = os.path.join(ROOT, "cmake", "check_core_ros_free.cmake")
@@ -19,19 +20,16 @@ def test_real_core_is_ros_free():
     assert proc.returncode == 0, proc.stdout
 
 
-def test_check_fails_on_ros_include():
-    for header in ("ros/ros.h", "sensor_msgs/Image.h", "tf2_ros/buffer.h", "semantic_exploration/ros/params.hpp"):
-        with tempfile.TemporaryDirectory() as d:
-            bad = os.path.join(d, "bad.cpp")
-            with open(bad, "w") as f:
-                f.write('#include <vector>\n#include <%s>\nint x;\n' % header)
-            proc = run_check([d])
-            assert proc.returncode != 0, header
-            assert "bad.cpp" in proc.stdout and "ROS-free" in proc.stdout
+@pytest.mark.parametrize("header", ["ros/ros.h", "sensor_msgs/Image.h", "tf2_ros/buffer.h",
+                                    "semantic_exploration/ros/params.hpp"])
+def test_check_fails_on_ros_include(tmp_path, header):
+    (tmp_path / "bad.cpp").write_text('#include <vector>\n#include <%s>\nint x;\n' % header)
+    proc = run_check([str(tmp_path)])
+    assert proc.returncode != 0, header
+    assert "bad.cpp" in proc.stdout and "ROS-free" in proc.stdout
 
 
-def test_check_ignores_non_ros_includes():
-    with tempfile.TemporaryDirectory() as d:
-        with open(os.path.join(d, "ok.hpp"), "w") as f:
-            f.write('#include <Eigen/Core>\n#include "semantic_exploration/core/camera.hpp"\n// ros/ros.h in a comment\n')
-        assert run_check([d]).returncode == 0
+def test_check_ignores_non_ros_includes(tmp_path):
+    (tmp_path / "ok.hpp").write_text(
+        '#include <Eigen/Core>\n#include "semantic_exploration/core/camera.hpp"\n// ros/ros.h in a comment\n')
+    assert run_check([str(tmp_path)]).returncode == 0

@@ -14,8 +14,10 @@ import time
 
 import pytest
 
+if __name__ == "__main__":  # a child process: no pytest to load conftest
+    import conftest  # noqa: F401
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
 MAKE_MODEL = os.path.join(ROOT, "test", "detector", "make_seg_model.py")
 
 ROS_SOURCED = shutil.which("roslaunch") is not None and (

@@ -5,7 +5,6 @@ found before the camera search and the incidence rule applied before rays
 are built, probe masks carried per face, the capped clearance transform,
 k-d tree queries in spatial order, and surface sampling."""
 import os
-import sys
 import types
 
 import numpy as np
@@ -21,7 +20,6 @@ from semantic_exploration.eval import metrics, observable  # noqa: E402
 from semantic_exploration.eval.truth import GroundTruthIndex  # noqa: E402
 from semantic_exploration.sim.scene import export_ground_truth  # noqa: E402
 
-sys.path.insert(0, os.path.dirname(__file__))
 from test_eval_background import _scene, _voxel_centres, _scene_mesh  # noqa: E402
 
 

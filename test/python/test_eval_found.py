@@ -4,7 +4,6 @@ report's), at object-map snapshots (eval.snapshots), not when a map object's
 centroid falls in its box (RunLog.found_proxy, kept under that name)."""
 import json
 import os
-import sys
 from types import SimpleNamespace as NS
 
 import numpy as np
@@ -18,7 +17,6 @@ from semantic_exploration.eval.snapshots import ObjectSnapshots  # noqa: E402
 from semantic_exploration.eval.truth import GroundTruthIndex  # noqa: E402
 from semantic_exploration.sim.scene import export_ground_truth  # noqa: E402
 
-sys.path.insert(0, os.path.dirname(__file__))
 from test_eval_background import _scene  # noqa: E402
 
 CHAIR_LO, CHAIR_HI = np.array([1.6, 1.2, 0.0]), np.array([2.05, 1.65, 0.9])  # test_eval_background's chair box

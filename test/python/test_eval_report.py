@@ -2,11 +2,9 @@
 import argparse
 import json
 import os
-import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.join(HERE, "..", "..")
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import run_mission  # noqa: E402
 from semantic_exploration.eval.runlog import RunLog  # noqa: E402
 

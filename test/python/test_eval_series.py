@@ -3,7 +3,6 @@ taken during a run, scored after it against the ground truth, added to
 timeseries.csv; on the furnished room of test_eval_background."""
 import csv
 import os
-import sys
 
 import numpy as np
 import pytest
@@ -15,7 +14,6 @@ from semantic_exploration.eval import metrics, snapshots  # noqa: E402
 from semantic_exploration.eval.truth import GroundTruthIndex  # noqa: E402
 from semantic_exploration.sim.scene import export_ground_truth  # noqa: E402
 
-sys.path.insert(0, os.path.dirname(__file__))
 from test_eval_background import GRID_ORIGIN, R_M, _scene, _scene_mesh, _voxel_centres  # noqa: E402
 
 

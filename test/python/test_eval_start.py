@@ -4,7 +4,6 @@ goes into the exported ground truth and onto sim.launch's command line, so
 the evaluation knows the observable surface."""
 import json
 import os
-import sys
 
 import pytest
 
@@ -14,9 +13,6 @@ pytest.importorskip("embreex")
 from semantic_exploration.sim.scene import load_scene, save_habitat  # noqa: E402
 from semantic_exploration.sim.simulator import start_pose_of  # noqa: E402
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-sys.path.insert(0, os.path.join(HERE, "..", "..", "scripts"))
 import run_mission  # noqa: E402
 from test_eval_background import _scene  # noqa: E402
 

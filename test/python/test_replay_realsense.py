@@ -23,9 +23,10 @@ import time
 
 import pytest
 
+if __name__ == "__main__":  # a child process: no pytest to load conftest
+    import conftest  # noqa: F401
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 MAKE_MODEL = os.path.join(ROOT, "test", "detector", "make_seg_model.py")
 
 ROS_SOURCED = shutil.which("roslaunch") is not None and shutil.which("rosbag") is not None and (
@@ -174,7 +175,7 @@ def replay_phase(work, bag):
         s = latest["s"]
         with open(os.path.join(work, "replay.json"), "w") as f:
             json.dump({"stats": {k: getattr(s, k) for k in (
-                "frames_integrated", "dropped_no_tf", "dropped_no_camera_info", "dropped_bad_encoding",
+                "frames_integrated", "dropped_no_tf", "dropped_no_camera_info", "dropped_bad_depth",
                 "dropped_size_mismatch", "dropped_out_of_bounds")}, "refused_ns": sorted(refused),
                 "detections": len(dets), "detection_frame": dets[-1].header.frame_id if dets else "",
                 "detection_size": [dets[-1].instance_image.width, dets[-1].instance_image.height] if dets else []},
@@ -213,7 +214,7 @@ def test_realsense_bag_replays_unedited(tmp_path):
     gap = [ns for ns in FRAMES_NS if GAP_NS[0] < ns < GAP_NS[1]]
     assert set(gap) <= set(r["refused_ns"]), (gap, r["refused_ns"])
     assert n_gap <= st["dropped_no_tf"] <= n_gap + 2, st
-    assert st["dropped_bad_encoding"] == st["dropped_size_mismatch"] == st["dropped_out_of_bounds"] == 0, st
+    assert st["dropped_bad_depth"] == st["dropped_size_mismatch"] == st["dropped_out_of_bounds"] == 0, st
     # every other frame is integrated but possibly the first (depth before any camera_info): none lost
     assert st["frames_integrated"] >= len(FRAMES_NS) - n_gap - 3, st
     assert st["frames_integrated"] + st["dropped_no_tf"] + st["dropped_no_camera_info"] == len(FRAMES_NS), st

@@ -20,7 +20,6 @@ import numpy as np
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import rviz_screenshot as rs  # noqa: E402
 
 PIL = pytest.importorskip("PIL.Image")

@@ -16,9 +16,10 @@ import time
 import numpy as np
 import pytest
 
+if __name__ == "__main__":  # a child process: no pytest to load conftest
+    import conftest  # noqa: F401
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "src"))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
 
 from semantic_exploration.sim.config import from_dict  # noqa: E402
 from semantic_exploration.sim.scene import SceneError  # noqa: E402

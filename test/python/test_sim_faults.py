@@ -2,13 +2,11 @@
 parameter's name, the tf gap window, seeded frame drops and detection images at
 another resolution, each counted."""
 import os
-import sys
 
 import numpy as np
 import pytest
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-sys.path.insert(0, os.path.join(ROOT, "src"))
 
 from semantic_exploration.sim.config import ConfigError, FaultsConfig, from_dict  # noqa: E402
 from semantic_exploration.sim.faults import FaultInjector  # noqa: E402

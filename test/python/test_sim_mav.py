@@ -1,13 +1,8 @@
 """Kinematic MAV: limits, goal reaching, path tracking and collision detection."""
 import math
-import os
-import sys
 
 import numpy as np
 import pytest
-
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-sys.path.insert(0, os.path.join(ROOT, "src"))
 
 from semantic_exploration.sim.config import MavConfig  # noqa: E402
 from semantic_exploration.sim.generator import generate  # noqa: E402

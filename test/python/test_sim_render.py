@@ -1,13 +1,11 @@
 """Renderer and detector against analytic scenes (noise off unless tested)."""
 import math
 import os
-import sys
 
 import numpy as np
 import pytest
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-sys.path.insert(0, os.path.join(ROOT, "src"))
 
 from semantic_exploration.sim.classes import ClassTable  # noqa: E402
 from semantic_exploration.sim.config import CameraConfig, DetectorConfig, NoiseConfig  # noqa: E402

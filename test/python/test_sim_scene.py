@@ -3,13 +3,11 @@ import collections
 import json
 import math
 import os
-import sys
 
 import numpy as np
 import pytest
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-sys.path.insert(0, os.path.join(ROOT, "src"))
 
 from semantic_exploration.sim.classes import DEFAULT_CLASS_NAMES  # noqa: E402
 from semantic_exploration.sim.generator import generate, three_chairs_room  # noqa: E402

@@ -1,13 +1,11 @@
 """ROS-free simulator core: config validation, path rejection, poses and collision counting."""
 import math
 import os
-import sys
 
 import numpy as np
 import pytest
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
-sys.path.insert(0, os.path.join(ROOT, "src"))
 
 from semantic_exploration.sim.config import ConfigError, from_dict  # noqa: E402
 from semantic_exploration.sim.scene import SceneError  # noqa: E402

@@ -17,8 +17,10 @@ import time
 
 import pytest
 
+if __name__ == "__main__":  # a child process: no pytest to load conftest
+    import conftest  # noqa: F401
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
 ROS_SOURCED = shutil.which("roslaunch") is not None and (
     "ROS_PACKAGE_PATH" in os.environ or "CMAKE_PREFIX_PATH" in os.environ)
 EXAMPLE = os.path.join(ROOT, "test", "data", "example_semantic.ply")

@@ -167,3 +167,127 @@ TEST(ToHistoryMasks, ResizedMasksAreDroppedAndCounted) {
   EXPECT_EQ(out[0], (std::vector<std::uint8_t>{1, 0, 1, 1}));
   EXPECT_TRUE(out[1].empty());  // empty = all directions valid
 }
+
+// ------------------------------------------------ what the map nodes send
+
+TEST(MapNodeConversions, MapBlocksRoundTripThroughTheReplicaUpdate) {
+  semexp::MapBlocksData d;
+  d.sequence = 7;
+  d.full = true;
+  d.resolution_m = 0.1;
+  d.block_size = 2;
+  d.origin_m = {-1.0, 2.0, 0.5};
+  d.coords = {0, 0, 0, 1, -1, 3};
+  d.payload = {-128, -20, 0, 1, 127, -1, 35, -35,   // block (0, 0, 0)
+               10, 10, 10, 10, 10, 10, 10, 10};     // block (1, -1, 3)
+  d.uniform_coords = {4, 5, 6};
+  d.uniform_values = {-4};
+  const auto m = toMapBlocksMsg(d, ros::Time(12.5), "world");
+  EXPECT_EQ(m.header.stamp, ros::Time(12.5));
+  EXPECT_EQ(m.header.frame_id, "world");
+  EXPECT_EQ(m.encoding, semantic_exploration::MapBlocks::ENCODING_LOG_ODDS_I8);
+  EXPECT_FLOAT_EQ(m.resolution_m, 0.1f);
+  EXPECT_EQ(m.block_size, 2);
+  EXPECT_DOUBLE_EQ(m.origin.x, -1.0);
+  EXPECT_DOUBLE_EQ(m.origin.y, 2.0);
+  EXPECT_DOUBLE_EQ(m.origin.z, 0.5);
+  // int8 values keep their bits in the uint8 payload: -128 -> 0x80, -1 -> 0xff.
+  ASSERT_EQ(m.payload.size(), 16u);
+  EXPECT_EQ(m.payload[0], 0x80);
+  EXPECT_EQ(m.payload[5], 0xff);
+  EXPECT_EQ(m.payload[4], 127);
+  ASSERT_EQ(m.uniform_values.size(), 1u);
+  EXPECT_EQ(m.uniform_values[0], 0xfc);
+
+  semexp::MapReplica::Update u;
+  ASSERT_EQ(toMapUpdate(m, u), "");
+  EXPECT_EQ(u.sequence, 7u);
+  EXPECT_TRUE(u.full);
+  EXPECT_EQ(u.block_size, 2);
+  EXPECT_TRUE(u.origin_W.isApprox(d.origin_m));
+  ASSERT_EQ(u.coord_count, 6u);
+  EXPECT_EQ(u.coords[4], -1);
+  ASSERT_EQ(u.payload_size, 16u);
+  EXPECT_EQ(static_cast<std::int8_t>(u.payload[0]), -128);
+  EXPECT_EQ(static_cast<std::int8_t>(u.payload[7]), -35);
+  ASSERT_EQ(u.uniform_value_count, 1u);
+  EXPECT_EQ(static_cast<std::int8_t>(u.uniform_values[0]), -4);
+}
+
+TEST(MapNodeConversions, ObjectInfoCarriesTheSummaryThePlannerReads) {
+  semexp::TsdfParams params;
+  params.resolution_m = 0.04;
+  semexp::MappedObject o(42, 3, "chair", params);
+  o.detection_count = 5;
+  o.undetected_count = 2;
+  semexp::TsdfSummary s;
+  s.bbox_min_W = {1.0, 2.0, 0.0};
+  s.bbox_max_W = {1.5, 2.5, 0.9};
+  s.centroid_W = {1.25, 2.25, 0.45};
+  s.voxel_count = 900;
+  s.observed_fraction = 0.75;
+  s.weight_sum = 123.5;
+  const auto info = toObjectInfo(o, s);
+  EXPECT_EQ(info.id, 42u);
+  EXPECT_EQ(info.class_id, 3);
+  EXPECT_EQ(info.class_name, "chair");
+  EXPECT_FLOAT_EQ(info.resolution_m, 0.04f);
+  EXPECT_EQ(info.voxel_count, 900u);
+  EXPECT_FLOAT_EQ(info.observed_fraction, 0.75f);
+  EXPECT_EQ(info.detection_count, 5u);
+  EXPECT_EQ(info.undetected_count, 2u);
+  EXPECT_FLOAT_EQ(info.weight_sum, 123.5f);
+
+  semantic_exploration::ObjectArray arr;
+  arr.objects.push_back(info);
+  std::size_t dropped = 99;
+  const auto summaries = toObjectSummaries(arr, dropped);
+  EXPECT_EQ(dropped, 0u);
+  ASSERT_EQ(summaries.size(), 1u);
+  EXPECT_EQ(summaries[0].id, 42u);
+  EXPECT_TRUE(summaries[0].bbox_min_W.isApprox(s.bbox_min_W));
+  EXPECT_TRUE(summaries[0].bbox_max_W.isApprox(s.bbox_max_W));
+  EXPECT_TRUE(summaries[0].centroid_W.isApprox(s.centroid_W));
+  EXPECT_DOUBLE_EQ(summaries[0].observed_fraction, 0.75);
+}
+
+TEST(MapNodeConversions, PosesRoundTripAndBadOnesAreRefused) {
+  // 90 deg about z, then at (1, 2, 3): the camera's x axis points along world +y.
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(1.0, 2.0, 3.0);
+  const geometry_msgs::Pose m = toPose(T);
+  EXPECT_NEAR(m.orientation.w, std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(m.orientation.z, std::sqrt(0.5), 1e-12);
+  EXPECT_DOUBLE_EQ(m.position.y, 2.0);
+  Eigen::Isometry3d back;
+  ASSERT_EQ(fromPose(m, back), "");
+  EXPECT_TRUE(back.isApprox(T, 1e-12));
+  EXPECT_TRUE((back * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d(1.0, 3.0, 3.0), 1e-12));
+
+  // A quaternion of norm 2 is normalised; one of norm 0 or a NaN position is refused and T left alone.
+  geometry_msgs::Pose scaled = m;
+  scaled.orientation.w *= 2;
+  scaled.orientation.z *= 2;
+  ASSERT_EQ(fromPose(scaled, back), "");
+  EXPECT_TRUE(back.isApprox(T, 1e-12));
+  geometry_msgs::Pose zero = m;
+  zero.orientation.w = zero.orientation.z = 0.0;
+  EXPECT_NE(fromPose(zero, back), "");
+  geometry_msgs::Pose nan = m;
+  nan.position.x = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(fromPose(nan, back), "");
+  EXPECT_TRUE(back.isApprox(T, 1e-12));
+
+  geometry_msgs::Transform t;
+  t.translation.x = 1.0;
+  t.translation.y = 2.0;
+  t.translation.z = 3.0;
+  t.rotation = m.orientation;
+  EXPECT_TRUE(fromTransform(t).isApprox(T, 1e-12));
+
+  const std::vector<geometry_msgs::Point> pts = {toPoint(Eigen::Vector3d(1, 2, 3)), toPoint(Eigen::Vector3d(-4, 5.5, 0))};
+  const auto v = fromPoints(pts);
+  ASSERT_EQ(v.size(), 2u);
+  EXPECT_EQ(v[1], Eigen::Vector3d(-4, 5.5, 0));
+}

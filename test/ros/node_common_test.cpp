@@ -1,10 +1,17 @@
 // Drop counting in the ROS shell: FrameGapCounter (frames missing from a
 // constant-rate stream, from the stamps that arrive), DropCounter without a
 // running node (counts only, nothing published), and TfGapGuard refusing a
-// pose tf2 would interpolate across a gap in the pose stream.
+// pose tf2 would interpolate across a gap in the pose stream. Also the 16UC1
+// reader, the node name the frame reports carry, and the per-frame CPU budget.
 #include <gtest/gtest.h>
 #include <tf2_ros/buffer.h>
 
+#include <chrono>
+#include <cstring>
+#include <thread>
+
+#include "semantic_exploration/ros/camera_node.hpp"
+#include "semantic_exploration/ros/frame_timing.hpp"
 #include "semantic_exploration/ros/node_common.hpp"
 
 using semexp_ros::DropCounter;
@@ -207,4 +214,91 @@ TEST(CheckSaveDirectory, OnlyAbsolutePathsWithoutDotDot) {
   EXPECT_EQ(semexp_ros::checkSaveDirectory(""), "directory '' must be an absolute path");
   EXPECT_EQ(semexp_ros::checkSaveDirectory("/tmp/run1/../../etc"), "directory '/tmp/run1/../../etc' must not contain '..'");
   EXPECT_EQ(semexp_ros::checkSaveDirectory("/tmp/a..b"), "");  // a name with dots is fine
+}
+
+// ------------------------------------------- 16UC1 images, node names, CPU budget
+
+namespace {
+
+sensor_msgs::Image mono16(uint32_t w, uint32_t h, uint32_t step, const std::string& encoding = "16UC1") {
+  sensor_msgs::Image m;
+  m.width = w;
+  m.height = h;
+  m.step = step;
+  m.encoding = encoding;
+  m.data.assign(static_cast<size_t>(step) * h, 0);
+  return m;
+}
+
+}  // namespace
+
+TEST(Uint16ToMat, CopiesRowsPastTheirPadding) {
+  auto m = mono16(2, 2, 6);  // one 16-bit pad value per row
+  const uint16_t rows[2][3] = {{7, 300, 0xffff}, {65535, 1, 0xffff}};
+  std::memcpy(m.data.data(), rows, sizeof(rows));
+  cv::Mat out;
+  ASSERT_EQ(semexp_ros::uint16ToMat(m, out), "");
+  ASSERT_EQ(out.type(), CV_16UC1);
+  ASSERT_EQ(out.size(), cv::Size(2, 2));
+  EXPECT_EQ(out.at<uint16_t>(0, 0), 7);
+  EXPECT_EQ(out.at<uint16_t>(0, 1), 300);
+  EXPECT_EQ(out.at<uint16_t>(1, 0), 65535);
+  EXPECT_EQ(out.at<uint16_t>(1, 1), 1);
+  auto mono = mono16(2, 2, 4, "mono16");
+  EXPECT_EQ(semexp_ros::uint16ToMat(mono, out), "");
+}
+
+TEST(Uint16ToMat, RefusesWhatWouldBeReadOutOfBounds) {
+  cv::Mat out;
+  EXPECT_NE(semexp_ros::uint16ToMat(mono16(4, 2, 8, "32FC1"), out).find("expected 16UC1"), std::string::npos);
+  EXPECT_NE(semexp_ros::uint16ToMat(mono16(0, 0, 0), out), "");
+  EXPECT_NE(semexp_ros::uint16ToMat(mono16(4, 2, 6), out).find("step 6"), std::string::npos);  // a row is 8 bytes
+  auto short_data = mono16(4, 2, 8);
+  short_data.data.resize(15);
+  EXPECT_NE(semexp_ros::uint16ToMat(short_data, out).find("15 bytes"), std::string::npos);
+  auto big = mono16(4, 2, 8);
+  big.is_bigendian = 1;
+  EXPECT_NE(semexp_ros::uint16ToMat(big, out), "");
+}
+
+TEST(ShortNodeName, IsWhatLockstepNodesLists) {
+  EXPECT_EQ(semexp_ros::shortNodeName("/background_map"), "background_map");
+  EXPECT_EQ(semexp_ros::shortNodeName("/robot1/object_map"), "object_map");
+  EXPECT_EQ(semexp_ros::shortNodeName("depth_history/"), "depth_history");
+  EXPECT_EQ(semexp_ros::shortNodeName("planner"), "planner");
+}
+
+TEST(CpuBudget, NearestRankMedianAndP95) {
+  semexp_ros::CpuBudget b(100);
+  EXPECT_EQ(b.median_ms(), 0.0);
+  EXPECT_EQ(b.p95_ms(), 0.0);
+  // 1..20 ms in shuffled order: median = rank ceil(10) = 10, p95 = rank ceil(19) = 19.
+  for (int v : {20, 3, 17, 1, 9, 12, 5, 14, 7, 19, 2, 11, 16, 4, 10, 18, 6, 13, 8, 15}) b.add(v);
+  EXPECT_EQ(b.frames(), 20u);
+  EXPECT_EQ(b.median_ms(), 10.0);
+  EXPECT_EQ(b.p95_ms(), 19.0);
+  EXPECT_EQ(b.percentile_ms(100.0), 20.0);
+  semexp_ros::CpuBudget one;
+  one.add(4.5);
+  EXPECT_EQ(one.median_ms(), 4.5);
+  EXPECT_EQ(one.p95_ms(), 4.5);
+}
+
+TEST(CpuBudget, KeepsOnlyTheLastWindow) {
+  semexp_ros::CpuBudget b(4);
+  for (int v : {100, 100, 100, 100, 1, 2, 3, 4}) b.add(v);  // the four 100s drop out of the window
+  EXPECT_EQ(b.frames(), 8u);
+  EXPECT_EQ(b.median_ms(), 2.0);  // rank ceil(2) of {1, 2, 3, 4}
+  EXPECT_EQ(b.p95_ms(), 4.0);
+}
+
+TEST(FrameTimer, ThreadCpuTimeCountsWorkNotSleep) {
+  const semexp_ros::FrameTimer idle;
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_GE(idle.wall_ms(), 50.0);
+  EXPECT_LT(idle.cpu_ms(), 25.0);  // sleeping costs (almost) no CPU
+  const semexp_ros::FrameTimer busy;
+  volatile double x = 0;
+  while (busy.cpu_ms() < 30.0) x = x + 1.0;  // spins until 30 ms of CPU time are used
+  EXPECT_GE(busy.wall_ms(), busy.cpu_ms() - 1.0);
 }

@@ -164,3 +164,51 @@ TEST(Params, DetectorSectionLoadsAndChecksTheClassMap) {
   bad["detector"]["target"] = std::string("cuda");  // with backend opencv
   EXPECT_EQ(rejected([&] { semexp_ros::loadDetector(ParamReader(bad), classes); }), "detector/target");
 }
+
+TEST(Params, NodeConfigsLoadAndNameTheParameterAtFault) {
+  XmlRpcValue root;
+  root["background_map"]["frontier_period_s"] = 0.25;
+  root["background_map"]["colour_wait_s"] = 0.1;
+  root["background_map"]["start_free_radius_m"] = 0.75;
+  root["depth_history"]["marker_period_s"] = 2.0;
+  root["sync_max_interval_s"] = 0.03;
+  const ParamReader p(root);
+  const auto bg = semexp_ros::loadBackgroundMapNode(p);
+  EXPECT_DOUBLE_EQ(bg.frontier_period_s, 0.25);
+  EXPECT_DOUBLE_EQ(bg.colour_wait_s, 0.1);
+  EXPECT_DOUBLE_EQ(bg.start_free_radius_m, 0.75);
+  EXPECT_DOUBLE_EQ(semexp_ros::loadDepthHistoryNode(p, semexp::DepthHistoryConfig()).marker_period_s, 2.0);
+  EXPECT_DOUBLE_EQ(semexp_ros::loadImageSync(p).max_interval_s, 0.03);
+
+  root["background_map"]["start_free_radius_m"] = -0.1;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadBackgroundMapNode(ParamReader(root)); }),
+            "background_map/start_free_radius_m");
+  root["sync_max_interval_s"] = "fast";
+  EXPECT_EQ(rejected([&] { semexp_ros::loadImageSync(ParamReader(root)); }), "sync_max_interval_s");
+  // The history's image must be the planner's raycast size.
+  root["planner"]["raycast_width"] = 24;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadDepthHistoryNode(ParamReader(root), semexp::DepthHistoryConfig()); }),
+            "depth_history/width");
+}
+
+TEST(Params, RecordedReadsListEveryParameterWithItsDefault) {
+  XmlRpcValue root = cameraTree();
+  root["camera"]["d_max_m"] = 5.0;
+  ParamReader p(root);
+  std::vector<semexp_ros::ParamRead> reads;
+  p.recordReads(&reads);
+  semexp_ros::loadCamera(p);
+  semexp_ros::loadBounds(p);
+  ASSERT_EQ(reads.size(), 10u);  // width .. d_max_m, then bounds min_m and max_m
+  EXPECT_EQ(reads[0].path, "camera/width");
+  EXPECT_EQ(reads[0].default_text, "required");
+  EXPECT_EQ(reads[6].path, "camera/d_min_m");
+  EXPECT_EQ(reads[6].default_text, "0.10000000000000001");  // the default, not the value read
+  EXPECT_EQ(reads[7].path, "camera/d_max_m");
+  EXPECT_EQ(reads[7].default_text, "10");
+  EXPECT_EQ(reads[8].path, "bounds/min_m");
+  EXPECT_EQ(reads[8].default_text, "[-10, -10, -0.5]");
+  p.recordReads(nullptr);
+  semexp_ros::loadExploration(p);
+  EXPECT_EQ(reads.size(), 10u);
+}

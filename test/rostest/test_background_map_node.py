@@ -7,6 +7,7 @@ MapStats while the node keeps integrating good frames.
 """
 import math
 import os
+import shutil
 import struct
 import sys
 import tempfile
@@ -160,7 +161,8 @@ class TestBackgroundMapNode(unittest.TestCase):
         self.assertAlmostEqual(float(hit[4, 18]), WALL / math.cos(math.radians(5)), delta=0.1)
         self.assertAlmostEqual(float(hit[4, 0]), 10.0, delta=1e-3)  # looking backwards: nothing hit
         self.assertGreater(float(ent[4, 0]), float(ent[4, 18]))      # unknown behind vs. known in front
-        out = tempfile.mkdtemp()
+        out = tempfile.mkdtemp(prefix="semexp_background_map_test_")
+        self.addCleanup(shutil.rmtree, out, True)  # also when an assertion below fails
         r = rospy.ServiceProxy("/background_map/save", SaveMap)(directory=out)
         self.assertTrue(r.success, r.message)
         for f in r.files:
@@ -175,7 +177,7 @@ class TestBackgroundMapNode(unittest.TestCase):
         self.assertFalse(self.send(depth_image(rospy.Time.now(), self.wall(), frame="nowhere")).integrated)
         self.assertFalse(self.send(depth_image(rospy.Time.now(), self.wall(), frame="far_camera")).integrated)
         s = self.stats[-1]
-        self.assertEqual(s.dropped_bad_encoding, before.dropped_bad_encoding + 1)
+        self.assertEqual(s.dropped_bad_depth, before.dropped_bad_depth + 1)
         self.assertEqual(s.dropped_size_mismatch, before.dropped_size_mismatch + 1)
         self.assertEqual(s.dropped_no_tf, before.dropped_no_tf + 1)
         self.assertEqual(s.dropped_out_of_bounds, before.dropped_out_of_bounds + 1)

@@ -36,6 +36,7 @@ Checks, against known answers:
 import json
 import math
 import os
+import shutil
 import tempfile
 import threading
 import time
@@ -306,6 +307,7 @@ class ObjectMapTest(unittest.TestCase):
         self.assertFalse([k for k in markers if k[1] not in chairs], "markers of objects that do not exist")
 
         d = tempfile.mkdtemp(prefix="semexp_object_map_test_")
+        self.addCleanup(shutil.rmtree, d, True)  # also when an assertion below fails
         res = rospy.ServiceProxy("/object_map/save", SaveMap)(d)
         self.assertTrue(res.success, res.message)
         self.assertEqual(len(res.files), len(final.objects) + 1)

@@ -19,7 +19,7 @@
 
 #include "semantic_exploration/core/bounds.hpp"
 #include "semantic_exploration/core/camera.hpp"
-#include "semantic_exploration/core/planner_config.hpp"
+#include "semantic_exploration/core/depth_history_config.hpp"
 #include "semantic_exploration/core/spherical_grid.hpp"
 
 namespace semexp {

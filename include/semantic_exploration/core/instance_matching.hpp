@@ -29,7 +29,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "semantic_exploration/core/object_map_config.hpp"
+#include "semantic_exploration/core/matching_config.hpp"
 
 namespace semexp {
 

@@ -30,24 +30,21 @@
 #include "semantic_exploration/SaveMap.h"
 #include "semantic_exploration/core/frontier_evidence.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
-#include "semantic_exploration/ros/node_common.hpp"
-#include "semantic_exploration/ros/params.hpp"
+#include "semantic_exploration/ros/camera_node.hpp"
 
 namespace semexp_ros {
 
-class BackgroundMapNode {
+class BackgroundMapNode : public CameraNode {
  public:
   BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
 
  private:
   void depthCallback(const sensor_msgs::ImageConstPtr& msg);
   void rgbCallback(const sensor_msgs::ImageConstPtr& msg);
-  void infoCallback(const sensor_msgs::CameraInfoConstPtr& msg);
   void flushTimer(const ros::WallTimerEvent&);
   /// Integrates depth (with `rgb` if non-null); always reports frame_integrated.
   void processFrame(const sensor_msgs::ImageConstPtr& depth, const sensor_msgs::ImageConstPtr& rgb);
   sensor_msgs::ImageConstPtr matchingRgb(const ros::Time& stamp) const;
-  void reportFrame(const std_msgs::Header& header, bool integrated, double time_ms);
   void publishStats(const std_msgs::Header& header);
   void publishClouds(const ros::Time& stamp);
   void publishOccupied(const ros::Time& stamp);
@@ -57,26 +54,17 @@ class BackgroundMapNode {
   bool getMap(semantic_exploration::GetMap::Request& req, semantic_exploration::GetMap::Response& res);
   bool save(semantic_exploration::SaveMap::Request& req, semantic_exploration::SaveMap::Response& res);
 
-  semexp::PinholeCamera camera_;
-  CameraInfoInput camera_input_;  ///< validates camera_info against the cap and the depth frames
-  semexp::Bounds bounds_;
   semexp::BackgroundMapConfig config_;
   semexp::ExplorationConfig exploration_;
-  FrameNames frames_;
-  std::unique_ptr<PoseSource> poses_;  ///< T_WC at image stamps (tf2, gap-guarded)
-  double frontier_period_s_ = 0.5;  ///< minimum period between ~frontiers clouds, s
-  double colour_wait_s_ = 0.05;     ///< how long a depth frame waits for its colour image, s (wall)
-  double start_free_radius_m_ = 0.5;  ///< unknown space this close to the first camera pose is assumed free, m
+  BackgroundMapNodeConfig node_config_;
 
   std::unique_ptr<semexp::OccupancyMap> map_;
   std::unique_ptr<semexp::FrontierEvidence> evidence_;  ///< frontiers looked at without resolving them
-  ros::Subscriber depth_sub_, rgb_sub_, info_sub_;
-  ros::Publisher occupied_pub_, frontiers_pub_, retired_pub_, update_pub_, stats_pub_, integrated_pub_;
+  ros::Subscriber depth_sub_, rgb_sub_;
+  ros::Publisher occupied_pub_, frontiers_pub_, retired_pub_, update_pub_, stats_pub_;
   ros::ServiceServer gains_srv_, get_map_srv_, save_srv_;
   ros::WallTimer flush_timer_;
-  DropCounter drops_;
   FrameGapCounter depth_gaps_;  ///< depth frames missing from the stream ("frame_gap")
-  bool have_info_ = false;
 
   std::deque<sensor_msgs::ImageConstPtr> rgb_buffer_;  ///< recent colour images, oldest first
   sensor_msgs::ImageConstPtr pending_depth_;           ///< depth waiting for its colour image

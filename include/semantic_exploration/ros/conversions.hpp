@@ -3,10 +3,12 @@
 /// Message <-> core conversions: points, poses and paths for every node, and
 /// what the planner reads and sends (gain images, MapBlocks for the map
 /// replica, object summaries, the frontier cloud, history masks, candidates,
-/// status). Each function that reads a message validates it and says why it
+/// status), and what the map nodes send (MapBlocks, ObjectInfo). Each function that reads a message validates it and says why it
 /// refused it, so a node can count the drop and go on.
 
 #include <geometry_msgs/Point.h>
+#include <geometry_msgs/Pose.h>
+#include <geometry_msgs/Transform.h>
 #include <geometry_msgs/Quaternion.h>
 #include <nav_msgs/Path.h>
 #include <sensor_msgs/Image.h>
@@ -14,6 +16,7 @@
 #include <trajectory_msgs/MultiDOFJointTrajectory.h>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <string>
 #include <vector>
 
@@ -22,6 +25,8 @@
 #include "semantic_exploration/ExplorationStatus.h"
 #include "semantic_exploration/MapBlocks.h"
 #include "semantic_exploration/ObjectArray.h"
+#include "semantic_exploration/core/object_map.hpp"
+#include "semantic_exploration/core/occupancy_map.hpp"
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
 #include "semantic_exploration/core/planning/interfaces.hpp"
 #include "semantic_exploration/core/planning/map_replica.hpp"
@@ -107,5 +112,30 @@ std::string fromTrajectoryMsg(const trajectory_msgs::MultiDOFJointTrajectory& ms
 /// fields, header and endianness, as one row. Returns "" or why it cannot
 /// (no FLOAT32 z, data shorter than width x height x point_step).
 std::string cutCloudAboveZ(const sensor_msgs::PointCloud2& in, double max_z_m, sensor_msgs::PointCloud2& out);
+
+// ---------------------------------------------------------------- map nodes
+
+/// geometry_msgs::Point -> vector, m.
+Eigen::Vector3d fromPoint(const geometry_msgs::Point& p);
+/// The positions of a gain request.
+std::vector<Eigen::Vector3d> fromPoints(const std::vector<geometry_msgs::Point>& points);
+
+/// Pose message of T (translation and unit quaternion).
+geometry_msgs::Pose toPose(const Eigen::Isometry3d& T);
+/// T of a pose message. Returns "" or why it is not a rigid transform (a
+/// quaternion of norm <= 0.5 or non-finite values); the quaternion is
+/// normalised. `T` is untouched on failure.
+std::string fromPose(const geometry_msgs::Pose& pose, Eigen::Isometry3d& T);
+/// T of a tf transform; the quaternion is normalised (not checked: tf2 has).
+Eigen::Isometry3d fromTransform(const geometry_msgs::Transform& t);
+
+/// The MapBlocks message of a map update or snapshot (background_map's
+/// ~map_update and ~get_map); toMapUpdate() reads it back.
+semantic_exploration::MapBlocks toMapBlocksMsg(const semexp::MapBlocksData& blocks, const ros::Time& stamp,
+                                               const std::string& frame);
+
+/// The ObjectInfo of an object with the summary of its surface (object_map's
+/// ~objects); toObjectSummaries() reads what the planner needs back.
+semantic_exploration::ObjectInfo toObjectInfo(const semexp::MappedObject& object, const semexp::TsdfSummary& surface);
 
 }  // namespace semexp_ros

@@ -24,39 +24,31 @@
 
 #include "semantic_exploration/GetHistoryMasks.h"
 #include "semantic_exploration/core/depth_history.hpp"
-#include "semantic_exploration/ros/node_common.hpp"
-#include "semantic_exploration/ros/params.hpp"
+#include "semantic_exploration/ros/camera_node.hpp"
 
 namespace semexp_ros {
 
-class DepthHistoryNode {
+class DepthHistoryNode : public CameraNode {
  public:
   DepthHistoryNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
 
  private:
-  void infoCallback(const sensor_msgs::CameraInfoConstPtr& msg);
   void depthCallback(const sensor_msgs::ImageConstPtr& msg);
   bool getMasks(semantic_exploration::GetHistoryMasks::Request& req,
                 semantic_exploration::GetHistoryMasks::Response& res);
   void publishMarkers(const ros::Time& stamp);
-  void reportFrame(const std_msgs::Header& header, bool integrated, double time_ms);
+  /// The history's image layout is fixed at its first frame.
+  bool cameraChangeable() const override { return !history_; }
 
   semexp::DepthHistoryConfig config_;
-  semexp::PinholeCamera camera_;
-  bool have_info_ = false;        ///< camera_ came from a camera_info
-  CameraInfoInput camera_input_;  ///< validates camera_info against the cap and the depth frames
-  semexp::Bounds bounds_;
-  FrameNames frames_;
-  std::unique_ptr<PoseSource> poses_;  ///< T_WC at image stamps (tf2, gap-guarded)
-  double marker_period_s_ = 1.0;
+  DepthHistoryNodeConfig node_config_;
   std::unique_ptr<semexp::DepthHistory> history_;
   uint64_t frames_integrated_ = 0;
   bool markers_dirty_ = false;
   ros::WallTime last_markers_;
-  ros::Subscriber depth_sub_, info_sub_;
-  ros::Publisher markers_pub_, integrated_pub_;
+  ros::Subscriber depth_sub_;
+  ros::Publisher markers_pub_;
   ros::ServiceServer masks_srv_;
-  DropCounter drops_;
 };
 
 }  // namespace semexp_ros

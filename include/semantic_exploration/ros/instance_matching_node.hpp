@@ -24,12 +24,11 @@
 
 #include "semantic_exploration/Detections.h"
 #include "semantic_exploration/RenderInstances.h"
-#include "semantic_exploration/ros/node_common.hpp"
-#include "semantic_exploration/ros/params.hpp"
+#include "semantic_exploration/ros/camera_node.hpp"
 
 namespace semexp_ros {
 
-class InstanceMatchingNode {
+class InstanceMatchingNode : public CameraNode {
  public:
   InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
 
@@ -37,7 +36,6 @@ class InstanceMatchingNode {
   using SyncPolicy =
       message_filters::sync_policies::ApproximateTime<semantic_exploration::Detections, sensor_msgs::Image>;
 
-  void infoCallback(const sensor_msgs::CameraInfoConstPtr& msg);
   void frameCallback(const semantic_exploration::DetectionsConstPtr& msg, const sensor_msgs::ImageConstPtr& depth);
   /// Publishes the frame without detections (an all-zero instance image of width_px x height_px).
   void publishEmpty(const std_msgs::Header& header, int width_px, int height_px);
@@ -47,20 +45,11 @@ class InstanceMatchingNode {
   ros::NodeHandle nh_;
   semexp::MatchingConfig config_;
   semexp::ClassTable classes_;
-  semexp::PinholeCamera camera_;
-  semexp::Bounds bounds_;  ///< camera poses outside are refused ("out_of_bounds")
-  sensor_msgs::CameraInfo camera_info_;
-  bool have_info_ = false;
-  CameraInfoInput camera_input_;  ///< validates camera_info against the cap and the depth frames
-  FrameNames frames_;
-  std::unique_ptr<PoseSource> poses_;  ///< T_WC at image stamps (tf2, gap-guarded)
   message_filters::Subscriber<semantic_exploration::Detections> detections_sub_;
   message_filters::Subscriber<sensor_msgs::Image> depth_sub_;
   std::unique_ptr<message_filters::Synchronizer<SyncPolicy>> sync_;
-  ros::Subscriber info_sub_;
   ros::Publisher matched_pub_;
   ros::ServiceClient render_client_;
-  DropCounter drops_;
   FrameGapCounter frame_gaps_;  ///< detection frames missing from the paired stream ("frame_gap")
 };
 

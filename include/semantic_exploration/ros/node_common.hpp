@@ -36,6 +36,10 @@ std::string depthToMeters(const sensor_msgs::Image& msg, cv::Mat& depth_m);
 /// Returns "" on success, else why it was rejected.
 std::string colourToRgb(const sensor_msgs::Image& msg, cv::Mat& rgb);
 
+/// Copies a 16UC1 (or mono16) image, e.g. an instance or object id image, to
+/// a CV_16UC1 image. Returns "" on success, else why it was rejected.
+std::string uint16ToMat(const sensor_msgs::Image& msg, cv::Mat& out);
+
 /// Image message holding a copy of `m`: CV_32FC1 -> 32FC1, CV_16UC1 -> 16UC1,
 /// CV_8UC1 -> mono8 (other types throw std::invalid_argument).
 sensor_msgs::Image toImageMsg(const std_msgs::Header& header, const cv::Mat& m);

@@ -29,12 +29,11 @@
 #include "semantic_exploration/RenderInstances.h"
 #include "semantic_exploration/SaveMap.h"
 #include "semantic_exploration/core/object_map.hpp"
-#include "semantic_exploration/ros/node_common.hpp"
-#include "semantic_exploration/ros/params.hpp"
+#include "semantic_exploration/ros/camera_node.hpp"
 
 namespace semexp_ros {
 
-class ObjectMapNode {
+class ObjectMapNode : public CameraNode {
  public:
   ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh);
 
@@ -42,10 +41,8 @@ class ObjectMapNode {
   using SyncPolicy = message_filters::sync_policies::ApproximateTime<semantic_exploration::MatchedDetections,
                                                                      sensor_msgs::Image, sensor_msgs::Image>;
 
-  void infoCallback(const sensor_msgs::CameraInfoConstPtr& msg);
   void frameCallback(const semantic_exploration::MatchedDetectionsConstPtr& matched,
                      const sensor_msgs::ImageConstPtr& depth, const sensor_msgs::ImageConstPtr& rgb);
-  void reportFrame(const std_msgs::Header& header, bool integrated, double time_ms);
   void publishObjects(const ros::Time& stamp);
   bool renderInstances(semantic_exploration::RenderInstances::Request& req,
                        semantic_exploration::RenderInstances::Response& res);
@@ -55,11 +52,6 @@ class ObjectMapNode {
   semexp::ObjectMapConfig config_;
   semexp::ClassTable classes_;
   semexp::ExplorationConfig exploration_;
-  semexp::PinholeCamera camera_;
-  semexp::Bounds bounds_;  ///< camera poses and gain positions outside are refused ("out_of_bounds")
-  CameraInfoInput camera_input_;  ///< validates camera_info against the cap and the depth frames
-  FrameNames frames_;
-  std::unique_ptr<PoseSource> poses_;  ///< T_WC at image stamps (tf2, gap-guarded)
   std::unique_ptr<semexp::ObjectMap> map_;
   ros::Time last_stamp_;
   /// Last render_instances answer, reused by the frame it was made for if the map did not change since.
@@ -73,10 +65,8 @@ class ObjectMapNode {
   message_filters::Subscriber<semantic_exploration::MatchedDetections> matched_sub_;
   message_filters::Subscriber<sensor_msgs::Image> depth_sub_, rgb_sub_;
   std::unique_ptr<message_filters::Synchronizer<SyncPolicy>> sync_;
-  ros::Subscriber info_sub_;
-  ros::Publisher objects_pub_, meshes_pub_, integrated_pub_;
+  ros::Publisher objects_pub_, meshes_pub_;
   ros::ServiceServer render_srv_, gains_srv_, save_srv_;
-  DropCounter drops_;
 };
 
 }  // namespace semexp_ros

@@ -10,15 +10,19 @@
 
 #include <xmlrpcpp/XmlRpcValue.h>
 
+#include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "semantic_exploration/core/background_map_config.hpp"
 #include "semantic_exploration/core/bounds.hpp"
 #include "semantic_exploration/core/camera.hpp"
 #include "semantic_exploration/core/class_table.hpp"
+#include "semantic_exploration/core/depth_history_config.hpp"
 #include "semantic_exploration/core/detector/detector_config.hpp"
 #include "semantic_exploration/core/exploration_config.hpp"
+#include "semantic_exploration/core/matching_config.hpp"
 #include "semantic_exploration/core/object_map_config.hpp"
 #include "semantic_exploration/core/planner_config.hpp"
 #include "semantic_exploration/core/frontier_evidence.hpp"
@@ -52,6 +56,31 @@ struct PlannerNodeConfig {
   double goal_timeout_factor = 3.0;  ///< `planner/goal_timeout_factor`: replan if the goal is not reached in factor x path time + 10 s
 };
 
+/// Settings of the background_map node itself (not of the core map).
+struct BackgroundMapNodeConfig {
+  double frontier_period_s = 0.5;    ///< `background_map/frontier_period_s`: minimum period between ~frontiers clouds, s
+  double colour_wait_s = 0.05;       ///< `background_map/colour_wait_s`: how long a depth frame waits for its colour image, wall s
+  double start_free_radius_m = 0.5;  ///< `background_map/start_free_radius_m`: unknown space this close to the first camera pose is free, m
+};
+
+/// Settings of the depth_history node itself.
+struct DepthHistoryNodeConfig {
+  double marker_period_s = 1.0;  ///< `depth_history/marker_period_s`: minimum period between ~markers updates, s
+};
+
+/// How object_map and instance_matching pair their input streams.
+struct ImageSyncConfig {
+  double max_interval_s = 0.02;  ///< `sync_max_interval_s`: messages of one frame lie at most this far apart, s
+};
+
+/// One parameter a loader read: its path and the default it had in code
+/// (the value before reading, as text: numbers with full precision, true /
+/// false, strings in double quotes, lists in brackets, "" for a map).
+struct ParamRead {
+  std::string path;
+  std::string default_text;
+};
+
 /// Reads typed values out of a parameter tree (the node's private namespace).
 class ParamReader {
  public:
@@ -73,15 +102,29 @@ class ParamReader {
   /// Required parameters: throw ConfigError("missing") if absent.
   template <typename T>
   void require(const std::string& path, T& out) const {
+    record(path, "required");
     if (!has(path)) throw semexp::ConfigError(path, "is required but missing");
+    // Recorded once, as required: what `out` held is no default. The log is back even if get() throws.
+    struct Pause {
+      std::vector<ParamRead>*& log;
+      std::vector<ParamRead>* const saved;
+      ~Pause() { log = saved; }
+    } pause{log_, log_};
+    log_ = nullptr;
     get(path, out);
   }
 
   /// The value at `path`, or nullptr.
   const XmlRpc::XmlRpcValue* find(const std::string& path) const;
 
+  /// From now on every get(), getAtLeast() and require() also appends what it
+  /// read to `log` (null: stop), so that a tool can list the parameters.
+  void recordReads(std::vector<ParamRead>* log) { log_ = log; }
+
  private:
+  void record(const std::string& path, std::string default_text) const;
   XmlRpc::XmlRpcValue root_;
+  mutable std::vector<ParamRead>* log_ = nullptr;
 };
 
 // Each loader reads its section and validates it (throws semexp::ConfigError).
@@ -118,5 +161,18 @@ SetpointStreamerConfig loadSetpointStreamer(const ParamReader& p);  ///< `setpoi
 
 /// `display_cut/max_z_m`: the display_cut node shows the map up to this height in world, m.
 double loadDisplayCut(const ParamReader& p);
+
+/// `background_map/{frontier_period_s,colour_wait_s,start_free_radius_m}`
+BackgroundMapNodeConfig loadBackgroundMapNode(const ParamReader& p);
+/// `depth_history/marker_period_s`; also checks that `history`'s image size
+/// is the planner's raycast size (`planner/raycast_{width,height}`) when a
+/// planner section is present: get_masks answers only its own size.
+DepthHistoryNodeConfig loadDepthHistoryNode(const ParamReader& p, const semexp::DepthHistoryConfig& history);
+ImageSyncConfig loadImageSync(const ParamReader& p);  ///< `sync_max_interval_s`
+
+/// Every loader above by name, each reading all its parameters from `p`
+/// (whose errors it throws): for test/tools/list_params, which lists what
+/// the nodes read so that a test can compare it with the YAML files.
+std::vector<std::pair<std::string, std::function<void(const ParamReader&)>>> allLoaders();
 
 }  // namespace semexp_ros

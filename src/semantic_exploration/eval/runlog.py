@@ -25,7 +25,7 @@ DROP_HEADLINES = [
     ("instance_matching", "size_mismatch", "detection frames with mismatched size"),
     ("background_map", "size_mismatch", "depth frames with mismatched size"),
     ("background_map", "no_camera_info", "depth frames before camera_info"),
-    ("background_map", "bad_encoding", "depth frames with a bad encoding"),
+    ("background_map", "bad_depth", "depth frames that cannot be read"),
     ("background_map", "out_of_bounds", "depth frames outside the map bounds"),
     ("object_map", "no_tf", "detection frames without tf (object map)"),
 ]

@@ -1,0 +1,72 @@
+#pragma once
+// Solids with an exact signed distance and an exact ray intersection, shared
+// by the scene helpers of the map tests (tsdf_test_scenes.hpp,
+// occupancy_test_scene.hpp): one definition of each.
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace semexp_test {
+
+struct Shape {
+  virtual ~Shape() = default;
+  /// Exact signed distance (negative inside), m.
+  virtual double sdf(const Eigen::Vector3d& p_W) const = 0;
+  /// Smallest s > 0 with o + s d on the surface (d need not be unit).
+  virtual bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& s) const = 0;
+};
+
+struct Sphere : Shape {
+  Eigen::Vector3d centre;
+  double radius;
+  Sphere(const Eigen::Vector3d& c, double r) : centre(c), radius(r) {}
+  double sdf(const Eigen::Vector3d& p) const override { return (p - centre).norm() - radius; }
+  bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& s) const override {
+    const Eigen::Vector3d oc = o - centre;
+    const double a = d.squaredNorm(), b = 2.0 * oc.dot(d), c = oc.squaredNorm() - radius * radius;
+    const double disc = b * b - 4 * a * c;
+    if (disc < 0) return false;
+    s = (-b - std::sqrt(disc)) / (2 * a);
+    return s > 0;
+  }
+};
+
+/// Solid axis-aligned box between the corners lo and hi, m.
+struct Box : Shape {
+  Eigen::Vector3d lo = Eigen::Vector3d::Zero();
+  Eigen::Vector3d hi = Eigen::Vector3d::Zero();
+
+  Box() = default;
+  Box(const Eigen::Vector3d& lo_, const Eigen::Vector3d& hi_) : lo(lo_), hi(hi_) {}
+  /// The box reaching `half` from `centre` along each axis.
+  static Box around(const Eigen::Vector3d& centre, const Eigen::Vector3d& half) {
+    return Box(centre - half, centre + half);
+  }
+  Eigen::Vector3d centre() const { return 0.5 * (lo + hi); }
+  Eigen::Vector3d half() const { return 0.5 * (hi - lo); }
+
+  double sdf(const Eigen::Vector3d& p) const override {
+    const Eigen::Vector3d q = (p - centre()).cwiseAbs() - half();
+    return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+  }
+  bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& s) const override {
+    double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < 3; ++i) {
+      if (std::abs(d[i]) < 1e-12) {
+        if (o[i] < lo[i] || o[i] > hi[i]) return false;
+        continue;
+      }
+      double a = (lo[i] - o[i]) / d[i], b = (hi[i] - o[i]) / d[i];
+      if (a > b) std::swap(a, b);
+      t0 = std::max(t0, a);
+      t1 = std::min(t1, b);
+    }
+    if (t0 > t1 || t0 <= 0) return false;
+    s = t0;
+    return true;
+  }
+};
+
+}  // namespace semexp_test
