@@ -5,7 +5,8 @@
 # .colcon/sanitize) and runs them. Any sanitizer report fails the program
 # (halt_on_error, -fno-sanitize-recover); leaks are reported too.
 # Ends with "sanitize: N passed, N failed"; exits non-zero on any failure.
-# Results (logs, gtest XML) go to $1 if given.
+# Results (logs, gtest XML, exit_codes: one "name rc" line per program) go
+# to $1 if given; scripts/run_tests.sh (make test) counts them with the rest.
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD="${SEMEXP_SANITIZE_BUILD:-$ROOT/.colcon/sanitize}"
@@ -13,6 +14,7 @@ OUT="${1:-$BUILD/results}"
 JOBS="${JOBS:-$(nproc)}"
 START=$(date +%s)
 mkdir -p "$BUILD" "$OUT"
+: > "$OUT/exit_codes"
 export PATH="/usr/bin:$PATH"
 launcher=()
 if command -v ccache > /dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
@@ -20,6 +22,7 @@ if ! { cmake -S "$ROOT/test/sanitize" -B "$BUILD" -DCMAKE_BUILD_TYPE=None "${lau
        && cmake --build "$BUILD" -j "$JOBS"; } > "$OUT/build.log" 2>&1; then
   tail -n 40 "$OUT/build.log"
   echo "sanitize: build failed (log: $OUT/build.log)"
+  echo "build 1" >> "$OUT/exit_codes"
   echo "sanitize: 0 passed, 1 failed"
   exit 1
 fi
@@ -31,8 +34,13 @@ passed=0; failed=0
 for t in "$BUILD"/test_core_*; do
   [ -x "$t" ] || continue
   name=$(basename "$t")
-  if timeout 900 "$t" --gtest_output="xml:$OUT/$name.xml" > "$OUT/$name.log" 2>&1 \
-     && ! grep -q -e "ERROR: AddressSanitizer" -e "ERROR: LeakSanitizer" -e "runtime error:" "$OUT/$name.log"; then
+  timeout 900 "$t" --gtest_output="xml:$OUT/$name.xml" > "$OUT/$name.log" 2>&1
+  rc=$?
+  # A report always fails the program (halt_on_error); grep as well, in case one is printed at exit.
+  if [ $rc -eq 0 ] && grep -q -e "ERROR: AddressSanitizer" -e "ERROR: LeakSanitizer" -e "runtime error:" \
+       "$OUT/$name.log"; then rc=1; fi
+  echo "$name $rc" >> "$OUT/exit_codes"
+  if [ $rc -eq 0 ]; then
     passed=$((passed + 1))
   else
     failed=$((failed + 1))

@@ -18,11 +18,7 @@ namespace {
 std::string toMat16(const sensor_msgs::Image& im, cv::Mat& out) {
   if (im.encoding != enc::TYPE_16UC1 && im.encoding != enc::MONO16)
     return "encoding '" + im.encoding + "' (expected 16UC1)";
-  if (im.width == 0 || im.height == 0 || im.step < im.width * 2 ||
-      im.data.size() < static_cast<size_t>(im.step) * im.height || im.is_bigendian)
-    return "buffer does not match its size";
-  cv::Mat(im.height, im.width, CV_16UC1, const_cast<uint8_t*>(im.data.data()), im.step).copyTo(out);
-  return "";
+  return imageToMat(im, CV_16UC1, 2, out);
 }
 
 }  // namespace

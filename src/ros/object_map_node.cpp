@@ -138,9 +138,8 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
     return fail("bad_instances", "instance image encoding '" + im.encoding + "' (expected 16UC1)");
   if (static_cast<int>(im.width) != depth_m.cols || static_cast<int>(im.height) != depth_m.rows)
     return fail("size_mismatch", "instance image differs from depth in size");
-  if (im.step < im.width * 2 || im.data.size() < static_cast<size_t>(im.step) * im.height || im.is_bigendian)
-    return fail("bad_instances", "instance image buffer does not match its size");
-  cv::Mat(im.height, im.width, CV_16UC1, const_cast<uint8_t*>(im.data.data()), im.step).copyTo(instances);
+  if (const std::string bad = imageToMat(im, CV_16UC1, 2, instances); !bad.empty())
+    return fail("bad_instances", "instance image: " + bad);
 
   Eigen::Isometry3d T_WC;
   err = poses_->cameraPose(frames_, matched->header, T_WC);

@@ -59,6 +59,12 @@ def rss_mb(pid):
     return int(kv["VmRSS"].split()[0]) / 1024.0, int(kv["VmHWM"].split()[0]) / 1024.0
 
 
+def describe(m):
+    return "%s %dx%d step %d, %d bytes, stamp %.3f, frame '%s'%s" % (
+        m.encoding, m.width, m.height, m.step, len(m.data), m.header.stamp.to_sec(), m.header.frame_id,
+        ", big-endian" if m.is_bigendian else "")
+
+
 def camera_info(stamp):
     m = CameraInfo()
     m.header.stamp, m.header.frame_id = stamp, "camera"
@@ -190,7 +196,8 @@ class Soak(unittest.TestCase):
             pub.publish(m)
             for n in FRAME_NODES:
                 self._wait_for(lambda: self._n_frames(n) >= first[n] + i + 1, 10.0,
-                               "frame_integrated from %s for depth frame %d" % (n, i))
+                               "frame_integrated from %s for depth frame %d (%s; the node %s)"
+                               % (n, i, describe(m), "runs" if node_pid(n) else "died"))
         pub.unregister()
         for n in FRAME_NODES:
             with self.lock:
