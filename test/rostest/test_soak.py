@@ -104,6 +104,7 @@ class Soak(unittest.TestCase):
         for n in NODES:
             self._wait_for(lambda: node_pid(n) is not None, 30.0, "/%s to start" % n)
         self.pids = {n: node_pid(n) for n in NODES}
+        self.rss0 = {n: rss_mb(self.pids[n])[0] for n in NODES}
         self.report = []
 
     # ------------------------------------------------------------ bookkeeping
@@ -303,8 +304,8 @@ class Soak(unittest.TestCase):
         m.point_step = self.rng.choice([0, 1, 12, 12, 16, 13])
         m.height = self.rng.choice([0, 1, 1, 2])
         m.width = self.rng.choice([0, 1, 10, 1000])
-        m.row_step = m.width * m.point_step + self.rng.choice([0, 0, 0, 4, -1 if m.width else 0])
-        n = m.row_step * m.height + self.rng.choice([0, 0, 0, 1, -1 if m.row_step * m.height else 0])
+        m.row_step = max(0, m.width * m.point_step + self.rng.choice([0, 0, 0, 4, -1]))
+        n = max(0, m.row_step * m.height + self.rng.choice([0, 0, 0, 1, -1]))
         m.data = sm.struct.pack("<%df" % (n // 4), *[self.rng.choice(sm.SPECIAL_FLOATS + (1.0, 2.0))
                                                       for _ in range(n // 4)]) + bytes(n % 4)
         return m
@@ -344,6 +345,8 @@ class Soak(unittest.TestCase):
             proxy = rospy.ServiceProxy(name, srv)
             n = self.n_reqs if req_cls is not None else self.n_reqs // 4
             answered = refused = 0
+            node = name.split("/")[1]
+            drops0 = self._dropped(node, ("service_timeout",))
             for i in range(n):
                 if srv is SaveMap:
                     req = [self.rng.choice(["", "relative/dir", os.path.join(tmp, "..", "x"), "/proc/none/x",
@@ -363,7 +366,11 @@ class Soak(unittest.TestCase):
                 except rospy.ServiceException as e:  # refused (the service returned false) or the node died
                     self.assertIsNotNone(node_pid(name.split("/")[1]), "%s died on request %d: %s" % (name, i, e))
                     refused += 1
-            self._log("%s: %d requests, %d answered, %d refused" % (name, n, answered, refused))
+            if req_cls is not None and srv is not GetMap:  # a refused request is a counted drop
+                self._wait_for(lambda: self._dropped(node, ("service_timeout",)) - drops0 >= refused, 5.0)
+                self.assertGreaterEqual(self._dropped(node, ("service_timeout",)) - drops0, refused,
+                                        "%s counts every refused request" % name)
+            self._log("%s: %d requests, %d answered, %d refused (counted as drops)" % (name, n, answered, refused))
 
     # ------------------------------------------------------------ the soak
     def test_soak(self):
@@ -390,7 +397,8 @@ class Soak(unittest.TestCase):
         self.assertTrue(rospy.ServiceProxy("/planner/plan_once", Trigger)().message)
         for n in NODES:
             rss, peak = rss_mb(self.pids[n])
-            self._log("%s: RSS %.0f MB, peak %.0f MB, %d drops counted" % (n, rss, peak, self._dropped(n)))
+            self._log("%s: RSS %.0f MB at the start, %.0f MB at the end, peak %.0f MB, %d drops counted"
+                      % (n, self.rss0[n], rss, peak, self._dropped(n)))
             self.assertLess(peak, self.max_rss_mb, "/%s peak RSS" % n)
         self._log("total %.0f s wall" % (time.time() - t0))
 
