@@ -30,11 +30,16 @@ echo "[sanitize] build done after $(( $(date +%s) - START )) s"
 # detect_leaks needs ptrace-free LeakSanitizer; it is on by default where it works.
 export ASAN_OPTIONS="halt_on_error=1:abort_on_error=0:detect_stack_use_after_return=1:strict_string_checks=1:check_initialization_order=1"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
+# Left out here (they run uninstrumented in make test's gtest step): tests whose
+# outcome depends on CPU speed. ClosedLoop plans with the default wall-time
+# budget (planner/time_budget_s), which an instrumented build spends on far
+# fewer RRT* iterations, so its paths, not its memory use, differ.
+EXCLUDE="${SEMEXP_SANITIZE_EXCLUDE-ClosedLoop.ExploresTwoRoomsUntilTermination}"
 passed=0; failed=0
 for t in "$BUILD"/test_core_*; do
   [ -x "$t" ] || continue
   name=$(basename "$t")
-  timeout 900 "$t" --gtest_output="xml:$OUT/$name.xml" > "$OUT/$name.log" 2>&1
+  timeout 900 "$t" --gtest_filter="-$EXCLUDE" --gtest_output="xml:$OUT/$name.xml" > "$OUT/$name.log" 2>&1
   rc=$?
   # A report always fails the program (halt_on_error); grep as well, in case one is printed at exit.
   if [ $rc -eq 0 ] && grep -q -e "ERROR: AddressSanitizer" -e "ERROR: LeakSanitizer" -e "runtime error:" \
