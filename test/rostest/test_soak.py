@@ -144,8 +144,12 @@ class Soak(unittest.TestCase):
 
     def _publisher(self, topic, cls):
         pub = rospy.Publisher(topic, cls, queue_size=1000)
-        self._wait_for(lambda: pub.get_num_connections() > 0, 10.0, "a subscriber of " + topic)
-        time.sleep(0.3)  # every subscriber connected, not only the first
+
+        def all_connected():  # every subscriber the master lists, not only the first
+            subs = [s for t, s in rosgraph.Master("/soak").getSystemState()[1] if t == topic]
+            return bool(subs) and pub.get_num_connections() >= len(subs[0])
+        self._wait_for(all_connected, 20.0, "every subscriber of " + topic)
+        time.sleep(0.1)
         return pub
 
     def _log(self, line):
