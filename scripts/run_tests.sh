@@ -44,6 +44,13 @@ for t in "$BIN"/test_*; do
   echo "$name $rc" >> "$RESULTS/gtest/exit_codes"
 done
 
+# 1b. The core gtest programs again, built with AddressSanitizer and
+# UndefinedBehaviorSanitizer in a build directory of their own (make test-sanitize).
+echo "[test] gtest under -fsanitize=address,undefined (scripts/run_sanitize.sh)"
+bash "$ROOT/scripts/run_sanitize.sh" "$RESULTS/gtest/sanitize" > "$RESULTS/gtest/sanitize.log" 2>&1
+tail -n 3 "$RESULTS/gtest/sanitize.log"
+sed 's|^|sanitize/|' "$RESULTS/gtest/sanitize/exit_codes" >> "$RESULTS/gtest/exit_codes"
+
 # 2. Python unit tests (simulator, evaluation, repository checks).
 echo "[test] pytest test/python"
 (cd "$ROOT" && timeout 1200 "$SEMEXP_VENV/bin/python" -m pytest -q -p no:cacheprovider test/python \

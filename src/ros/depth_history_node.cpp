@@ -73,8 +73,10 @@ void DepthHistoryNode::publishMarkers(const ros::Time& stamp) {
 bool DepthHistoryNode::getMasks(semantic_exploration::GetHistoryMasks::Request& req,
                                 semantic_exploration::GetHistoryMasks::Response& res) {
   if (req.width != config_.width || req.height != config_.height) {
-    ROS_WARN_THROTTLE(5.0, "depth_history: get_masks asked for %ux%u, the history is %dx%d", req.width, req.height,
-                      config_.width, config_.height);
+    // Counted like every refused request (found by the soak: it was only logged).
+    drops_.drop("bad_mask_request", "get_masks asked for " + std::to_string(req.width) + "x" +
+                                        std::to_string(req.height) + ", the history is " +
+                                        std::to_string(config_.width) + "x" + std::to_string(config_.height));
     return false;
   }
   if (const std::string why = semexp::SphericalGrid::checkRequest(static_cast<long>(req.positions.size()),

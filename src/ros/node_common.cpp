@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iterator>
+#include <limits>
 #include <stdexcept>
 #include <opencv2/imgproc.hpp>
 
@@ -19,34 +20,33 @@ namespace semexp_ros {
 
 namespace enc = sensor_msgs::image_encodings;
 
-namespace {
-
-// Rejects images whose buffer cannot hold height * step bytes or whose step
-// is shorter than a row: such messages would read out of bounds.
-std::string checkLayout(const sensor_msgs::Image& msg, int bytes_per_pixel) {
+std::string imageToMat(const sensor_msgs::Image& msg, int cv_type, int bytes_per_pixel, cv::Mat& out) {
+  // 64-bit sizes: width x bytes per pixel must not wrap around in uint32.
+  const uint64_t row = static_cast<uint64_t>(msg.width) * static_cast<uint64_t>(bytes_per_pixel);
   if (msg.width == 0 || msg.height == 0) return "empty image";
-  if (msg.step < msg.width * static_cast<uint32_t>(bytes_per_pixel))
+  if (msg.width > static_cast<uint32_t>(std::numeric_limits<int>::max()) ||
+      msg.height > static_cast<uint32_t>(std::numeric_limits<int>::max()))
+    return "image of " + std::to_string(msg.width) + "x" + std::to_string(msg.height) + " px is too large";
+  if (msg.step < row)
     return "step " + std::to_string(msg.step) + " shorter than a row of " + std::to_string(msg.width) + " px";
-  if (msg.data.size() < static_cast<size_t>(msg.step) * msg.height)
+  if (msg.data.size() < static_cast<uint64_t>(msg.step) * msg.height)
     return "data holds " + std::to_string(msg.data.size()) + " bytes, expected " +
-           std::to_string(static_cast<size_t>(msg.step) * msg.height);
+           std::to_string(static_cast<uint64_t>(msg.step) * msg.height);
   if (msg.is_bigendian) return "big-endian images are not supported";
+  // Row by row: a step that is no multiple of the pixel size (padding of any
+  // length) is valid in sensor_msgs/Image but not in a cv::Mat header.
+  out.create(static_cast<int>(msg.height), static_cast<int>(msg.width), cv_type);
+  for (uint32_t v = 0; v < msg.height; ++v)
+    std::memcpy(out.ptr(static_cast<int>(v)), &msg.data[static_cast<size_t>(v) * msg.step], row);
   return "";
 }
 
-}  // namespace
-
 std::string depthToMeters(const sensor_msgs::Image& msg, cv::Mat& depth_m) {
-  if (msg.encoding == enc::TYPE_32FC1) {
-    if (auto err = checkLayout(msg, 4); !err.empty()) return err;
-    const cv::Mat view(msg.height, msg.width, CV_32FC1, const_cast<uint8_t*>(msg.data.data()), msg.step);
-    view.copyTo(depth_m);
-    return "";
-  }
+  if (msg.encoding == enc::TYPE_32FC1) return imageToMat(msg, CV_32FC1, 4, depth_m);
   if (msg.encoding == enc::TYPE_16UC1 || msg.encoding == enc::MONO16) {
-    if (auto err = checkLayout(msg, 2); !err.empty()) return err;
-    const cv::Mat view(msg.height, msg.width, CV_16UC1, const_cast<uint8_t*>(msg.data.data()), msg.step);
-    view.convertTo(depth_m, CV_32FC1, 1e-3);  // millimetres -> metres; 0 stays 0 (invalid)
+    cv::Mat mm;
+    if (auto err = imageToMat(msg, CV_16UC1, 2, mm); !err.empty()) return err;
+    mm.convertTo(depth_m, CV_32FC1, 1e-3);  // millimetres -> metres; 0 stays 0 (invalid)
     return "";
   }
   return "unsupported depth encoding '" + msg.encoding + "' (expected 32FC1 in m or 16UC1 in mm)";
@@ -55,9 +55,7 @@ std::string depthToMeters(const sensor_msgs::Image& msg, cv::Mat& depth_m) {
 std::string uint16ToMat(const sensor_msgs::Image& msg, cv::Mat& out) {
   if (msg.encoding != enc::TYPE_16UC1 && msg.encoding != enc::MONO16)
     return "encoding '" + msg.encoding + "' (expected 16UC1)";
-  if (auto err = checkLayout(msg, 2); !err.empty()) return err;
-  cv::Mat(msg.height, msg.width, CV_16UC1, const_cast<uint8_t*>(msg.data.data()), msg.step).copyTo(out);
-  return "";
+  return imageToMat(msg, CV_16UC1, 2, out);  // row by row: any padding, 64-bit size checks
 }
 
 std::string colourToRgb(const sensor_msgs::Image& msg, cv::Mat& rgb) {
@@ -71,10 +69,10 @@ std::string colourToRgb(const sensor_msgs::Image& msg, cv::Mat& rgb) {
   };
   for (const auto& f : fmts) {
     if (msg.encoding != f.name) continue;
-    if (auto err = checkLayout(msg, f.bpp); !err.empty()) return err;
-    const cv::Mat view(msg.height, msg.width, f.type, const_cast<uint8_t*>(msg.data.data()), msg.step);
+    cv::Mat view;
+    if (auto err = imageToMat(msg, f.type, f.bpp, view); !err.empty()) return err;
     if (f.code < 0)
-      view.copyTo(rgb);
+      rgb = view;
     else
       cv::cvtColor(view, rgb, f.code);
     return "";

@@ -76,8 +76,11 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
   sync_->registerCallback(&ObjectMapNode::frameCallback, this);
   std::string interest;
   for (const auto& c : classes_.of_interest) interest += (interest.empty() ? "" : ", ") + c;
-  ROS_INFO("object_map: classes of interest [%s], truncation %.1f voxels", interest.c_str(),
-           config_.truncation_voxels);
+  // Objects live only in memory: after a restart (respawn) the map starts
+  // empty and finds them again; say so, so a run's log shows what happened.
+  ROS_INFO("object_map: classes of interest [%s], truncation %.1f voxels; starting with no objects "
+           "(objects from before a restart are not restored: they are rebuilt from new observations)",
+           interest.c_str(), config_.truncation_voxels);
 }
 
 void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsConstPtr& matched,

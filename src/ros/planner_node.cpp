@@ -132,11 +132,17 @@ void PlannerNode::objectsCallback(const semantic_exploration::ObjectArrayConstPt
 }
 
 void PlannerNode::statsCallback(const semantic_exploration::MapStatsConstPtr& msg) {
-  if (std::isfinite(msg->explored_volume_m3) && msg->explored_volume_m3 >= 0)
-    explored_volume_m3_ = msg->explored_volume_m3;
-  if (std::isfinite(msg->surface_observed_share) && msg->surface_observed_share >= 0 &&
-      msg->surface_observed_share <= 1)
-    background_share_ = msg->surface_observed_share;
+  const bool volume_ok = std::isfinite(msg->explored_volume_m3) && msg->explored_volume_m3 >= 0;
+  // -1: background_map does not know the share yet (see MapStats.msg).
+  const bool share_ok = msg->surface_observed_share == -1 || (std::isfinite(msg->surface_observed_share) &&
+                                                              msg->surface_observed_share >= 0 &&
+                                                              msg->surface_observed_share <= 1);
+  if (!volume_ok || !share_ok) {
+    drops_.drop("bad_stats", "map stats with a negative or non-finite explored volume or a share outside [0, 1]");
+    return;
+  }
+  explored_volume_m3_ = msg->explored_volume_m3;
+  if (msg->surface_observed_share >= 0) background_share_ = msg->surface_observed_share;
   map_retired_frontiers_ = msg->retired_frontier_count;
 }
 

@@ -301,4 +301,50 @@ TEST(FrameTimer, ThreadCpuTimeCountsWorkNotSleep) {
   volatile double x = 0;
   while (busy.cpu_ms() < 30.0) x = x + 1.0;  // spins until 30 ms of CPU time are used
   EXPECT_GE(busy.wall_ms(), busy.cpu_ms() - 1.0);
+
+// Found by the soak (issue 15): a padded row step that is no multiple of the
+// pixel size is valid in sensor_msgs/Image, but made cv::Mat throw out of the
+// depth callback; and width x bytes per pixel wrapped around in uint32.
+TEST(DepthToMeters, TakesAnyRowPadding) {
+  sensor_msgs::Image m;
+  m.encoding = "32FC1";
+  m.width = 3;
+  m.height = 2;
+  m.step = 13;  // 12 bytes of pixels + 1 byte of padding per row
+  m.data.assign(26, 0);
+  const float rows[2][3] = {{1.0f, 2.0f, 3.5f}, {4.0f, 5.0f, 6.25f}};
+  std::memcpy(&m.data[0], rows[0], 12);
+  std::memcpy(&m.data[13], rows[1], 12);
+  cv::Mat d;
+  ASSERT_EQ(semexp_ros::depthToMeters(m, d), "");
+  ASSERT_EQ(d.type(), CV_32FC1);
+  ASSERT_EQ(d.cols, 3);
+  ASSERT_EQ(d.rows, 2);
+  for (int v = 0; v < 2; ++v)
+    for (int u = 0; u < 3; ++u) EXPECT_EQ(d.at<float>(v, u), rows[v][u]) << v << "," << u;
+
+  m.encoding = "16UC1";  // 2-byte pixels, step 7: 3 px + 1 byte of padding
+  m.step = 7;
+  m.data.assign(14, 0);
+  const uint16_t mm[2][3] = {{1000, 2000, 0}, {1, 65535, 500}};
+  std::memcpy(&m.data[0], mm[0], 6);
+  std::memcpy(&m.data[7], mm[1], 6);
+  ASSERT_EQ(semexp_ros::depthToMeters(m, d), "");
+  EXPECT_FLOAT_EQ(d.at<float>(0, 1), 2.0f);
+  EXPECT_FLOAT_EQ(d.at<float>(1, 1), 65.535f);
+  EXPECT_FLOAT_EQ(d.at<float>(0, 2), 0.0f);
+}
+
+TEST(DepthToMeters, RefusesARowLengthThatWrapsAround) {
+  sensor_msgs::Image m;
+  m.encoding = "32FC1";
+  m.width = 1u << 30;  // x 4 bytes = 2^32, 0 in uint32
+  m.height = 1;
+  m.step = 4;
+  m.data.assign(4, 0);
+  cv::Mat d;
+  EXPECT_EQ(semexp_ros::depthToMeters(m, d), "step 4 shorter than a row of 1073741824 px");
+  cv::Mat rgb;
+  m.encoding = "rgba8";
+  EXPECT_EQ(semexp_ros::colourToRgb(m, rgb), "step 4 shorter than a row of 1073741824 px");
 }

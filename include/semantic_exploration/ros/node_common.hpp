@@ -28,6 +28,13 @@
 
 namespace semexp_ros {
 
+/// Copies the pixels of `msg` (rows `step` bytes apart, padding of any length)
+/// into `out`, a new contiguous cv::Mat of `cv_type` with `bytes_per_pixel`
+/// bytes per pixel. Returns "" on success, else why the layout is unusable:
+/// empty, a side over INT_MAX px, a step shorter than a row, data shorter
+/// than step x height, or big-endian.
+std::string imageToMat(const sensor_msgs::Image& msg, int cv_type, int bytes_per_pixel, cv::Mat& out);
+
 /// Converts depth (32FC1 metres or 16UC1 millimetres) to a CV_32FC1 image in
 /// metres (a deep copy). Returns "" on success, else why it was rejected.
 std::string depthToMeters(const sensor_msgs::Image& msg, cv::Mat& depth_m);
