@@ -301,6 +301,7 @@ TEST(FrameTimer, ThreadCpuTimeCountsWorkNotSleep) {
   volatile double x = 0;
   while (busy.cpu_ms() < 30.0) x = x + 1.0;  // spins until 30 ms of CPU time are used
   EXPECT_GE(busy.wall_ms(), busy.cpu_ms() - 1.0);
+}
 
 // Found by the soak (issue 15): a padded row step that is no multiple of the
 // pixel size is valid in sensor_msgs/Image, but made cv::Mat throw out of the
