@@ -1,0 +1,497 @@
+// Background occupancy map integration: octree walk against the depth
+// pyramid, voxel update of the cells at the surface, spread over a pool.
+#include "semantic_exploration/core/occupancy/integrator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace semexp {
+namespace occupancy {
+
+namespace {
+
+// Calls f(cx, cy, cz) for each of the (up to eight) children of node
+// (ix, iy, iz) that exist in the finer level of dimensions `child_dims`.
+template <typename F>
+inline void forEachChild(const Eigen::Vector3i& child_dims, int ix, int iy, int iz, F&& f) {
+  for (int dz = 0; dz < 2; ++dz)
+    for (int dy = 0; dy < 2; ++dy)
+      for (int dx = 0; dx < 2; ++dx) {
+        const int cx = 2 * ix + dx, cy = 2 * iy + dy, cz = 2 * iz + dz;
+        if (cx < child_dims.x() && cy < child_dims.y() && cz < child_dims.z()) f(cx, cy, cz);
+      }
+}
+
+}  // namespace
+
+/// Constants of one frame.
+struct Integrator::Frame {
+  Eigen::Matrix3d R_CW;
+  Eigen::Vector3d t_CW;
+  Eigen::Vector3d cam_W;
+  float fx, fy, cx, cy;
+  int W, H;
+  const std::uint8_t* rgb;
+  float band;
+};
+
+void Integrator::TaskOut::clear() {
+  changed.clear();
+  voxels_updated = blocks_allocated = 0;
+  pending.clear();
+  l.clear();
+  dist.clear();
+  rgbw.clear();
+}
+
+Integrator::Integrator(const BackgroundMapConfig& config)
+    : cfg_(config),
+      l_free_(toFixed(config.log_odds_free)),
+      l_occ_(toFixed(config.log_odds_occupied)),
+      l_min_(toFixed(config.log_odds_min)),
+      l_max_(toFixed(config.log_odds_max)),
+      pool_(std::make_unique<WorkerPool>(config.integration_threads)) {}
+
+Integrator::Integrator(const Integrator& o)
+    : cfg_(o.cfg_),
+      l_free_(o.l_free_),
+      l_occ_(o.l_occ_),
+      l_min_(o.l_min_),
+      l_max_(o.l_max_),
+      hit_(o.hit_),
+      cell_stamp_(o.cell_stamp_),
+      stamp_(o.stamp_),
+      pool_(std::make_unique<WorkerPool>(o.pool_->threads())) {}
+
+Integrator& Integrator::operator=(const Integrator& o) {
+  if (this != &o) *this = Integrator(o);
+  return *this;
+}
+
+Integrator::~Integrator() = default;
+
+IntegrationStats Integrator::integrate(BlockStore& store, const float* depth_m, const std::uint8_t* rgb,
+                                       const PinholeCamera& camera, const Eigen::Isometry3d& T_WC,
+                                       std::vector<int>& changed) {
+  camera.validate();
+  Frame fr;
+  fr.W = camera.width;
+  fr.H = camera.height;
+  fr.fx = static_cast<float>(camera.fx);
+  fr.fy = static_cast<float>(camera.fy);
+  fr.cx = static_cast<float>(camera.cx);
+  fr.cy = static_cast<float>(camera.cy);
+  fr.rgb = cfg_.integrate_colour ? rgb : nullptr;
+  fr.band = static_cast<float>(cfg_.surface_band_m);
+  const Eigen::Isometry3d T_CW = T_WC.inverse();
+  fr.R_CW = T_CW.linear();
+  fr.t_CW = T_CW.translation();
+  fr.cam_W = T_WC.translation();
+
+  IntegrationStats stats;
+  stats.invalid_pixels = pyr_.build(depth_m, fr.W, fr.H, static_cast<float>(camera.d_min_m),
+                                    static_cast<float>(camera.d_max_m), static_cast<float>(cfg_.surface_front_m),
+                                    static_cast<float>(cfg_.surface_front_quadratic_per_m));
+  if (cell_stamp_.size() != store.cellCount()) cell_stamp_.assign(store.cellCount(), 0);
+  ++stamp_;
+  if (stamp_ == 0) {  // wrapped: clear stamps so no cell looks already listed
+    std::fill(cell_stamp_.begin(), cell_stamp_.end(), 0);
+    stamp_ = 1;
+  }
+  markEndpoints(store, camera, T_WC, stats);
+
+  // The walk down to kSplitLevel lists the tasks; the pool does them.
+  tasks_.clear();
+  plan(store, fr, static_cast<int>(store.levels.size()) - 1, 0, 0, 0);
+  if (outs_.size() < tasks_.size() + 1) outs_.resize(tasks_.size() + 1);
+  pool_->run(tasks_.size(), [&](std::size_t i) {
+    const Task& t = tasks_[i];
+    TaskOut& out = outs_[i];
+    out.clear();
+    if (t.free)
+      freeRegion(store, fr, out, t.k, t.ix, t.iy, t.iz);
+    else
+      descend(store, fr, out, t.k, t.ix, t.iy, t.iz);
+  });
+  for (std::size_t i = 0; i < tasks_.size(); ++i) merge(store, outs_[i], changed, stats);
+  // Endpoint cells the octree walk did not reach (numerical edge cases).
+  TaskOut& rest = outs_[tasks_.size()];
+  rest.clear();
+  for (int cell : hit_cells_) {
+    const std::uint64_t* hb = hits(store, store.cell_block[cell]);
+    bool any = false;
+    for (int w = 0; w < store.fwords; ++w) any = any || hb[w] != 0;
+    if (any) updateCellVoxels(store, fr, rest, cell);
+  }
+  merge(store, rest, changed, stats);
+  stats.changed_cells = changed.size();
+  return stats;
+}
+
+// The voxel holding each measured endpoint is a surface voxel this frame
+// (once, however many pixels fall into it: OctoMap's discretised update).
+// Marking them first lets the per-voxel pass apply "occupied wins". Their
+// blocks are allocated here, before the walk, in pixel order.
+void Integrator::markEndpoints(BlockStore& store, const PinholeCamera& camera, const Eigen::Isometry3d& T_WC,
+                               IntegrationStats& stats) {
+  const int bs = store.bs, bshift = store.bshift, fw = store.fwords;
+  const auto fit = [&] {
+    if (hit_.size() < store.slotCount() * fw) hit_.resize(store.block_cell.capacity() * fw, 0);
+  };
+  fit();
+  const Eigen::Matrix3f R = T_WC.linear().cast<float>();
+  const Eigen::Vector3f t = ((T_WC.translation() - store.origin) / store.res).cast<float>();
+  const Eigen::Matrix3f Rv = R / static_cast<float>(store.res);
+  const Eigen::Vector3i nv = store.nb * bs;
+  const int m = bs - 1;
+  const int W = camera.width, H = camera.height;
+  const float* depth = pyr_.depth();
+  hit_cells_.clear();
+  for (int v = 0; v < H; ++v) {
+    const float yc = static_cast<float>((v - camera.cy) / camera.fy);
+    for (int u = 0; u < W; ++u) {
+      const float d = depth[v * W + u];
+      if (d <= 0.f) continue;
+      const float xc = static_cast<float>((u - camera.cx) / camera.fx);
+      const Eigen::Vector3f q = Rv * Eigen::Vector3f(xc * d, yc * d, d) + t;  // voxel units
+      if (!(q.x() >= 0.f && q.y() >= 0.f && q.z() >= 0.f && q.x() < nv.x() && q.y() < nv.y() && q.z() < nv.z()))
+        continue;
+      const int x = static_cast<int>(q.x()), y = static_cast<int>(q.y()), z = static_cast<int>(q.z());
+      const int cell = store.cellIndex(x >> bshift, y >> bshift, z >> bshift);
+      int b = store.cell_block[cell];
+      if (b < 0) {
+        b = store.allocateBlock(cell);
+        fit();
+        ++stats.blocks_allocated;
+      }
+      const int i = store.voxelIndex(x & m, y & m, z & m);
+      std::uint64_t* hb = hits(store, b);
+      bool first = true;
+      for (int w = 0; w < fw; ++w) first = first && hb[w] == 0;
+      if (first) hit_cells_.push_back(cell);
+      hb[i >> 6] |= std::uint64_t{1} << (i & 63);
+    }
+  }
+}
+
+Integrator::NodeClass Integrator::classify(const BlockStore& store, const Frame& fr, int k, int ix, int iy,
+                                           int iz) const {
+  const int S = store.bs << k;
+  const Eigen::Vector3i lo(ix * S, iy * S, iz * S);
+  const Eigen::Vector3i hi = (lo.array() + S).min(store.nb.array() * store.bs);
+  const Eigen::Vector3d lo_W = store.origin + lo.cast<double>() * store.res;
+  const Eigen::Vector3d ext = (hi - lo).cast<double>() * store.res;
+  const Eigen::Vector3d c0 = fr.R_CW * lo_W + fr.t_CW;
+  const Eigen::Vector3d ax = fr.R_CW.col(0) * ext.x(), ay = fr.R_CW.col(1) * ext.y(), az = fr.R_CW.col(2) * ext.z();
+  double zmin = 1e300, zmax = -1e300, umin = 1e300, umax = -1e300, vmin = 1e300, vmax = -1e300;
+  bool crosses = false;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d p = c0 + ((c & 1) ? ax : Eigen::Vector3d::Zero()) + ((c & 2) ? ay : Eigen::Vector3d::Zero()) +
+                              ((c & 4) ? az : Eigen::Vector3d::Zero());
+    zmin = std::min(zmin, p.z());
+    zmax = std::max(zmax, p.z());
+    if (p.z() <= 1e-3) {
+      crosses = true;
+      continue;
+    }
+    const double u = fr.fx * p.x() / p.z() + fr.cx, v = fr.fy * p.y() / p.z() + fr.cy;
+    umin = std::min(umin, u);
+    umax = std::max(umax, u);
+    vmin = std::min(vmin, v);
+    vmax = std::max(vmax, v);
+  }
+  if (zmax <= 1e-3) return NodeClass::kSkip;     // wholly behind the camera
+  if (crosses) return NodeClass::kDescend;        // contains or touches the camera plane: cannot bound the footprint
+  const double lim = 1e7;
+  const int u0 = static_cast<int>(std::floor(std::max(-lim, umin) + 0.5));
+  const int u1 = static_cast<int>(std::floor(std::min(lim, umax) + 0.5));
+  const int v0 = static_cast<int>(std::floor(std::max(-lim, vmin) + 0.5));
+  const int v1 = static_cast<int>(std::floor(std::min(lim, vmax) + 0.5));
+  if (u1 < 0 || v1 < 0 || u0 >= fr.W || v0 >= fr.H) return NodeClass::kSkip;  // outside the frustum
+  const bool partial = u0 < 0 || v0 < 0 || u1 >= fr.W || v1 >= fr.H;
+  float mn, mx;
+  pyr_.query(std::max(u0, 0), std::min(u1, fr.W - 1), std::max(v0, 0), std::min(v1, fr.H - 1), mn, mx);
+  if (zmin > mx + fr.band) return NodeClass::kSkip;  // behind every measured surface (or no valid depth at all)
+  // Wholly in front of the nearest surface (and its margin): free at this scale.
+  if (!partial && zmax < mn) return NodeClass::kFree;
+  return NodeClass::kDescend;
+}
+
+// The same depth-first walk as visitNode, stopping at kSplitLevel to list tasks.
+void Integrator::plan(const BlockStore& store, const Frame& fr, int k, int ix, int iy, int iz) {
+  const NodeClass c = classify(store, fr, k, ix, iy, iz);
+  if (c == NodeClass::kSkip) return;
+  if (c == NodeClass::kFree) {
+    planFree(store, k, ix, iy, iz);
+    return;
+  }
+  if (k <= kSplitLevel) {
+    tasks_.push_back({k, ix, iy, iz, false});
+    return;
+  }
+  forEachChild(store.levels[k - 1].dims, ix, iy, iz, [&](int cx, int cy, int cz) { plan(store, fr, k - 1, cx, cy, cz); });
+}
+
+void Integrator::planFree(const BlockStore& store, int k, int ix, int iy, int iz) {
+  const Summary& s = store.levels[k].at(ix, iy, iz);
+  if (s.known_any && !s.unknown_any && s.max_l <= l_min_) return;  // see freeRegion
+  if (k <= kSplitLevel) {
+    tasks_.push_back({k, ix, iy, iz, true});
+    return;
+  }
+  forEachChild(store.levels[k - 1].dims, ix, iy, iz, [&](int cx, int cy, int cz) { planFree(store, k - 1, cx, cy, cz); });
+}
+
+void Integrator::visitNode(BlockStore& store, const Frame& fr, TaskOut& out, int k, int ix, int iy, int iz) {
+  switch (classify(store, fr, k, ix, iy, iz)) {
+    case NodeClass::kSkip:
+      return;
+    case NodeClass::kFree:
+      freeRegion(store, fr, out, k, ix, iy, iz);
+      return;
+    case NodeClass::kDescend:
+      descend(store, fr, out, k, ix, iy, iz);
+      return;
+  }
+}
+
+// Visits the children (or, at the cell level, updates the voxels).
+void Integrator::descend(BlockStore& store, const Frame& fr, TaskOut& out, int k, int ix, int iy, int iz) {
+  if (k == 0) {
+    updateCellVoxels(store, fr, out, store.cellIndex(ix, iy, iz));
+    return;
+  }
+  forEachChild(store.levels[k - 1].dims, ix, iy, iz,
+               [&](int cx, int cy, int cz) { visitNode(store, fr, out, k - 1, cx, cy, cz); });
+}
+
+void Integrator::freeRegion(BlockStore& store, const Frame& fr, TaskOut& out, int k, int ix, int iy, int iz) {
+  const Summary& s = store.levels[k].at(ix, iy, iz);
+  // Everything below already at the free clamp: the update cannot change it.
+  if (s.known_any && !s.unknown_any && s.max_l <= l_min_) return;
+  if (k == 0) {
+    freeCell(store, fr, out, store.cellIndex(ix, iy, iz));
+    return;
+  }
+  forEachChild(store.levels[k - 1].dims, ix, iy, iz,
+               [&](int cx, int cy, int cz) { freeRegion(store, fr, out, k - 1, cx, cy, cz); });
+}
+
+void Integrator::markChanged(TaskOut& out, int cell) {
+  if (cell_stamp_[cell] == stamp_) return;
+  cell_stamp_[cell] = stamp_;
+  out.changed.push_back(cell);
+}
+
+void Integrator::freeCell(BlockStore& store, const Frame& fr, TaskOut& out, int cell) {
+  const Eigen::Vector3i bc = store.cellCoords(cell);
+  const int bs = store.bs;
+  const double res = store.res;
+  const int b = store.cell_block[cell];
+  const int lf = l_free_, lmin = l_min_;
+  if (b < 0) {
+    const std::int16_t v = store.cell_value[cell];
+    const std::int16_t nv = static_cast<std::int16_t>(v == kUnknown ? std::max(lf, lmin) : std::max(lmin, v + lf));
+    if (nv != v) {
+      store.cell_value[cell] = nv;
+      markChanged(out, cell);
+    }
+    if (cfg_.integrate_min_distance) {
+      const Eigen::Vector3d c = store.origin + (bc.cast<double>() * bs + Eigen::Vector3d::Constant(0.5 * bs)) * res;
+      store.cell_dist[cell] = std::min(store.cell_dist[cell], toMm(static_cast<float>((c - fr.cam_W).norm())));
+    }
+    return;
+  }
+  std::int16_t* L = store.logOdds(b);
+  std::uint16_t* D = store.block_surf[b] >= 0 && cfg_.integrate_min_distance ? store.dist(store.block_surf[b]) : nullptr;
+  bool changed = false;
+  const Eigen::Vector3d c0 = store.origin + (bc.cast<double>() * bs + Eigen::Vector3d::Constant(0.5)) * res - fr.cam_W;
+  int i = 0;
+  for (int z = 0; z < bs; ++z)
+    for (int y = 0; y < bs; ++y)
+      for (int x = 0; x < bs; ++x, ++i) {
+        const std::int16_t v = L[i];
+        const std::int16_t nv = static_cast<std::int16_t>(v == kUnknown ? std::max(lf, lmin) : std::max(lmin, v + lf));
+        if (nv != v) {
+          L[i] = nv;
+          changed = true;
+        }
+        if (D) {
+          const double d = (c0 + Eigen::Vector3d(x, y, z) * res).norm();
+          D[i] = std::min(D[i], toMm(static_cast<float>(d)));
+        }
+      }
+  if (changed) markChanged(out, cell);
+}
+
+void Integrator::updateCellVoxels(BlockStore& store, const Frame& fr, TaskOut& out, int cell) {
+  const int bs = store.bs, bs3 = store.bs3;
+  const int b = store.cell_block[cell];
+  const bool was_uniform = b < 0;
+  // A uniform cell is refined in scratch memory: the store allocates at the merge.
+  int scratch_block = -1, scratch_surface = -1;
+  std::int16_t* L;
+  std::uint64_t* hit_bits = nullptr;  // a uniform cell holds no endpoint (markEndpoints gave those blocks)
+  if (was_uniform) {
+    scratch_block = static_cast<int>(out.l.size() / bs3);
+    out.l.resize(out.l.size() + bs3, store.cell_value[cell]);
+    L = out.l.data() + static_cast<std::size_t>(scratch_block) * bs3;
+  } else {
+    L = store.logOdds(b);
+    hit_bits = hits(store, b);
+  }
+  // Surface data pointers; allocated at the first occupied update of this block.
+  std::uint16_t* Dm = nullptr;
+  std::uint8_t* C = nullptr;
+  const bool colour = cfg_.integrate_colour;
+  auto attachSurface = [&] {
+    scratch_surface = static_cast<int>(out.dist.size() / bs3);
+    out.dist.resize(out.dist.size() + bs3, kNoDist);
+    Dm = out.dist.data() + static_cast<std::size_t>(scratch_surface) * bs3;
+    if (colour) {
+      out.rgbw.resize(out.rgbw.size() + 4 * static_cast<std::size_t>(bs3), 0);
+      C = out.rgbw.data() + static_cast<std::size_t>(scratch_surface) * bs3 * 4;
+    }
+  };
+  if (!was_uniform && store.block_surf[b] >= 0) {
+    Dm = store.dist(store.block_surf[b]);
+    if (colour) C = store.rgbw(store.block_surf[b]);
+  }
+  const Eigen::Vector3i bc = store.cellCoords(cell);
+  const double res = store.res;
+  const Eigen::Vector3d c0_W = store.origin + (bc.cast<double>() * bs + Eigen::Vector3d::Constant(0.5)) * res;
+  const Eigen::Vector3f c0 = (fr.R_CW * c0_W + fr.t_CW).cast<float>();
+  const Eigen::Vector3f ex = (fr.R_CW.col(0) * res).cast<float>();
+  const Eigen::Vector3f ey = (fr.R_CW.col(1) * res).cast<float>();
+  const Eigen::Vector3f ez = (fr.R_CW.col(2) * res).cast<float>();
+  const float fx = fr.fx, fy = fr.fy, cx = fr.cx, cy = fr.cy;
+  const float umax = fr.W - 0.5f, vmax = fr.H - 0.5f;
+  const float band = fr.band;
+  const float half_vox_px = 0.5f * static_cast<float>(res) * std::min(fx, fy);
+  const int lf = l_free_, lo = l_occ_, lmin = l_min_, lmax = l_max_;
+  const float* depth = pyr_.depth();
+  const float* freelim = pyr_.freeLimit();
+  const int W = fr.W;
+  const bool track_dist = cfg_.integrate_min_distance;
+  bool changed = false;
+  std::size_t updated = 0;
+  int i = 0;
+  for (int z = 0; z < bs; ++z)
+    for (int y = 0; y < bs; ++y) {
+      Eigen::Vector3f p = c0 + ey * static_cast<float>(y) + ez * static_cast<float>(z);
+      for (int x = 0; x < bs; ++x, ++i, p += ex) {
+        const bool hit = hit_bits && ((hit_bits[i >> 6] >> (i & 63)) & 1u);
+        int pix = -1;
+        float d = 0.f, fl = 0.f;
+        if (p.z() > 1e-3f) {
+          const float iz = 1.f / p.z();
+          float uf = fx * p.x() * iz + cx, vf = fy * p.y() * iz + cy;
+          // A voxel whose centre projects just outside the image is still
+          // crossed by the border rays: use the nearest border pixel.
+          const float margin = half_vox_px * iz;
+          if (uf >= -0.5f - margin && vf >= -0.5f - margin && uf < umax + margin && vf < vmax + margin) {
+            uf = std::min(std::max(uf, 0.f), umax - 0.5f);
+            vf = std::min(std::max(vf, 0.f), vmax - 0.5f);
+            pix = static_cast<int>(vf + 0.5f) * W + static_cast<int>(uf + 0.5f);
+            d = depth[pix];
+            fl = freelim[pix];
+          }
+        }
+        if (!hit && d <= 0.f) continue;
+        const std::int16_t old = L[i];
+        const int base = old == kUnknown ? 0 : old;
+        std::int16_t nv;
+        if (!hit && p.z() < fl) {
+          nv = static_cast<std::int16_t>(std::max(lmin, base + lf));
+        } else if (hit || p.z() <= d + band) {
+          nv = static_cast<std::int16_t>(std::min(lmax, base + lo));
+          if (!Dm) attachSurface();
+          if (C && fr.rgb && d > 0.f) {
+            std::uint8_t* c = C + 4 * i;
+            const int w = c[3];
+            const std::uint8_t* in = fr.rgb + 3 * pix;
+            for (int ch = 0; ch < 3; ++ch) c[ch] = static_cast<std::uint8_t>((c[ch] * w + in[ch] + (w + 1) / 2) / (w + 1));
+            c[3] = static_cast<std::uint8_t>(std::min(255, w + 1));
+          }
+        } else {
+          continue;
+        }
+        ++updated;
+        if (nv != old) {
+          L[i] = nv;
+          changed = true;
+        }
+        if (track_dist && Dm) {
+          const std::uint16_t dm = toMm(p.norm());
+          if (dm < Dm[i]) Dm[i] = dm;
+        }
+      }
+    }
+  if (hit_bits) std::fill_n(hit_bits, store.fwords, 0);
+  out.voxels_updated += updated;
+  if (was_uniform && !changed) {
+    // Nothing measurable fell into it: it stays a uniform leaf (distances are
+    // dropped with the scratch block; they only matter for occupied voxels).
+    out.l.resize(out.l.size() - bs3);
+    if (scratch_surface >= 0) {
+      out.dist.resize(out.dist.size() - bs3);
+      if (colour) out.rgbw.resize(out.rgbw.size() - 4 * static_cast<std::size_t>(bs3));
+    }
+    return;
+  }
+  if (changed) {
+    if (was_uniform) ++out.blocks_allocated;
+    markChanged(out, cell);
+  }
+  if (scratch_block >= 0 || scratch_surface >= 0) out.pending.push_back({cell, scratch_block, scratch_surface});
+}
+
+// Allocates the task's new blocks and surfaces in the store (in the order the
+// task met them) and appends its changed cells.
+void Integrator::merge(BlockStore& store, TaskOut& out, std::vector<int>& changed, IntegrationStats& stats) {
+  const std::size_t bs3 = static_cast<std::size_t>(store.bs3);
+  for (const Pending& p : out.pending) {
+    int b = store.cell_block[p.cell];
+    if (p.scratch_block >= 0) {
+      b = store.allocateBlock(p.cell);
+      std::memcpy(store.logOdds(b), out.l.data() + p.scratch_block * bs3, bs3 * sizeof(std::int16_t));
+    }
+    if (p.scratch_surface >= 0) {
+      const int sl = store.ensureSurface(b);
+      std::memcpy(store.dist(sl), out.dist.data() + p.scratch_surface * bs3, bs3 * sizeof(std::uint16_t));
+      if (store.colour) std::memcpy(store.rgbw(sl), out.rgbw.data() + p.scratch_surface * bs3 * 4, bs3 * 4);
+    }
+  }
+  changed.insert(changed.end(), out.changed.begin(), out.changed.end());
+  stats.voxels_updated += out.voxels_updated;
+  stats.blocks_allocated += out.blocks_allocated;
+  // Scratch blocks are rare after the first frames: give their memory back
+  // rather than keep a high-water mark per task.
+  std::vector<std::int16_t>().swap(out.l);
+  std::vector<std::uint16_t>().swap(out.dist);
+  std::vector<std::uint8_t>().swap(out.rgbw);
+}
+
+void Integrator::summarise(BlockStore& store, const std::vector<int>& cells, std::vector<Summary>& out) {
+  out.resize(cells.size());
+  // Chunks of 64 cells: enough work per task to pay for the hand-over.
+  const std::size_t chunk = 64, n = (cells.size() + chunk - 1) / chunk;
+  pool_->run(n, [&](std::size_t t) {
+    const std::size_t end = std::min(cells.size(), (t + 1) * chunk);
+    for (std::size_t i = t * chunk; i < end; ++i) out[i] = store.cellSummary(cells[i]);
+  });
+}
+
+std::size_t Integrator::memoryBytes() const {
+  std::size_t m = sizeof(*this) + pyr_.memoryBytes() + hit_.capacity() * sizeof(std::uint64_t) +
+                  hit_cells_.capacity() * sizeof(int) + cell_stamp_.capacity() * sizeof(std::uint32_t) +
+                  tasks_.capacity() * sizeof(Task);
+  for (const TaskOut& o : outs_)
+    m += o.changed.capacity() * sizeof(int) + o.pending.capacity() * sizeof(Pending) +
+         o.l.capacity() * sizeof(std::int16_t) + o.dist.capacity() * sizeof(std::uint16_t) + o.rgbw.capacity();
+  return m;
+}
+
+}  // namespace occupancy
+}  // namespace semexp
