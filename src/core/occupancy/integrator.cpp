@@ -147,31 +147,43 @@ void Integrator::markEndpoints(BlockStore& store, const PinholeCamera& camera, c
   const int m = bs - 1;
   const int W = camera.width, H = camera.height;
   const float* depth = pyr_.depth();
-  hit_cells_.clear();
-  for (int v = 0; v < H; ++v) {
-    const float yc = static_cast<float>((v - camera.cy) / camera.fy);
-    for (int u = 0; u < W; ++u) {
-      const float d = depth[v * W + u];
-      if (d <= 0.f) continue;
-      const float xc = static_cast<float>((u - camera.cx) / camera.fx);
-      const Eigen::Vector3f q = Rv * Eigen::Vector3f(xc * d, yc * d, d) + t;  // voxel units
-      if (!(q.x() >= 0.f && q.y() >= 0.f && q.z() >= 0.f && q.x() < nv.x() && q.y() < nv.y() && q.z() < nv.z()))
-        continue;
-      const int x = static_cast<int>(q.x()), y = static_cast<int>(q.y()), z = static_cast<int>(q.z());
-      const int cell = store.cellIndex(x >> bshift, y >> bshift, z >> bshift);
-      int b = store.cell_block[cell];
-      if (b < 0) {
-        b = store.allocateBlock(cell);
-        fit();
-        ++stats.blocks_allocated;
+  // Each pixel's endpoint voxel (cell, voxel in cell; cell -1: none), rows
+  // spread over the pool; then blocks and bits in pixel order on this thread.
+  endpoint_.resize(static_cast<std::size_t>(W) * H);
+  const int rows = 16;
+  pool_->run(static_cast<std::size_t>((H + rows - 1) / rows), [&](std::size_t chunk) {
+    const int v_end = std::min(H, static_cast<int>(chunk + 1) * rows);
+    for (int v = static_cast<int>(chunk) * rows; v < v_end; ++v) {
+      const float yc = static_cast<float>((v - camera.cy) / camera.fy);
+      for (int u = 0; u < W; ++u) {
+        Endpoint& e = endpoint_[static_cast<std::size_t>(v) * W + u];
+        e.cell = -1;
+        const float d = depth[v * W + u];
+        if (d <= 0.f) continue;
+        const float xc = static_cast<float>((u - camera.cx) / camera.fx);
+        const Eigen::Vector3f q = Rv * Eigen::Vector3f(xc * d, yc * d, d) + t;  // voxel units
+        if (!(q.x() >= 0.f && q.y() >= 0.f && q.z() >= 0.f && q.x() < nv.x() && q.y() < nv.y() && q.z() < nv.z()))
+          continue;
+        const int x = static_cast<int>(q.x()), y = static_cast<int>(q.y()), z = static_cast<int>(q.z());
+        e.cell = store.cellIndex(x >> bshift, y >> bshift, z >> bshift);
+        e.voxel = store.voxelIndex(x & m, y & m, z & m);
       }
-      const int i = store.voxelIndex(x & m, y & m, z & m);
-      std::uint64_t* hb = hits(store, b);
-      bool first = true;
-      for (int w = 0; w < fw; ++w) first = first && hb[w] == 0;
-      if (first) hit_cells_.push_back(cell);
-      hb[i >> 6] |= std::uint64_t{1} << (i & 63);
     }
+  });
+  hit_cells_.clear();
+  for (const Endpoint& e : endpoint_) {
+    if (e.cell < 0) continue;
+    int b = store.cell_block[e.cell];
+    if (b < 0) {
+      b = store.allocateBlock(e.cell);
+      fit();
+      ++stats.blocks_allocated;
+    }
+    std::uint64_t* hb = hits(store, b);
+    bool first = true;
+    for (int w = 0; w < fw; ++w) first = first && hb[w] == 0;
+    if (first) hit_cells_.push_back(e.cell);
+    hb[e.voxel >> 6] |= std::uint64_t{1} << (e.voxel & 63);
   }
 }
 
@@ -485,6 +497,7 @@ void Integrator::summarise(BlockStore& store, const std::vector<int>& cells, std
 
 std::size_t Integrator::memoryBytes() const {
   std::size_t m = sizeof(*this) + pyr_.memoryBytes() + hit_.capacity() * sizeof(std::uint64_t) +
+                  endpoint_.capacity() * sizeof(Endpoint) +
                   hit_cells_.capacity() * sizeof(int) + cell_stamp_.capacity() * sizeof(std::uint32_t) +
                   tasks_.capacity() * sizeof(Task);
   for (const TaskOut& o : outs_)

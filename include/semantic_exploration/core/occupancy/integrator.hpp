@@ -82,6 +82,10 @@ class Integrator {
     std::vector<std::uint8_t> rgbw;   ///< scratch colour, 4 bs3 each (if colour)
     void clear();
   };
+  struct Endpoint {
+    std::int32_t cell;   ///< cell holding the pixel's endpoint, -1 if none
+    std::int32_t voxel;  ///< voxel index in that cell
+  };
   enum class NodeClass { kSkip, kFree, kDescend };
 
   void markEndpoints(BlockStore& store, const PinholeCamera& camera, const Eigen::Isometry3d& T_WC,
@@ -103,6 +107,7 @@ class Integrator {
   DepthPyramid pyr_;
   std::vector<std::uint64_t> hit_;         ///< per block slot: bits of voxels holding a measured endpoint this frame
   std::vector<int> hit_cells_;             ///< cells with endpoint bits this frame
+  std::vector<Endpoint> endpoint_;         ///< per pixel, this frame
   std::vector<std::uint32_t> cell_stamp_;  ///< frame stamp per cell (each changed cell listed once)
   std::uint32_t stamp_ = 0;
   std::vector<Task> tasks_;
