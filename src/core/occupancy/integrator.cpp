@@ -61,6 +61,7 @@ Integrator::Integrator(const Integrator& o)
       l_max_(o.l_max_),
       hit_(o.hit_),
       cell_stamp_(o.cell_stamp_),
+      hit_stamp_(o.hit_stamp_),
       stamp_(o.stamp_),
       pool_(std::make_unique<WorkerPool>(o.pool_->threads())) {}
 
@@ -93,10 +94,14 @@ IntegrationStats Integrator::integrate(BlockStore& store, const float* depth_m, 
   stats.invalid_pixels = pyr_.build(depth_m, fr.W, fr.H, static_cast<float>(camera.d_min_m),
                                     static_cast<float>(camera.d_max_m), static_cast<float>(cfg_.surface_front_m),
                                     static_cast<float>(cfg_.surface_front_quadratic_per_m));
-  if (cell_stamp_.size() != store.cellCount()) cell_stamp_.assign(store.cellCount(), 0);
+  if (cell_stamp_.size() != store.cellCount()) {
+    cell_stamp_.assign(store.cellCount(), 0);
+    hit_stamp_.assign(store.cellCount(), 0);
+  }
   ++stamp_;
   if (stamp_ == 0) {  // wrapped: clear stamps so no cell looks already listed
     std::fill(cell_stamp_.begin(), cell_stamp_.end(), 0);
+    std::fill(hit_stamp_.begin(), hit_stamp_.end(), 0);
     stamp_ = 1;
   }
   markEndpoints(store, camera, T_WC, stats);
@@ -179,11 +184,11 @@ void Integrator::markEndpoints(BlockStore& store, const PinholeCamera& camera, c
       fit();
       ++stats.blocks_allocated;
     }
-    std::uint64_t* hb = hits(store, b);
-    bool first = true;
-    for (int w = 0; w < fw; ++w) first = first && hb[w] == 0;
-    if (first) hit_cells_.push_back(e.cell);
-    hb[e.voxel >> 6] |= std::uint64_t{1} << (e.voxel & 63);
+    if (hit_stamp_[e.cell] != stamp_) {  // the cell's first endpoint this frame
+      hit_stamp_[e.cell] = stamp_;
+      hit_cells_.push_back(e.cell);
+    }
+    hits(store, b)[e.voxel >> 6] |= std::uint64_t{1} << (e.voxel & 63);
   }
 }
 
@@ -498,7 +503,7 @@ void Integrator::summarise(BlockStore& store, const std::vector<int>& cells, std
 std::size_t Integrator::memoryBytes() const {
   std::size_t m = sizeof(*this) + pyr_.memoryBytes() + hit_.capacity() * sizeof(std::uint64_t) +
                   endpoint_.capacity() * sizeof(Endpoint) +
-                  hit_cells_.capacity() * sizeof(int) + cell_stamp_.capacity() * sizeof(std::uint32_t) +
+                  hit_cells_.capacity() * sizeof(int) + (cell_stamp_.capacity() + hit_stamp_.capacity()) * sizeof(std::uint32_t) +
                   tasks_.capacity() * sizeof(Task);
   for (const TaskOut& o : outs_)
     m += o.changed.capacity() * sizeof(int) + o.pending.capacity() * sizeof(Pending) +

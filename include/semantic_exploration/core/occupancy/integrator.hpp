@@ -109,6 +109,7 @@ class Integrator {
   std::vector<int> hit_cells_;             ///< cells with endpoint bits this frame
   std::vector<Endpoint> endpoint_;         ///< per pixel, this frame
   std::vector<std::uint32_t> cell_stamp_;  ///< frame stamp per cell (each changed cell listed once)
+  std::vector<std::uint32_t> hit_stamp_;   ///< frame stamp per cell (each endpoint cell listed once)
   std::uint32_t stamp_ = 0;
   std::vector<Task> tasks_;
   std::vector<TaskOut> outs_;  ///< one per task (reused: they keep their capacity)
