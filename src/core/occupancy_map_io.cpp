@@ -22,18 +22,8 @@ namespace {
 constexpr char kMagic[8] = {'S', 'E', 'M', 'E', 'X', 'P', 'O', 'M'};
 constexpr std::uint32_t kVersion = 1;
 
-// log-odds (thousandths) -> MapBlocks int8 (tenths); keeps the sign so that a
-// replica classifies every voxel as the source does.
-inline std::int8_t encodeL(std::int16_t l) {
-  if (l == kUnknown) return MapBlocksData::kUnknownI8;
-  long q = std::lround(l / 100.0);
-  q = std::clamp(q, -127L, 127L);
-  if (l < 0 && q >= 0) q = -1;
-  return static_cast<std::int8_t>(q);
-}
-inline std::int16_t decodeL(std::int8_t q) {
-  return q == MapBlocksData::kUnknownI8 ? kUnknown : static_cast<std::int16_t>(q * 100);
-}
+inline std::int8_t encodeL(std::int16_t l) { return map_blocks::encodeMilli(l); }
+inline std::int16_t decodeL(std::int8_t q) { return map_blocks::decodeMilli(q); }
 
 template <class T>
 void put(std::ostream& f, const T& v) {

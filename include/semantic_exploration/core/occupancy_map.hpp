@@ -34,6 +34,7 @@
 #include "semantic_exploration/core/background_map_config.hpp"
 #include "semantic_exploration/core/bounds.hpp"
 #include "semantic_exploration/core/camera.hpp"
+#include "semantic_exploration/core/map_blocks.hpp"
 #include "semantic_exploration/core/occupancy/block_store.hpp"
 #include "semantic_exploration/core/occupancy/frontier_tracker.hpp"
 #include "semantic_exploration/core/occupancy/integrator.hpp"
@@ -44,32 +45,6 @@ class Mat;
 }
 
 namespace semexp {
-
-enum class VoxelState : std::uint8_t { kUnknown = 0, kFree = 1, kOccupied = 2 };
-
-/// ROS-free twin of msg/MapBlocks.msg (see there for the field meanings).
-struct MapBlocksData {
-  static constexpr std::uint8_t kEncodingLogOddsI8 = 0;  ///< log-odds * 10 rounded, -128 unknown
-  static constexpr std::int8_t kUnknownI8 = -128;
-
-  std::uint64_t sequence = 0;  ///< 1 for the first update; a full map carries the last published sequence
-  bool full = false;           ///< true: the blocks are the whole map
-  double resolution_m = 0.0;   ///< finest voxel edge, m
-  int block_size = 0;          ///< voxels per block edge
-  Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();  ///< minimum corner of voxel (0,0,0), world, m
-  std::uint8_t encoding = kEncodingLogOddsI8;
-  std::vector<std::int32_t> coords;  ///< 3 per block (x, y, z) block coordinates
-  std::vector<std::int8_t> payload;  ///< block_size^3 per block, x fastest, then y, then z
-  /// Blocks whose voxels all hold one value (a compact snapshot): 3 coordinates and one value each.
-  std::vector<std::int32_t> uniform_coords;
-  std::vector<std::int8_t> uniform_values;
-
-  std::size_t blockCount() const { return coords.size() / 3; }
-  /// Bytes of coordinates and values: what the message carries besides its header.
-  std::size_t byteSize() const {
-    return 4 * (coords.size() + uniform_coords.size()) + payload.size() + uniform_values.size();
-  }
-};
 
 /// First hit of a raycast.
 struct RaycastHit {
