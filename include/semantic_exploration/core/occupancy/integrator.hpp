@@ -62,7 +62,16 @@ class Integrator {
   std::size_t memoryBytes() const;
 
  private:
-  struct Frame;
+  /// Constants of one frame.
+  struct Frame {
+    Eigen::Matrix3d R_CW;
+    Eigen::Vector3d t_CW;
+    Eigen::Vector3d cam_W;  ///< camera position, world, m
+    float fx, fy, cx, cy;
+    int W, H;
+    const std::uint8_t* rgb;
+    float band;  ///< surface band behind the depth, m
+  };
   struct Task {
     int k, ix, iy, iz;
     bool free;  ///< true: free the region; false: descend into it
