@@ -3,7 +3,7 @@
 #   make run     one simulated semantic exploration, writes a report to results/
 #   make test    every test (gtest, pytest, rostest); ends with "N passed, N failed, N skipped"
 #   make bench   every benchmark; JSON lines under results/bench/
-#   make experiments  N runs x {classic, semantic} x scenes -> plots and report (long)
+#   make experiments  N runs x {classic, semantic} x scenes -> plots and report (long; deterministic runs)
 #   make build   build only (BUILD_TYPE=Debug for a debug build)
 BUILD_TYPE ?= Release
 export BUILD_TYPE

@@ -1,11 +1,26 @@
 #!/usr/bin/env python3
-"""Runs N seeds x {classic, semantic} x scenes in lockstep simulation and
-writes median / 10th-90th percentile curves (PNG), curves.csv and report.md
-(the paper's Section V-B evaluation).
+"""Runs N planner seeds x {classic, semantic} x scenes in lockstep simulation
+and writes median / 10th-90th percentile curves (PNG), curves.csv and
+report.md (the paper's Section V-B evaluation).
 
 Example (what `make experiments` runs):
   run_experiments.py --scenes 0 1 2 --runs 3 --size 8 6 3 --sim-limit-s 200 --out results/experiments
 (18 runs of about 2.5 min each on a 2-core machine)
+
+Scenes are generator seeds (a generated --size house each) or scene files
+(a Habitat-style <scene>_semantic.ply with its .house, or a mesh with a JSON
+label table next to it, as mav_sim loads them), mixed freely:
+  run_experiments.py --scenes 0 test/data/example_semantic.ply --protocol paper
+
+--protocol paper runs the paper's protocol: 5 runs of each method on each
+scene (the paper used six Matterport3D scenes). The default protocol runs
+--runs (3) per method and scene.
+
+Runs are deterministic by default (run_mission.py --deterministic: OMPL stops
+after planner/ompl_iterations, the simulator lets the planner plan with sim
+time stopped, every node works at frame boundaries; see README "Deterministic
+runs"), so a rerun of the same campaign repeats each run's time series.
+--ompl-termination time keeps the wall-time budgets instead.
 
 Both modes run with config/sim.yaml's simulator settings (its detector misses
 masks under 1200 px, so a whole chair is detected from about 4 m, the range
@@ -19,62 +34,122 @@ import subprocess
 import sys
 import time
 
+#: runs per method and scene of each protocol (None: --runs)
+PROTOCOL_RUNS = {"default": None, "paper": 5}
 
-def main(argv=None):
-    here = os.path.dirname(os.path.abspath(__file__))
+
+def scene_spec(token: str) -> dict:
+    """A --scenes entry: a generator seed (integer) or a scene file that exists."""
+    try:
+        return {"seed": int(token), "file": "", "name": "scene%d" % int(token)}
+    except ValueError:
+        pass
+    path = os.path.abspath(token)
+    if not os.path.isfile(path):
+        raise argparse.ArgumentTypeError("scene '%s' is neither a generator seed nor an existing scene file" % token)
+    stem = os.path.basename(path)
+    stem = stem[:-len("_semantic.ply")] if stem.endswith("_semantic.ply") else os.path.splitext(stem)[0]
+    return {"seed": 0, "file": path, "name": stem}
+
+
+def parse_args(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--scenes", type=int, nargs="+", default=[0, 1, 2], help="generator seeds of the scenes")
-    ap.add_argument("--runs", type=int, default=3, help="runs per scene and mode (planner seeds)")
+    ap.add_argument("--scenes", type=scene_spec, nargs="+", default=[scene_spec(s) for s in ("0", "1", "2")],
+                    help="generator seeds and/or scene files (<scene>_semantic.ply + .house, or mesh + .json)")
+    ap.add_argument("--protocol", choices=sorted(PROTOCOL_RUNS), default="default",
+                    help="paper: 5 runs per method per scene (the paper's Section V); default: --runs")
+    ap.add_argument("--runs", type=int, default=None, help="runs per scene and mode (planner seeds; default 3)")
     ap.add_argument("--modes", nargs="+", default=["classic", "semantic"])
-    ap.add_argument("--size", type=float, nargs=3, default=[8.0, 6.0, 3.0], metavar=("X", "Y", "H"))
+    ap.add_argument("--size", type=float, nargs=3, default=[8.0, 6.0, 3.0], metavar=("X", "Y", "H"),
+                    help="size of the generated houses (scene files keep their own)")
     ap.add_argument("--classes", nargs="+", default=["chair"])
     ap.add_argument("--sim-limit-s", type=float, default=200.0)
     ap.add_argument("--wall-limit-s", type=float, default=900.0)
     ap.add_argument("--out", default=os.path.join("results", "experiments"))
+    ap.add_argument("--ompl-termination", choices=["iterations", "time"], default="iterations",
+                    help="iterations (default): deterministic runs (run_mission.py --deterministic); "
+                    "time: the planner's wall-time budgets (runs differ)")
     ap.add_argument("--sim-overrides", default="",
                     help="YAML for the simulator loaded after config/sim.yaml in every run, e.g. "
                     "config/detector_long_range.yaml")
     args = ap.parse_args(argv)
+    fixed = PROTOCOL_RUNS[args.protocol]
+    if fixed is not None and args.runs is not None and args.runs != fixed:
+        ap.error("--protocol %s runs %d runs per method per scene; drop --runs %d" % (args.protocol, fixed, args.runs))
+    args.runs = fixed if fixed is not None else (args.runs if args.runs is not None else 3)
+    if args.runs < 1:
+        ap.error("--runs must be at least 1")
+    return args
+
+
+def plan_runs(args, out: str, here: str):
+    """The campaign's missions in order: dicts of scene (name), run, mode, dir, and the
+    run_mission.py command line (`overrides`: the planner-seed YAML it loads)."""
+    sim_overrides = os.path.abspath(args.sim_overrides) if args.sim_overrides else ""
+    runs = []
+    for scene in args.scenes:
+        for run in range(args.runs):
+            for mode in args.modes:
+                run_dir = os.path.join(out, "runs", "%s_run%d_%s" % (scene["name"], run, mode))
+                overrides = os.path.join(out, "runs", "planner_seed%d.yaml" % run)
+                where = ["--scene", scene["file"]] if scene["file"] else (
+                    ["--seed", str(scene["seed"]), "--size"] + [str(v) for v in args.size])
+                cmd = [sys.executable, os.path.join(here, "run_mission.py"), "--mode", mode] + where + [
+                    "--classes"] + args.classes + [
+                    "--out", run_dir, "--sim-limit-s", str(args.sim_limit_s),
+                    "--wall-limit-s", str(args.wall_limit_s), "--extra-overrides", overrides]
+                if args.ompl_termination == "iterations":
+                    cmd.append("--deterministic")
+                if sim_overrides:
+                    cmd += ["--sim-overrides", sim_overrides]
+                runs.append({"scene": scene["name"], "run": run, "mode": mode, "dir": run_dir, "cmd": cmd,
+                             "overrides": overrides, "planner_seed": run + 1})
+    return runs
+
+
+def describe_setup(args, sim_overrides: str, describe_yaml) -> list:
+    """The report's lines on how the runs were made."""
+    scenes = ", ".join(s["file"] and os.path.basename(s["file"]) or "generated seed %d" % s["seed"]
+                       for s in args.scenes)
+    return ["scenes: %s (generated houses %g x %g x %g m)" % (scenes, *args.size),
+            "protocol %s: %d run%s per method and scene (planner seeds 1-%d), classes %s, %g s sim per run" % (
+                args.protocol, args.runs, "s" if args.runs != 1 else "", args.runs, " ".join(args.classes),
+                args.sim_limit_s),
+            "planner: %s" % ("deterministic (OMPL stops after planner/ompl_iterations; run_mission.py "
+                             "--deterministic)" if args.ompl_termination == "iterations"
+                             else "OMPL wall-time budget (planner/time_budget_s): runs are not repeatable"),
+            "simulator overrides: %s" % (describe_yaml(sim_overrides) if sim_overrides else "none")]
+
+
+def main(argv=None, call=subprocess.call):
+    here = os.path.dirname(os.path.abspath(__file__))
+    args = parse_args(argv)
     sys.path.insert(0, os.path.join(here, "..", "src"))
     from semantic_exploration.eval import experiments
 
     out = os.path.abspath(args.out)
     sim_overrides = os.path.abspath(args.sim_overrides) if args.sim_overrides else ""
-    setup = ["scenes %s (generator seeds), %d planner seeds, house %g x %g x %g m, classes %s, %g s sim per run" % (
-        " ".join(str(s) for s in args.scenes), args.runs, args.size[0], args.size[1], args.size[2],
-        " ".join(args.classes), args.sim_limit_s),
-        "simulator overrides: %s" % (experiments.describe_yaml(sim_overrides) if sim_overrides else "none")]
+    setup = describe_setup(args, sim_overrides, experiments.describe_yaml)
     by_mode = {m: [] for m in args.modes}
-    total = len(args.scenes) * args.runs * len(args.modes)
-    k = 0
+    plan = plan_runs(args, out, here)
     t0 = time.time()
-    for scene in args.scenes:
-        for run in range(args.runs):
-            for mode in args.modes:
-                k += 1
-                run_dir = os.path.join(out, "runs", "scene%d_run%d_%s" % (scene, run, mode))
-                print("[experiments] run %d/%d: scene %d, seed %d, %s (%.0f s so far)" % (
-                    k, total, scene, run, mode, time.time() - t0), flush=True)
-                overrides = os.path.join(out, "runs", "planner_seed%d.yaml" % run)
-                os.makedirs(os.path.dirname(overrides), exist_ok=True)
-                with open(overrides, "w") as f:
-                    f.write("planner:\n  seed: %d\n" % (run + 1))
-                cmd = [sys.executable, os.path.join(here, "run_mission.py"), "--mode", mode, "--seed", str(scene),
-                       "--size"] + [str(v) for v in args.size] + ["--classes"] + args.classes + [
-                       "--out", run_dir, "--sim-limit-s", str(args.sim_limit_s),
-                       "--wall-limit-s", str(args.wall_limit_s), "--extra-overrides", overrides]
-                if sim_overrides:
-                    cmd += ["--sim-overrides", sim_overrides]
-                rc = subprocess.call(cmd)
-                if rc != 0 or not os.path.exists(os.path.join(run_dir, "timeseries.csv")):
-                    print("[experiments] run %s failed (exit %d); left out of the curves" % (run_dir, rc))
-                    continue
-                run_data = experiments.read_run(run_dir)
-                why = experiments.implausible(run_data, args.sim_limit_s)
-                if why:
-                    print("[experiments] run %s: %s; left out of the curves" % (run_dir, why))
-                    continue
-                by_mode[mode].append(run_data)
+    for k, r in enumerate(plan, 1):
+        print("[experiments] run %d/%d: %s, run %d, %s (%.0f s so far)" % (
+            k, len(plan), r["scene"], r["run"], r["mode"], time.time() - t0), flush=True)
+        os.makedirs(os.path.dirname(r["overrides"]), exist_ok=True)
+        with open(r["overrides"], "w") as f:
+            f.write("planner:\n  seed: %d\n" % r["planner_seed"])
+        rc = call(r["cmd"])
+        if rc != 0 or not os.path.exists(os.path.join(r["dir"], "timeseries.csv")):
+            print("[experiments] run %s failed (exit %d); left out of the curves" % (r["dir"], rc))
+            continue
+        run_data = experiments.read_run(r["dir"])
+        why = experiments.implausible(run_data, args.sim_limit_s)
+        if why:
+            print("[experiments] run %s: %s; left out of the curves" % (r["dir"], why))
+            continue
+        by_mode[r["mode"]].append(run_data)
+    setup.append("wall time of the campaign: %.0f s" % (time.time() - t0))
     by_mode = {m: r for m, r in by_mode.items() if r}
     if not by_mode:
         print("[experiments] no run succeeded")

@@ -81,9 +81,11 @@ def launch_command(args, ply, overrides, port, start):
             "mode:=" + args.mode, "scene:=" + ply, "overrides:=" + overrides,
             "classes_of_interest:=[%s]" % ", ".join(args.classes),
             "start_pose:=[%s]" % ", ".join(repr(float(v)) for v in start),
-            "lockstep:=" + ("false" if args.no_lockstep else "true"),
+            "lockstep:=" + ("false" if args.no_lockstep and not args.deterministic else "true"),
             "real_time_factor:=%g" % args.real_time_factor, "rviz:=" + ("true" if args.rviz else "false"),
             "sim_overrides:=" + (os.path.abspath(args.sim_overrides) if args.sim_overrides else ""),
+            ] + (["lockstep_nodes:=[background_map, object_map, depth_history, mission]"] if args.deterministic
+                 else []) + [
             "bag:=" + (os.path.abspath(args.record_bag) if args.record_bag else ""),
             "output:=log"]
 
@@ -104,6 +106,12 @@ def Monitor():
     _import_package()
     from semantic_exploration.eval.runlog import RunLog
     return RunLog().subscribe()
+
+
+def lockstep_timing(get_param):
+    _import_package()
+    from semantic_exploration.eval.lockstep import timing_of
+    return timing_of(False, get_param)
 
 
 def call_save(service, directory):
@@ -136,42 +144,10 @@ def rviz_screenshot(out, env, gt, timeout_s=60.0):
 
 
 def evaluate(out, gt, classes, saved):
-    """Final figures from the saved meshes and map (empty where a map was not saved).
-    gt["start"] stands in for a ground truth exported without one."""
-    from semantic_exploration.eval import metrics
-    from semantic_exploration.eval.truth import GroundTruthIndex
-    res = {}
-    try:
-        doc = metrics.load_ground_truth(gt["gt_dir"])
-        if not doc.get("start") and gt.get("start"):
-            doc["start"] = list(gt["start"])
-        index = GroundTruthIndex(doc, classes)
-        # Observability in other processes while this one samples the scene and builds its trees.
-        index.start_observability()
-        index.background.tree
-        rec_dir = saved.get("object_map", {}).get("dir") or os.path.join(out, "objects")
-        if saved.get("object_map", {}).get("success") and os.path.exists(os.path.join(rec_dir, "objects.json")):
-            ev = index.evaluate_objects(metrics.load_reconstruction(rec_dir))
-            res["found"] = len(ev.found_gt_ids)
-            res["ground_truth"] = ev.n_ground_truth
-            res["objects"] = [{"map_id": m.map_id, "class": m.map_class, "gt_id": m.gt_id,
-                               "on_surface_fraction": m.on_surface_fraction,
-                               "rmse_m": m.score.rmse_m if m.score else None,
-                               "completeness": m.score.completeness if m.score else None,
-                               "observable_fraction": ev.observable_fraction.get(m.gt_id)} for m in ev.matches]
-        occ = [f for f in saved.get("background_map", {}).get("files", []) if f.endswith("occupied.ply")]
-        b = index.evaluate_background(metrics.read_ply_vertices(occ[0])) if occ else None
-        if b is not None:
-            res["background"] = {"rmse_m": b.rmse_m, "completeness": b.completeness,
-                                 "n_reconstructed": b.n_reconstructed, "observable_fraction": b.observable_fraction}
-        series = os.path.join(out, "snapshot", "series")
-        if os.path.isdir(series):  # the time series' accuracy and completeness, from the run's snapshots
-            from semantic_exploration.eval.snapshots import finish_series
-            rec = metrics.load_reconstruction(rec_dir) if "found" in res else None
-            res["timeseries"] = finish_series(index, series, os.path.join(out, "timeseries.csv"), rec, b)
-    except Exception as e:  # a failed evaluation must not lose the rest of the report
-        res["error"] = "%s: %s" % (type(e).__name__, e)
-    return res
+    """Final figures from the saved meshes and map (semantic_exploration.eval.final.evaluate)."""
+    _import_package()
+    from semantic_exploration.eval.final import evaluate as final_evaluate
+    return final_evaluate(out, gt, classes, saved)
 
 
 def stop_launch(launch):
@@ -217,7 +193,8 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
         "path_length_m": mon.path_length_m, "collisions": mon.collisions,
         "dropped_input": mon.drop_summary(),
         "invalid_depth_pixels": stats.invalid_depth_pixels if stats else 0,
-        "saved": saved, "detector": detector, "snapshots": getattr(args, "snapshot_summary", None),
+        "saved": saved, "detector": detector, "planner_timing": getattr(args, "timing", None),
+        "snapshots": getattr(args, "snapshot_summary", None),
         "background_snapshots": getattr(args, "background_snapshot_summary", None),
     }
     free = os.path.join(gt["gt_dir"], "free_space.json")
@@ -236,6 +213,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
         "| mode | %s |" % args.mode,
         "| scene | %s |" % summary["scene"],
         "| detector | %s |" % describe_detector(detector),
+        "| planner timing | %s |" % (getattr(args, "timing", None) or "unknown"),
         "| termination | %s |" % reason,
         "| sim time | %.1f s |" % sim_s,
         "| wall time | %s |" % ("%.1f s" % wall_s if wall_s is not None else "- (from a bag)"),
@@ -319,6 +297,11 @@ def parse_args(argv=None):
     ap.add_argument("--sim-limit-s", type=float, default=600.0, help="stop after this sim time, s")
     ap.add_argument("--real-time-factor", type=float, default=0.0, help="0 = as fast as lockstep allows")
     ap.add_argument("--no-lockstep", action="store_true")
+    ap.add_argument("--deterministic", action="store_true",
+                    help="repeatable run: OMPL stops on iterations (config/deterministic.yaml), mav_sim asks the "
+                    "planner for each path with sim time stopped and waits for this mission at every frame "
+                    "(config/deterministic_sim.yaml); two runs give the same timeseries.csv but for wall-time "
+                    "columns (make experiments' default; make run keeps wall-time budgets)")
     ap.add_argument("--rviz", action="store_true")
     ap.add_argument("--rviz-screenshot", action="store_true",
                     help="at the end, save rviz.png: rviz with the project's config on Xvfb "
@@ -354,6 +337,11 @@ def main(argv=None):
     if args.extra_overrides:
         with open(args.extra_overrides) as f, open(overrides, "a") as o:
             o.write(f.read())
+    if args.deterministic:
+        _import_package()
+        from semantic_exploration.eval.lockstep import deterministic_setup
+        deterministic_setup(args, out, overrides, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..",
+                                                               "config"))
     print("[mission] scene %s: %d objects, %d of interest" % (
         gt["scene"], len(gt["objects"]), sum(o["class"] in args.classes for o in gt["objects"])), flush=True)
 
@@ -385,9 +373,17 @@ def main(argv=None):
             if launch.poll() is not None or time.time() > deadline:
                 raise RuntimeError("roslaunch did not come up (see %s)" % log_path)
             time.sleep(0.5)
-        rospy.init_node("mission", anonymous=True, disable_signals=True)
-        detector = detector_of(args.sim_overrides, rospy.get_param("/mav_sim/detector/min_mask_pixels", None))
-        mon = Monitor()
+        # Deterministic: the node is mav_sim's lockstep node "mission" and must subscribe before frame 0.
+        rospy.init_node("mission", anonymous=not args.deterministic, disable_signals=True)
+        if args.deterministic:
+            from semantic_exploration.eval import lockstep
+            barrier = lockstep.FrameBarrier()
+            mon = lockstep.RunLog()
+            stamped = lockstep.StampedLog(mon).subscribe()
+        else:
+            mon = Monitor()
+        detector = detector_of(getattr(args, "user_sim_overrides", args.sim_overrides),
+                               rospy.get_param("/mav_sim/detector/min_mask_pixels", None))
         gt_objs = [o for o in gt["objects"] if o["class"] in args.classes]
         n_gt = len(gt_objs)
         occupied = None
@@ -397,8 +393,47 @@ def main(argv=None):
                                          args.background_snapshot_period_s)
         series = open(os.path.join(out, "timeseries.csv"), "w")
         writer = None
+
+        def write_row(sim_s, wall_s):
+            nonlocal writer
+            row = mon.row(sim_s, wall_s, gt_objs)
+            if writer is None:
+                writer = csv.DictWriter(series, fieldnames=list(row))
+                writer.writeheader()
+            writer.writerow(row)
+            series.flush()
+
+        def stop_reason(sim):
+            if mon.finished():
+                return mon.status.termination_reason or "finished"
+            if launch.poll() is not None:
+                return "a node died (see %s)" % log_path
+            if time.time() - t0 > args.wall_limit_s:
+                return "wall_time_limit"
+            return "sim_time_limit" if sim is not None and sim > args.sim_limit_s else ""
         next_print = next_row = 0.0
-        while True:
+        if args.deterministic:  # rows, snapshots and the stop at frame boundaries (eval/lockstep.py)
+            args.timing = lockstep.timing_of(True, rospy.get_param)
+            at = {"frame": rospy.Time(0)}
+            if occupied is not None:  # the cloud of the frame the simulator waits at
+                occupied.grab = lambda: grab_occupied(since=at["frame"])
+
+            def take_snapshots(sim):
+                at["frame"] = rospy.Time.from_sec(sim)
+                if snaps is not None and snaps.due(sim):
+                    snaps.take(sim, mon)
+                if occupied is not None and occupied.due(sim):
+                    occupied.take(sim)
+
+            def progress(sim):
+                nonlocal next_print
+                if time.time() >= next_print:
+                    print(mon.line(sim, time.time() - t0, n_gt), flush=True)
+                    next_print = time.time() + args.progress_period_s
+            reason, sim_end = lockstep.run_lockstep(
+                barrier, stamped, lockstep.RowClock(args.period_s), lambda t: write_row(t, time.time() - t0),
+                take_snapshots, stop_reason, progress)
+        while not args.deterministic:
             wall = time.time() - t0
             sim = rospy.get_time()
             if snaps is not None and snaps.due(sim):
@@ -406,46 +441,37 @@ def main(argv=None):
             if occupied is not None and occupied.due(sim) and sim > 0:
                 occupied.take(sim)
             if sim >= next_row:  # one row every --period-s of sim time
-                row = mon.row(sim, wall, gt_objs)
-                if writer is None:
-                    writer = csv.DictWriter(series, fieldnames=list(row))
-                    writer.writeheader()
-                writer.writerow(row)
-                series.flush()
+                write_row(sim, wall)
                 next_row = (sim // args.period_s + 1) * args.period_s
             if time.time() >= next_print:
                 print(mon.line(sim, wall, n_gt), flush=True)
                 next_print = time.time() + args.progress_period_s
-            if mon.finished():
-                reason = mon.status.termination_reason or "finished"
-                break
-            if launch.poll() is not None:
-                reason = "a node died (see %s)" % log_path
-                break
-            if wall > args.wall_limit_s:
-                reason = "wall_time_limit"
-                break
-            if sim > args.sim_limit_s:
-                reason = "sim_time_limit"
+            reason = stop_reason(sim)
+            if reason:
+                args.timing = lockstep_timing(rospy.get_param)
                 break
             time.sleep(0.05)
         print(mon.line(rospy.get_time(), time.time() - t0, n_gt), flush=True)
         # The simulator runs on while the maps are saved: the report's figures are those at the stop.
         mon.freeze()
-        sim_end, wall_end = rospy.get_time(), time.time() - t0
-        if args.rviz_screenshot and launch.poll() is None:
-            print("[mission] rviz screenshot (headless)", flush=True)
-            saved["rviz"] = rviz_screenshot(out, env, gt)
-            print("[mission] %s" % saved["rviz"]["message"], flush=True)
-        print("[mission] stopping: %s; saving maps" % reason, flush=True)
-        saved["background_map"] = call_save("/background_map/save", os.path.join(out, "map"))
-        saved["object_map"] = call_save("/object_map/save", os.path.join(out, "objects"))
+        wall_end = time.time() - t0
+        sim_end = sim_end if args.deterministic else rospy.get_time()
+        # Deterministic: the maps first, while the simulator still waits at the stop frame.
+        for step in (["maps", "rviz"] if args.deterministic else ["rviz", "maps"]):
+            if step == "rviz" and args.rviz_screenshot and launch.poll() is None:
+                print("[mission] rviz screenshot (headless)", flush=True)
+                saved["rviz"] = rviz_screenshot(out, env, gt)
+                print("[mission] %s" % saved["rviz"]["message"], flush=True)
+            elif step == "maps":
+                print("[mission] stopping: %s; saving maps" % reason, flush=True)
+                saved["background_map"] = call_save("/background_map/save", os.path.join(out, "map"))
+                saved["object_map"] = call_save("/object_map/save", os.path.join(out, "objects"))
         if writer is not None:  # the last row: found as the report counts it, from the saved object map
             if snaps is not None and saved["object_map"]["success"]:
                 from semantic_exploration.eval.metrics import load_reconstruction
                 mon.found_ids = snaps.index.found(load_reconstruction(os.path.join(out, "objects")))
                 mon.found_at_s = sim_end
-            writer.writerow(mon.row(sim_end, wall_end, gt_objs))
+            write_row(sim_end, wall_end)
         series.close()
         if snaps is not None:
             args.snapshot_summary = snaps.summary(wall_end)

@@ -18,6 +18,7 @@ runs this script and checks its PNGs with map_pixels().
 Example:
   rviz_screenshot.py --out /tmp/shot              # -> /tmp/shot/rviz.png
   rviz_screenshot.py --out /tmp/shot --control    # also rviz_no_map.png (map display on an unused topic)
+  rviz_screenshot.py --out /tmp/shot --uncut      # also rviz_uncut.png (the whole map: its ceiling hides the inside)
 
 Needs rviz, Xvfb and ImageMagick's import (scripts/setup.sh installs them).
 """
@@ -33,10 +34,19 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 RVIZ_CONFIG = os.path.join(HERE, "..", "config", "rviz", "exploration.rviz")
-OCCUPIED_TOPIC = "/background_map/occupied"
+OCCUPIED_TOPIC = "/display_cut/occupied"  # the config's map display: the map below display_cut/max_z_m
 SCREEN = (1400, 900)  # px, the config's window geometry
 BACKGROUND_RGB = (48, 48, 48)  # the config's Background Color
 ERROR_RGB = (192, 32, 32)  # rviz's colour for a display's error status text
+# object_map's colour of class id 1 (chair: classColour in src/ros/object_map_node.cpp, hue 0.618 * 6 = 3.708):
+# each object's box edges and "<class> #<id>" label. rviz lightens the lines (drawn as (51, 102-112, 255)), so
+# an object pixel is any strong blue of that kind: B >= 200, R <= 90, 60 <= G <= 130. That leaves out tf's z
+# axes (G < 60), frontiers, path, map and candidate views, but not the winner path line of the candidate
+# markers (0.2, 0.4, 1.0): --no-candidates takes that display off for the object count.
+CHAIR_RGB = (0, 74, 255)
+CANDIDATES_TOPIC = "/planner/candidate_markers"
+# The config's map displays pointed at the uncut clouds (the --uncut screenshot: the map's roof).
+UNCUT_TOPICS = {OCCUPIED_TOPIC: "/background_map/occupied", "/display_cut/frontiers": "/background_map/frontiers"}
 
 
 def missing_tools():
@@ -53,10 +63,11 @@ def find_config():
     return os.path.join(out, "config", "rviz", "exploration.rviz")
 
 
-def write_view_config(src, dst, bounds_min, bounds_max, occupied_topic=None):
+def write_view_config(src, dst, bounds_min, bounds_max, occupied_topic=None, topics=None):
     """Copies the rviz config src to dst with the orbit view and the grid
     fitted to the box [bounds_min, bounds_max] (m, world); occupied_topic replaces the occupied
-    map display's topic (the control screenshot points it at an unused one)."""
+    map display's topic (the control screenshot points it at an unused one), topics maps
+    other display topics to replacements (UNCUT_TOPICS: the whole map, ceiling included)."""
     import yaml
     with open(src) as f:
         cfg = yaml.safe_load(f)
@@ -70,10 +81,13 @@ def write_view_config(src, dst, bounds_min, bounds_max, occupied_topic=None):
             d["Offset"] = {"X": round(centre[0]), "Y": round(centre[1]), "Z": bounds_min[2]}
             n = int(math.ceil(max(b - a for a, b in zip(bounds_min[:2], bounds_max[:2])))) + 4
             d["Plane Cell Count"] = n + n % 2  # even: lines on whole metres round the whole-metre offset
+    replace = dict(topics or {})
     if occupied_topic is not None:
-        for d in cfg["Visualization Manager"]["Displays"]:
-            if d.get("Topic") == OCCUPIED_TOPIC:
-                d["Topic"] = occupied_topic
+        replace[OCCUPIED_TOPIC] = occupied_topic
+    for d in cfg["Visualization Manager"]["Displays"]:
+        for key in ("Topic", "Marker Topic"):
+            if d.get(key) in replace:
+                d[key] = replace[d[key]]
     with open(dst, "w") as f:
         yaml.safe_dump(cfg, f, sort_keys=False)
     return dst
@@ -238,12 +252,16 @@ def map_pixels(png):
     That leaves out the background, the grid's thin grey lines, text labels,
     frontiers (orange), the path (green) and TF axes (pure red, green, blue).
     error_pixels counts pixels outside the 3D view in rviz's error text colour
-    (a display or the global status in error, e.g. "Global Status: Error")."""
+    (a display or the global status in error, e.g. "Global Status: Error").
+    object_pixels counts pixels of the 3D view in the chair class colour
+    (CHAIR_RGB): the boxes and labels object_map draws with each chair's
+    mesh, seen only where nothing (a ceiling) hides them."""
     import numpy as np
     from PIL import Image
     rgb = np.asarray(Image.open(png).convert("RGB")).astype(np.int16)
     region = view_region(rgb)
-    res = {"view": region, "view_pixels": 0, "map_pixels": 0, "map_fraction": 0.0, "error_pixels": 0}
+    res = {"view": region, "view_pixels": 0, "map_pixels": 0, "map_fraction": 0.0, "error_pixels": 0,
+           "object_pixels": 0}
     if region is None:
         return res
     r0, r1, c0, c1 = region
@@ -257,6 +275,7 @@ def map_pixels(png):
     res["view_pixels"] = int(v.shape[0] * v.shape[1])
     res["map_pixels"] = int(is_map.sum())
     res["map_fraction"] = res["map_pixels"] / res["view_pixels"]
+    res["object_pixels"] = int(((v[:, :, 2] >= 200) & (v[:, :, 0] <= 90) & (v[:, :, 1] >= 60) & (v[:, :, 1] <= 130)).sum())
     return res
 
 
@@ -319,11 +338,14 @@ def take(rviz, png, config, watch, timeout_s, wait_topic=OCCUPIED_TOPIC):
         rviz.stop_rviz()
 
 
-def screenshot_scene(env, png, bounds_min, bounds_max, log_dir, timeout_s=90.0, control_png=None):
+def screenshot_scene(env, png, bounds_min, bounds_max, log_dir, timeout_s=90.0, control_png=None, uncut_png=None,
+                     hide=None):
     """The screenshot of a running exploration (the master in env, a rospy
     node in this process): rviz with the project's config, its view fitted to
     [bounds_min, bounds_max] (m), on Xvfb, into png. With control_png, a second
-    one with the occupied map display on an unused topic. Returns
+    one with the occupied map display on an unused topic; with uncut_png, one
+    of the whole map (UNCUT_TOPICS: the ceiling left in); hide: display topics put
+    on an unused one in every screenshot. Returns
     {png: map_pixels()}; logs go to log_dir."""
     os.makedirs(log_dir, exist_ok=True)
     work = tempfile.mkdtemp(prefix="rviz_screenshot.")
@@ -331,13 +353,16 @@ def screenshot_scene(env, png, bounds_min, bounds_max, log_dir, timeout_s=90.0, 
     res = {}
     try:
         with HeadlessRviz(env, log_dir) as rviz:
-            shots = [(png, None)] + ([(control_png, "/rviz_screenshot/no_map")] if control_png else [])
-            for i, (path, topic) in enumerate(shots):
+            shots = [(png, None, None)] + ([(control_png, "/rviz_screenshot/no_map", None)] if control_png else []) \
+                + ([(uncut_png, None, UNCUT_TOPICS)] if uncut_png else [])
+            for i, (path, topic, topics) in enumerate(shots):
+                topics = dict(topics or {}, **{t: "/rviz_screenshot/hidden" for t in hide or []})
                 cfg = write_view_config(find_config(), os.path.join(work, "view%d.rviz" % i), bounds_min,
-                                        bounds_max, topic)
+                                        bounds_max, topic, topics)
+                wait = topic or (topics or {}).get(OCCUPIED_TOPIC, OCCUPIED_TOPIC)
                 for attempt in (1, 2):
                     try:
-                        res[path] = take(rviz, path, cfg, watch, timeout_s, topic or OCCUPIED_TOPIC)
+                        res[path] = take(rviz, path, cfg, watch, timeout_s, wait)
                         break
                     except RvizExited as e:
                         if attempt == 2:
@@ -362,9 +387,15 @@ def main(argv=None):
     ap.add_argument("--size", type=float, nargs=3, default=[6.0, 5.0, 3.0], metavar=("X", "Y", "H"))
     ap.add_argument("--min-explored-m3", type=float, default=10.0,
                     help="take the screenshot once the background map has explored this much, m^3")
+    ap.add_argument("--min-objects", type=int, default=0,
+                    help="and once the object map holds this many objects with a surface")
     ap.add_argument("--timeout-s", type=float, default=90.0, help="limit for the simulation and for each screenshot, s")
     ap.add_argument("--control", action="store_true",
                     help="also rviz_no_map.png: the same view with the occupied map display on an unused topic")
+    ap.add_argument("--no-candidates", action="store_true",
+                    help="candidate views off (their winner path line has the objects' blue)")
+    ap.add_argument("--uncut", action="store_true",
+                    help="also rviz_uncut.png: the same view of the whole map (no display cut: the ceiling shows)")
     args = ap.parse_args(argv)
     missing = missing_tools()
     if missing:
@@ -389,15 +420,17 @@ def main(argv=None):
                "output:=log"]
         launch = subprocess.Popen(cmd, env=env, stdout=open(os.path.join(logs, "roslaunch.log"), "w"),
                                   stderr=subprocess.STDOUT, start_new_session=True)
-        explored = wait_explored(env, args.min_explored_m3, t0 + args.timeout_s, launch)
+        explored = wait_explored(env, args.min_explored_m3, t0 + args.timeout_s, launch, args.min_objects)
         import rospy
         print("[rviz] background map explored %.1f m3 after %.0f s" % (explored, time.time() - t0), flush=True)
         shots = screenshot_scene(env, os.path.join(out, "rviz.png"), gt["bounds_min"], gt["bounds_max"], logs,
-                                 args.timeout_s, os.path.join(out, "rviz_no_map.png") if args.control else None)
+                                 args.timeout_s, os.path.join(out, "rviz_no_map.png") if args.control else None,
+                                 os.path.join(out, "rviz_uncut.png") if args.uncut else None,
+                                 [CANDIDATES_TOPIC] if args.no_candidates else None)
         for png, m in shots.items():
-            print("[rviz] %s: 3D view %s, %d of %d pixels show the map (%.1f%%), %d error-coloured pixels" % (
-                png, m["view"], m["map_pixels"], m["view_pixels"], 100 * m["map_fraction"], m["error_pixels"]),
-                flush=True)
+            print("[rviz] %s: 3D view %s, %d of %d pixels show the map (%.1f%%), %d error-coloured pixels, "
+                  "%d object pixels" % (png, m["view"], m["map_pixels"], m["view_pixels"], 100 * m["map_fraction"],
+                                        m["error_pixels"], m["object_pixels"]), flush=True)
         print("[rviz] sim time %.1f s" % rospy.get_time(), flush=True)
     finally:
         _stop(launch, grace_s=20.0)
@@ -406,9 +439,10 @@ def main(argv=None):
     return 0
 
 
-def wait_explored(env, min_m3, deadline, launch):
-    """Waits until background_map/stats reports min_m3 explored (m^3); returns
-    the explored volume. Makes this process a rospy node on env's master."""
+def wait_explored(env, min_m3, deadline, launch, min_objects=0):
+    """Waits until background_map/stats reports min_m3 explored (m^3) and
+    object_map/objects holds min_objects objects; returns the explored volume.
+    Makes this process a rospy node on env's master."""
     os.environ.update(ROS_MASTER_URI=env["ROS_MASTER_URI"], ROS_HOSTNAME=env["ROS_HOSTNAME"],
                       ROS_HOME=env["ROS_HOME"])
     import rosgraph
@@ -417,21 +451,28 @@ def wait_explored(env, min_m3, deadline, launch):
             raise RuntimeError("roslaunch did not come up")
         time.sleep(0.3)
     import rospy
-    from semantic_exploration.msg import MapStats
+    from semantic_exploration.msg import MapStats, ObjectArray
     rospy.init_node("rviz_screenshot", anonymous=True, disable_signals=True)
     latest = [0.0]
+    objects = [0]
 
     def on_stats(msg):
         latest[0] = msg.explored_volume_m3
 
     sub = rospy.Subscriber("/background_map/stats", MapStats, on_stats, queue_size=2)
-    while latest[0] < min_m3:
+    # objects with a surface: object_map draws their mesh, box and label
+    obj_sub = rospy.Subscriber("/object_map/objects", ObjectArray, lambda m: objects.__setitem__(
+        0, sum(1 for o in m.objects if o.voxel_count > 0)), queue_size=2)
+    while latest[0] < min_m3 or objects[0] < min_objects:
         if launch.poll() is not None:
-            raise RuntimeError("the simulation stopped before the map explored %.1f m3" % min_m3)
+            raise RuntimeError("the simulation stopped before the map explored %.1f m3 with %d objects"
+                               % (min_m3, min_objects))
         if time.time() > deadline:
-            raise RuntimeError("the map explored only %.1f m3 before the timeout" % latest[0])
+            raise RuntimeError("the map explored only %.1f m3 with %d objects before the timeout"
+                               % (latest[0], objects[0]))
         time.sleep(0.2)
     sub.unregister()
+    obj_sub.unregister()
     return latest[0]
 
 

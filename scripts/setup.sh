@@ -27,8 +27,9 @@ DEBIAN_PKGS=(
   colcon python3-colcon-ros python3-colcon-cmake python3-colcon-bash
   python3-std-msgs python3-sensor-msgs python3-geometry-msgs
   python3-nav-msgs python3-visualization-msgs python3-std-srvs
+  libtrajectory-msgs-dev python3-trajectory-msgs
   python3-tf2-msgs python3-numpy python3-yaml python3-scipy
-  python3-matplotlib
+  python3-matplotlib libembree3-3
   rviz xvfb xauth imagemagick libgl1-mesa-dri
 )
 
@@ -38,11 +39,11 @@ NOETIC_PKGS=(
   ros-noetic-tf2-eigen ros-noetic-tf2-geometry-msgs ros-noetic-tf2-msgs ros-noetic-cv-bridge
   ros-noetic-image-transport ros-noetic-message-filters
   ros-noetic-octomap
-  ros-noetic-ompl ros-noetic-sensor-msgs ros-noetic-nav-msgs
+  ros-noetic-ompl ros-noetic-sensor-msgs ros-noetic-nav-msgs ros-noetic-trajectory-msgs
   ros-noetic-visualization-msgs ros-noetic-std-srvs ros-noetic-rosbag
   libeigen3-dev libopencv-dev libopencv-dnn-dev libgtest-dev
   python3-colcon-common-extensions python3-numpy python3-yaml python3-scipy
-  python3-matplotlib
+  python3-matplotlib libembree3-3
   ros-noetic-rviz xvfb xauth imagemagick libgl1-mesa-dri
 )
 

@@ -353,20 +353,44 @@ OccupancyMap::SurfaceObservation OccupancyMap::surfaceObservedWithin(double d_m)
   // Distances are stored in whole mm, rounded (see the integrator): compare in mm.
   const double d_mm = std::floor(d_m * 1000.0 + 0.5);
   const auto within = [d_mm](std::uint16_t d) { return d != kNoDist && d <= d_mm; };
+  const auto isFree = [](std::int16_t v) { return v != kUnknown && v < 0; };
+  const int m = store_.bs - 1;
+  // Whether voxel (x, y, z) of the grid has a free 6-neighbour: the voxel bounds observed free space, so it
+  // is surface, not the inside of a wall that noisy far returns marked occupied.
+  const auto exposed = [&](int x, int y, int z) {
+    return isFree(store_.voxelValue(x + 1, y, z)) || isFree(store_.voxelValue(x - 1, y, z)) || isFree(store_.voxelValue(x, y + 1, z)) ||
+           isFree(store_.voxelValue(x, y - 1, z)) || isFree(store_.voxelValue(x, y, z + 1)) || isFree(store_.voxelValue(x, y, z - 1));
+  };
   for (int cell = 0; cell < static_cast<int>(store_.cell_block.size()); ++cell) {
     const Summary& s = store_.levels[0].s[cell];
     if (!s.known_any || s.max_l < 0) continue;  // nothing occupied below
+    const int bz = cell / (store_.nb.x() * store_.nb.y()), by = (cell / store_.nb.x()) % store_.nb.y(), bx = cell % store_.nb.x();
+    const int gx0 = bx * store_.bs, gy0 = by * store_.bs, gz0 = bz * store_.bs;
     const int b = store_.cell_block[cell];
-    if (b < 0) {  // a uniform occupied cell
-      out.occupied_voxels += static_cast<std::size_t>(store_.bs3);
-      if (within(store_.cell_dist[cell])) out.within_voxels += static_cast<std::size_t>(store_.bs3);
+    if (b < 0) {  // a uniform occupied cell: only voxels on its faces can touch free space
+      const bool near = within(store_.cell_dist[cell]);
+      for (int z = 0; z < store_.bs; ++z)
+        for (int y = 0; y < store_.bs; ++y)
+          for (int x = 0; x < store_.bs; ++x) {
+            if (x != 0 && x != m && y != 0 && y != m && z != 0 && z != m) continue;
+            if (!exposed(gx0 + x, gy0 + y, gz0 + z)) continue;
+            ++out.occupied_voxels;
+            out.within_voxels += near;
+          }
       continue;
     }
     const std::int16_t* L = store_.logOdds(b);
     const std::uint16_t* D =
-        store_.block_surf[b] >= 0 ? store_.surf_dist.data() + static_cast<std::size_t>(store_.block_surf[b]) * store_.bs3 : nullptr;
+        store_.block_surf[b] >= 0 ? store_.dist(store_.block_surf[b]) : nullptr;
+    const int s1 = store_.bs, s2 = store_.bs * store_.bs;
     for (int i = 0; i < store_.bs3; ++i) {
       if (L[i] == kUnknown || L[i] < 0) continue;
+      const int x = i & m, y = (i >> store_.bshift) & m, z = i >> (2 * store_.bshift);
+      const bool inner = x > 0 && x < m && y > 0 && y < m && z > 0 && z < m;
+      const bool ex = inner ? isFree(L[i + 1]) || isFree(L[i - 1]) || isFree(L[i + s1]) || isFree(L[i - s1]) ||
+                                  isFree(L[i + s2]) || isFree(L[i - s2])
+                            : exposed(gx0 + x, gy0 + y, gz0 + z);
+      if (!ex) continue;
       ++out.occupied_voxels;
       if (D && within(D[i])) ++out.within_voxels;
     }

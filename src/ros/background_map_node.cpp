@@ -12,6 +12,7 @@
 #include "semantic_exploration/FrameIntegrated.h"
 #include "semantic_exploration/MapBlocks.h"
 #include "semantic_exploration/MapStats.h"
+#include "semantic_exploration/ros/conversions.hpp"
 
 namespace semexp_ros {
 
@@ -54,11 +55,13 @@ BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) 
   p.getAtLeast("background_map/colour_wait_s", colour_wait_s_, 0.0, "s");
   p.getAtLeast("background_map/start_free_radius_m", start_free_radius_m_, 0.0, "m");
   map_ = std::make_unique<semexp::OccupancyMap>(config_, bounds_);
+  evidence_ = std::make_unique<semexp::FrontierEvidence>(loadFrontierEvidence(p));
 
   occupied_pub_ = pnh.advertise<sensor_msgs::PointCloud2>(
       "occupied", 1, [this](const ros::SingleSubscriberPublisher& sub) { occupiedConnected(sub); },
       ros::SubscriberStatusCallback(), ros::VoidConstPtr(), true);
   frontiers_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("frontiers", 1, true);
+  retired_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("retired_frontiers", 1, true);
   update_pub_ = pnh.advertise<semantic_exploration::MapBlocks>("map_update", 50);
   stats_pub_ = pnh.advertise<semantic_exploration::MapStats>("stats", 10);
   integrated_pub_ = nh.advertise<semantic_exploration::FrameIntegrated>("frame_integrated", 10);
@@ -192,6 +195,8 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
   last_integration_ms_ = static_cast<float>((ros::WallTime::now() - t_int).toSec() * 1e3);
   const auto t_fr = ros::WallTime::now();
   map_->updateFrontiers();
+  // depthToMeters returns a fresh (continuous) CV_32F image.
+  if (depth_m.isContinuous()) evidence_->look(*map_, depth_m.ptr<float>(), camera_, T_WC);
   last_frontier_ms_ = static_cast<float>((ros::WallTime::now() - t_fr).toSec() * 1e3);
   invalid_depth_pixels_ += st.invalid_pixels;
   if (st.invalid_pixels > 0)
@@ -215,6 +220,7 @@ void BackgroundMapNode::publishStats(const std_msgs::Header& header) {
   s.occupied_volume_m3 = map_->occupiedVolume();
   s.explored_volume_m3 = s.free_volume_m3 + s.occupied_volume_m3;
   s.frontier_count = static_cast<std::uint32_t>(map_->frontierCount());
+  s.retired_frontier_count = static_cast<std::uint32_t>(evidence_->retiredCount());
   s.surface_voxels = surface_.occupied_voxels;
   s.surface_observed_share = surface_measured_ ? surface_.share() : -1.0;
   s.block_count = static_cast<std::uint32_t>(map_->blockCount());
@@ -239,23 +245,13 @@ void BackgroundMapNode::publishClouds(const ros::Time& stamp) {
     return last.isZero() || (now - last).toSec() >= period_s;
   };
   if (frontiers_dirty_ && due(last_frontier_pub_, frontier_period_s_)) {
-    sensor_msgs::PointCloud2 cloud;
-    cloud.header.stamp = stamp;
-    cloud.header.frame_id = frames_.world;
-    sensor_msgs::PointCloud2Modifier mod(cloud);
-    mod.setPointCloud2FieldsByString(1, "xyz");
-    mod.resize(map_->frontierCount());
-    sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
-    std::size_t n = 0;
+    std::vector<Eigen::Vector3d> active, retired;
+    active.reserve(map_->frontierCount());
     map_->forEachFrontier([&](const Eigen::Vector3d& c, double) {
-      if (n >= map_->frontierCount()) return;
-      *x = static_cast<float>(c.x());
-      *y = static_cast<float>(c.y());
-      *z = static_cast<float>(c.z());
-      ++x, ++y, ++z, ++n;
+      (evidence_->retired(c) ? retired : active).push_back(c);
     });
-    mod.resize(n);
-    frontiers_pub_.publish(cloud);
+    frontiers_pub_.publish(toPointCloud(active, stamp, frames_.world));
+    retired_pub_.publish(toPointCloud(retired, stamp, frames_.world));
     last_frontier_pub_ = now;
     // The termination's background share, at the frontier cloud's pace (one pass over the occupied blocks).
     surface_ = map_->surfaceObservedWithin(exploration_.d_bg_m);

@@ -1,10 +1,12 @@
 #include "semantic_exploration/ros/conversions.hpp"
 
 #include <sensor_msgs/image_encodings.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
 
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <utility>
 
 namespace semexp_ros {
 
@@ -225,6 +227,136 @@ semantic_exploration::ExplorationStatus toExplorationStatus(const semexp::Iterat
   s.objects_done = r.termination.objects_done;
   s.last_condition = r.termination.last_condition;
   return s;
+}
+
+sensor_msgs::PointCloud2 toPointCloud(const std::vector<Eigen::Vector3d>& points_W, const ros::Time& stamp,
+                                      const std::string& frame) {
+  sensor_msgs::PointCloud2 cloud;
+  cloud.header.stamp = stamp;
+  cloud.header.frame_id = frame;
+  sensor_msgs::PointCloud2Modifier mod(cloud);
+  mod.setPointCloud2FieldsByString(1, "xyz");
+  mod.resize(points_W.size());
+  sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
+  for (const auto& p : points_W) {
+    *x = static_cast<float>(p.x());
+    *y = static_cast<float>(p.y());
+    *z = static_cast<float>(p.z());
+    ++x, ++y, ++z;
+  }
+  return cloud;
+}
+
+trajectory_msgs::MultiDOFJointTrajectory toTrajectoryMsg(const std::vector<semexp::TrajectoryState>& samples,
+                                                         const std::string& frame, const std::string& joint,
+                                                         const ros::Time& stamp) {
+  trajectory_msgs::MultiDOFJointTrajectory out;
+  out.header.frame_id = frame;
+  out.header.stamp = stamp;
+  out.joint_names.push_back(joint);
+  out.points.reserve(samples.size());
+  for (const auto& s : samples) {
+    trajectory_msgs::MultiDOFJointTrajectoryPoint p;
+    geometry_msgs::Transform tf;
+    tf.translation.x = s.position_W.x();
+    tf.translation.y = s.position_W.y();
+    tf.translation.z = s.position_W.z();
+    tf.rotation = yawQuaternion(s.yaw_rad);
+    p.transforms.push_back(tf);
+    geometry_msgs::Twist v;
+    v.linear.x = s.velocity_W.x();
+    v.linear.y = s.velocity_W.y();
+    v.linear.z = s.velocity_W.z();
+    v.angular.z = s.yaw_rate_radps;
+    p.velocities.push_back(v);
+    geometry_msgs::Twist a;
+    a.linear.x = s.acceleration_W.x();
+    a.linear.y = s.acceleration_W.y();
+    a.linear.z = s.acceleration_W.z();
+    p.accelerations.push_back(a);
+    p.time_from_start = ros::Duration(s.t_s);
+    out.points.push_back(p);
+  }
+  return out;
+}
+
+std::string fromTrajectoryMsg(const trajectory_msgs::MultiDOFJointTrajectory& msg, const std::string& frame,
+                              semexp::SampledTrajectory& out) {
+  const std::string got = msg.header.frame_id.empty() || msg.header.frame_id[0] != '/'
+                              ? msg.header.frame_id : msg.header.frame_id.substr(1);
+  if (!got.empty() && got != frame) return "trajectory in frame '" + got + "' (expected '" + frame + "')";
+  if (msg.points.empty()) {
+    out = semexp::SampledTrajectory();
+    return "";
+  }
+  if (msg.joint_names.size() > 1) return std::to_string(msg.joint_names.size()) + " joints (expected 1, the body)";
+  std::vector<semexp::SampledTrajectory::Sample> samples;
+  samples.reserve(msg.points.size());
+  for (std::size_t i = 0; i < msg.points.size(); ++i) {
+    const auto& p = msg.points[i];
+    const std::string at = "point " + std::to_string(i);
+    if (p.transforms.size() != 1)
+      return at + " has " + std::to_string(p.transforms.size()) + " transforms (expected 1)";
+    const auto& t = p.transforms[0];
+    const auto& q = t.rotation;
+    const double n = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+    if (!std::isfinite(n) || n < 1e-6) return at + " has a zero or non-finite quaternion";
+    const double t_s = p.time_from_start.toSec();
+    if (t_s < 0) return at + " has a negative time_from_start";
+    semexp::SampledTrajectory::Sample s;
+    s.t_s = t_s;
+    s.position_W = Eigen::Vector3d(t.translation.x, t.translation.y, t.translation.z);
+    // Yaw of the rotation (z-y-x Euler), robust to an unnormalised quaternion.
+    s.yaw_rad = std::atan2(2.0 * (q.w * q.z + q.x * q.y), q.w * q.w + q.x * q.x - q.y * q.y - q.z * q.z);
+    samples.push_back(s);
+  }
+  try {
+    out = semexp::SampledTrajectory(std::move(samples));
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string cutCloudAboveZ(const sensor_msgs::PointCloud2& in, double max_z_m, sensor_msgs::PointCloud2& out) {
+  const sensor_msgs::PointField* z = nullptr;
+  for (const auto& f : in.fields)
+    if (f.name == "z") z = &f;
+  if (!z || z->datatype != sensor_msgs::PointField::FLOAT32 || z->offset + 4 > in.point_step)
+    return "the cloud has no FLOAT32 field z within its point_step";
+  const std::size_t n = static_cast<std::size_t>(in.width) * in.height;
+  if (in.row_step < static_cast<std::size_t>(in.width) * in.point_step ||
+      in.data.size() < static_cast<std::size_t>(in.row_step) * in.height)
+    return "the cloud's data is shorter than its width x height x point_step";
+  out.header = in.header;
+  out.fields = in.fields;
+  out.is_bigendian = in.is_bigendian;
+  out.point_step = in.point_step;
+  out.is_dense = in.is_dense;
+  out.height = 1;
+  out.data.clear();
+  out.data.reserve(n * in.point_step);
+  std::size_t kept = 0;
+  for (std::uint32_t row = 0; row < in.height; ++row) {
+    for (std::uint32_t col = 0; col < in.width; ++col) {
+      const std::uint8_t* p = &in.data[static_cast<std::size_t>(row) * in.row_step +
+                                       static_cast<std::size_t>(col) * in.point_step];
+      std::uint8_t b[4];
+      std::memcpy(b, p + z->offset, 4);
+      if (static_cast<bool>(in.is_bigendian) != (__BYTE_ORDER__ == __ORDER_BIG_ENDIAN__)) {
+        std::swap(b[0], b[3]);
+        std::swap(b[1], b[2]);
+      }
+      float v;
+      std::memcpy(&v, b, 4);
+      if (!std::isfinite(v) || v > max_z_m) continue;
+      out.data.insert(out.data.end(), p, p + in.point_step);
+      ++kept;
+    }
+  }
+  out.width = static_cast<std::uint32_t>(kept);
+  out.row_step = out.width * out.point_step;
+  return "";
 }
 
 }  // namespace semexp_ros

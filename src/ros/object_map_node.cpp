@@ -167,8 +167,9 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
   for (const auto& m : r.merged) ROS_INFO("object_map: object %u is part of object %u: merged", m.first, m.second);
   last_stamp_ = matched->header.stamp;
   const double ms = (ros::WallTime::now() - t0).toSec() * 1e3;
-  reportFrame(matched->header, true, ms);
+  // Objects before the report: whoever waits for the report (lockstep) then has this frame's objects.
   if ((ros::WallTime::now() - last_publish_).toSec() >= config_.publish_period_s) publishObjects(last_stamp_);
+  reportFrame(matched->header, true, ms);
 }
 
 void ObjectMapNode::publishObjects(const ros::Time& stamp) {

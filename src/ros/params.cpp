@@ -336,6 +336,19 @@ semexp::TerminationConfig loadTermination(const ParamReader& p) {
   return c;
 }
 
+semexp::FrontierEvidenceConfig loadFrontierEvidence(const ParamReader& p) {
+  semexp::FrontierEvidenceConfig c;
+  const std::string n = "frontier_evidence/";
+  p.get(n + "enabled", c.enabled);
+  p.get(n + "view_range_m", c.view_range_m);
+  p.get(n + "looks_to_retire", c.looks_to_retire);
+  p.get(n + "min_look_separation_m", c.min_look_separation_m);
+  p.get(n + "min_look_rotation_rad", c.min_look_rotation_rad);
+  p.get(n + "occlusion_margin_m", c.occlusion_margin_m);
+  c.validate(n);
+  return c;
+}
+
 semexp::FrontierRetirementConfig loadFrontierRetirement(const ParamReader& p) {
   semexp::FrontierRetirementConfig c;
   const std::string n = "frontier_retirement/";
@@ -361,6 +374,38 @@ PlannerNodeConfig loadPlannerNode(const ParamReader& p) {
     throw semexp::ConfigError("planner/retry_period_s", "must be in (0, 3600] s");
   p.getAtLeast("planner/goal_timeout_factor", c.goal_timeout_factor, 1.0, "(a factor)");
   return c;
+}
+
+semexp::TrajectoryConfig loadTrajectory(const ParamReader& p) {
+  semexp::TrajectoryConfig c;
+  p.get("planner/a_max_mps2", c.a_max_mps2);
+  p.get("planner/alpha_max_radps2", c.alpha_max_radps2);
+  p.get("planner/trajectory_sample_period_s", c.trajectory_sample_period_s);
+  c.validate("planner/");
+  return c;
+}
+
+SetpointStreamerConfig loadSetpointStreamer(const ParamReader& p) {
+  SetpointStreamerConfig c;
+  const auto positive = [&](const char* name, double& v, double max, const char* unit) {
+    const std::string path = std::string("setpoint_streamer/") + name;
+    p.get(path, v);
+    if (!(v > 0 && v <= max))
+      throw semexp::ConfigError(path, "must be in (0, " + std::to_string(static_cast<int>(max)) + "] " + unit);
+  };
+  positive("rate_hz", c.rate_hz, 1000, "Hz");
+  positive("pose_timeout_s", c.pose_timeout_s, 3600, "s");
+  positive("max_start_offset_m", c.max_start_offset_m, 1000, "m");
+  positive("goal_tolerance_m", c.goal_tolerance_m, 1000, "m");
+  positive("goal_yaw_tolerance_rad", c.goal_yaw_tolerance_rad, 4, "rad");
+  return c;
+}
+
+double loadDisplayCut(const ParamReader& p) {
+  double max_z_m = 2.0;
+  p.get("display_cut/max_z_m", max_z_m);
+  if (!std::isfinite(max_z_m)) throw semexp::ConfigError("display_cut/max_z_m", "must be a finite height, m");
+  return max_z_m;
 }
 
 }  // namespace semexp_ros

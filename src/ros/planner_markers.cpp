@@ -91,7 +91,7 @@ visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& 
   return markers;
 }
 
-std::string winnerSummary(const semexp::IterationResult& r, double background_share) {
+std::string winnerSummary(const semexp::IterationResult& r, double background_share, std::size_t map_retired) {
   if (r.winner < 0) return "no winner";
   const auto& w = r.candidates[static_cast<std::size_t>(r.winner)];
   const bool object = w.sample.source == semexp::CandidateSource::kObject;
@@ -99,12 +99,12 @@ std::string winnerSummary(const semexp::IterationResult& r, double background_sh
   std::snprintf(buf, sizeof(buf),
                 "%s candidate%s%s (%d of %zu planned, %d reachable) at (%.2f, %.2f, %.2f) yaw %.2f: gain %.3f "
                 "(entropy %.3f, bg %.3f, obj %.3f), %s path %.1f s, utility %.4f; %zu active frontier voxels "
-                "(%zu retired), background seen from <= d_bg %.3f",
+                "(%zu retired here, %zu by the map's evidence), background seen from <= d_bg %.3f",
                 semexp::candidateSourceName(w.sample.source), object ? " of object " : "",
                 object ? std::to_string(w.sample.object_id).c_str() : "", r.candidates_planned, r.candidates.size(),
                 r.candidates_reachable, w.position_W.x(), w.position_W.y(), w.position_W.z(), w.yaw_rad, w.gain,
                 w.gain_entropy, w.gain_bg, w.gain_obj, semexp::PlannedPath::name(w.plan.status), w.path_time_s,
-                w.utility, r.active_frontiers, r.retired_frontiers_W.size(), background_share);
+                w.utility, r.active_frontiers, r.retired_frontiers_W.size(), map_retired, background_share);
   return buf;
 }
 

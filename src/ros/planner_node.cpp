@@ -2,6 +2,7 @@
 
 #include <nav_msgs/Path.h>
 #include <sensor_msgs/Image.h>
+#include <trajectory_msgs/MultiDOFJointTrajectory.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
@@ -30,10 +31,13 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   retirement_ = loadFrontierRetirement(p);
   semexp::FrontierRetirement(retirement_, camera_, bounds_, config_.clearance_radius_m(), 1.0);  // checks them together
   node_config_ = loadPlannerNode(p);
+  trajectory_ = loadTrajectory(p);
   poses_ = std::make_unique<PoseSource>(loadTf(p), false);  // the latest pose, never an interpolated one: no gap guard
   services_ = std::make_unique<PlannerServices>(nh, config_, camera_, node_config_.service_timeout_s, drops_);
 
   path_pub_ = pnh.advertise<nav_msgs::Path>("path", 1, true);
+  // Not latched: a setpoint streamer that connects late must not fly an old trajectory.
+  trajectory_pub_ = pnh.advertise<trajectory_msgs::MultiDOFJointTrajectory>("trajectory", 1);
   candidates_pub_ = pnh.advertise<semantic_exploration::CandidateViewArray>("candidates", 1, true);
   markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("candidate_markers", 1, true);
   status_pub_ = pnh.advertise<ExplorationStatus>("status", 10, true);
@@ -133,6 +137,7 @@ void PlannerNode::statsCallback(const semantic_exploration::MapStatsConstPtr& ms
   if (std::isfinite(msg->surface_observed_share) && msg->surface_observed_share >= 0 &&
       msg->surface_observed_share <= 1)
     background_share_ = msg->surface_observed_share;
+  map_retired_frontiers_ = msg->retired_frontier_count;
 }
 
 // ---------------------------------------------------------------- triggers
@@ -280,9 +285,18 @@ void PlannerNode::publishWinner(const semexp::IterationResult& r, const ros::Tim
   path_pub_.publish(toPath(r.path_W, r.path_yaw_rad, frames_.world, now));
   const auto& w = r.candidates[static_cast<std::size_t>(r.winner)];
   expected_duration_s_ = w.path_time_s;
+  try {
+    const semexp::Trajectory tr(r.path_W, r.path_yaw_rad, config_.v_max_mps, config_.omega_max_radps, trajectory_);
+    trajectory_pub_.publish(
+        toTrajectoryMsg(tr.sample(trajectory_.trajectory_sample_period_s), frames_.world, frames_.body, now));
+    // The trajectory stops at every vertex and accelerates: longer than the utility's estimate.
+    expected_duration_s_ = std::max(expected_duration_s_, tr.duration_s());
+  } catch (const std::invalid_argument& e) {  // the planner's path is finite and non-empty: a defect if it happens
+    ROS_ERROR("planner: no trajectory for the path of iteration %u: %s", iteration_, e.what());
+  }
   executing_since_ = now;
   // One line per iteration: what won and why, so a run's log shows where the MAV went and for which gain.
-  ROS_INFO("planner: iteration %u: %s", iteration_, winnerSummary(r, background_share_).c_str());
+  ROS_INFO("planner: iteration %u: %s", iteration_, winnerSummary(r, background_share_, map_retired_frontiers_).c_str());
 }
 
 void PlannerNode::publishResult(const semexp::IterationResult& r, const ros::Time& stamp, double current_yaw) {

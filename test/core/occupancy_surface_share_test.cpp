@@ -29,17 +29,34 @@ Bounds twoWallBounds() {
   return b;
 }
 
-// Occupied voxels counted through the public queries: (all, on the +x wall, within d_m).
+// Surface voxels (occupied, with a free 6-neighbour) counted through the public queries: (all, on the +x wall,
+// within d_m).
 struct Counts {
   std::size_t all = 0, near_wall = 0, within = 0;
 };
 Counts bruteForce(const OccupancyMap& map, double d_m) {
   Counts c;
-  map.forEachOccupied([&](const Eigen::Vector3d& p, double size_m, const std::uint8_t*) {
-    const std::size_t n = static_cast<std::size_t>(std::lround(std::pow(size_m / map.resolution(), 3)));
-    c.all += n;
-    if (p.x() > 0) c.near_wall += n;
-    if (map.minObservedDistance(p) <= d_m + 5e-4) c.within += n;  // distances are kept in whole mm
+  const double r = map.resolution();
+  const auto isFree = [&](const Eigen::Vector3d& q) { return map.state(q) == VoxelState::kFree; };
+  map.forEachOccupied([&](const Eigen::Vector3d& centre, double size_m, const std::uint8_t*) {
+    const int n = static_cast<int>(std::lround(size_m / r));
+    const Eigen::Vector3d corner = centre - Eigen::Vector3d::Constant(0.5 * size_m);
+    for (int k = 0; k < n; ++k)
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          const Eigen::Vector3d p = corner + r * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5);
+          bool exposed = false;
+          for (int a = 0; a < 3 && !exposed; ++a)
+            for (int sg = -1; sg <= 1 && !exposed; sg += 2) {
+              Eigen::Vector3d q = p;
+              q[a] += sg * r;
+              exposed = isFree(q);
+            }
+          if (!exposed) continue;
+          ++c.all;
+          if (p.x() > 0) ++c.near_wall;
+          if (map.minObservedDistance(p) <= d_m + 5e-4) ++c.within;  // distances are kept in whole mm
+        }
   });
   return c;
 }

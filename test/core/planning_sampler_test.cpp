@@ -113,13 +113,24 @@ TEST_F(SamplerTest, ObjectViewPoints) {
   EXPECT_TRUE(sampler.object_view_point(o, M_PI / 4).isApprox(Eigen::Vector3d(d / std::sqrt(2.0), d / std::sqrt(2.0), 0.5)));
   // Only x < 0 is free: the sampler must pick a view point there.
   CollisionQuery left_free = [](const Eigen::Vector3d& p, double r) { return p.x() + r < 0.0; };
+  double z_lo = 1e9, z_hi = -1e9;
   for (int it = 0; it < 20; ++it) {
     const auto s = sampler.sample({}, {o}, left_free);
     ASSERT_EQ(s.size(), 1u);
     EXPECT_EQ(s[0].object_id, 7u);
     EXPECT_TRUE(left_free(s[0].position_W, planner.mav_radius_m)) << s[0].position_W.transpose();
-    EXPECT_NEAR(s[0].position_W.z(), 0.5, 1e-12);
+    // On the ring 0.25 + 0.5 m from the centroid (the box is square: any direction leaving through a side
+    // face lies 0.25 / max(|cos|, |sin|) from it), between the centroid's height and the box top.
+    const Eigen::Vector3d q = s[0].position_W;
+    const double yaw = std::atan2(q.y(), q.x());
+    const double ring = 0.25 / std::max(std::abs(std::cos(yaw)), std::abs(std::sin(yaw))) + 0.5;
+    EXPECT_NEAR(std::hypot(q.x(), q.y()), ring, 1e-9) << q.transpose();
+    EXPECT_GE(q.z(), 0.5);
+    EXPECT_LE(q.z(), 1.0);
+    z_lo = std::min(z_lo, q.z());
+    z_hi = std::max(z_hi, q.z());
   }
+  EXPECT_GT(z_hi - z_lo, 0.2);  // heights spread over the upper half of the box, not all at the centroid
 }
 
 }  // namespace

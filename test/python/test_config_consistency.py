@@ -18,6 +18,7 @@ STRUCTS = {
     "MatchingConfig": ("object_map_config.hpp", "matching"),
     "DepthHistoryConfig": ("planner_config.hpp", "depth_history"),
     "PlannerConfig": ("planner_config.hpp", "planner"),
+    "TrajectoryConfig": ("planning/trajectory.hpp", "planner"),
 }
 FIELD = re.compile(r"^\s+(?:double|float|int|bool|std::uint32_t|std::size_t|std::string)\s+(\w+)\s*=\s*([^;]+);",
                    re.M)

@@ -194,3 +194,37 @@ def test_eight_panels_and_the_reconstruction_claims(tmp_path):
     assert rows["semantic"]["explored_share"] == 0.5 and rows["classic"]["explored_share"] == 1.0
     report = open(str(tmp_path / "out" / "report.md")).read()
     assert "| explored, time_limit | 50% |" in report
+
+
+def test_background_observed_panel_reads_what_the_mission_writes(tmp_path):
+    # run_mission writes RunLog.row(); the background map's own share seen from <= d_bg
+    # (MapStats.surface_observed_share, -1 until measured) must reach the Fig. 8 panel.
+    from types import SimpleNamespace as NS
+    from semantic_exploration.eval.runlog import RunLog
+
+    def stats(share):
+        return NS(explored_volume_m3=1.0, frontier_count=0, surface_observed_share=share,
+                  integration_time_ms=0.0)
+
+    runs = []
+    for i, shares in enumerate([(-1.0, 0.2, 0.5), (-1.0, 0.4, 0.6), (0.1, 0.8, 0.9)]):
+        d = tmp_path / str(i)
+        d.mkdir()
+        log = RunLog()
+        rows = []
+        for t, share in zip((0.0, 10.0, 20.0), shares):
+            log.stats = stats(share)
+            rows.append(log.row(t, t, []))
+        assert rows[0]["background_observed_share"] == ("" if shares[0] < 0 else shares[0])
+        with open(str(d / "timeseries.csv"), "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+        with open(str(d / "summary.json"), "w") as f:
+            json.dump({"ground_truth_objects": 1, "termination_reason": "explored", "collisions": 0}, f)
+        runs.append(experiments.read_run(str(d)))
+    c = experiments.aggregate(runs, np.array([0.0, 10.0, 20.0]))["background_observed_percent"]
+    # 0 s: (0, 0, 10) -> median 0, p10 0, p90 8; 10 s: (20, 40, 80) -> 40, 24, 72; 20 s: (50, 60, 90) -> 60, 52, 84.
+    assert c["median"] == pytest.approx([0.0, 40.0, 60.0])
+    assert c["p10"] == pytest.approx([0.0, 24.0, 52.0])
+    assert c["p90"] == pytest.approx([8.0, 72.0, 84.0])

@@ -8,7 +8,8 @@ import subprocess
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-MAPPING = {"/background_map", "/instance_matching", "/object_map", "/depth_history"}
+# the mapping nodes and the display cut for rviz
+MAPPING = {"/background_map", "/instance_matching", "/object_map", "/depth_history", "/display_cut"}
 
 pytestmark = pytest.mark.skipif(shutil.which("roslaunch") is None or "ROS_PACKAGE_PATH" not in os.environ
                                 and "CMAKE_PREFIX_PATH" not in os.environ,
@@ -30,6 +31,7 @@ def test_exploration_launch():
 def test_sim_launch():
     assert nodes("sim.launch") == MAPPING | {"/planner", "/mav_sim"}
     assert nodes("sim.launch", "rviz:=true", "mode:=classic") == MAPPING | {"/planner", "/mav_sim", "/rviz"}
+    assert nodes("sim.launch", "follow:=setpoints") == MAPPING | {"/planner", "/mav_sim", "/setpoint_streamer"}
 
 
 def test_onboard_launch():
@@ -38,6 +40,8 @@ def test_onboard_launch():
         MAPPING | {"/planner", "/pose_to_tf"}
     assert nodes("onboard.launch", "detector:=true", "detector_model:=/tmp/m.onnx") == \
         MAPPING | {"/planner", "/T_BC", "/detector"}
+    assert nodes("onboard.launch", "setpoints:=true", "pose_topic:=/mavros/local_position/pose") == \
+        MAPPING | {"/planner", "/T_BC", "/pose_to_tf", "/setpoint_streamer"}
 
 
 def test_detector_launch():

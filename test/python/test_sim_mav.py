@@ -140,6 +140,27 @@ def test_collision_grid_matches_brute_force():
     assert 30 < hits < 270
 
 
+
+def test_collision_grid_matches_brute_force_along_a_walk():
+    """Small steps reuse the last cell range's triangles; a query with another radius in between
+    (another range) must not leave a stale set behind."""
+    s = generate(2, (8, 6, 3))
+    tri = s.triangles()
+    cc = CollisionChecker(tri, 0.3, cell_m=0.4)
+    hits = 0
+    for k, x in enumerate(np.arange(0.2, 7.8, 0.013)):
+        p = np.array([x, 3.0 + 0.8 * math.sin(x), 1.0])
+        q = closest_points_on_triangles(p, tri[:, 0], tri[:, 1], tri[:, 2])
+        d = np.linalg.norm(q - p, axis=1)
+        for r in ((0.3, 2.0) if k % 37 == 0 else (0.3,)):
+            got_d, got_k = cc.nearest(p, r)
+            if d.min() <= r:
+                hits += r == 0.3
+                assert got_k >= 0 and got_d == pytest.approx(d.min(), abs=1e-12)
+            else:
+                assert got_k == -1
+    assert 20 < hits < 500
+
 def test_path_through_a_wall_is_reported_as_collision():
     s = generate(0, (8, 6, 3))
     cfg = MavConfig()

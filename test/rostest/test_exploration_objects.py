@@ -5,7 +5,10 @@ until the planner stops by itself, with a reason and no collision. With
 scored against the exported ground truth (issue 7's acceptance): every chair
 found (a map object is matched to the ground-truth chair most of its surface
 lies on, within 5 cm) and each found chair at least 70% complete at 5 cm,
-against its observable surface (eval.metrics / eval.observable)."""
+against its observable surface (eval.metrics / eval.observable). With
+~expect_setpoints the MAV flew setpoint_streamer's setpoints (mav_sim ~follow
+setpoints): setpoints were streamed and every goal was reported by the
+streamer."""
 import json
 import os
 import shutil
@@ -16,6 +19,7 @@ import time
 import unittest
 
 import rospy
+from geometry_msgs.msg import PoseStamped
 from std_msgs.msg import UInt32
 
 from semantic_exploration.msg import ExplorationStatus
@@ -34,10 +38,18 @@ class ExplorationObjects(unittest.TestCase):
         status, collisions = [], [0]
         rospy.Subscriber("/planner/status", ExplorationStatus, status.append)
         rospy.Subscriber("/mav/collisions", UInt32, lambda m: collisions.__setitem__(0, m.data))
+        setpoints, goals = [0], []
+        rospy.Subscriber("/setpoint_position/local", PoseStamped, lambda m: setpoints.__setitem__(0, setpoints[0] + 1))
+        rospy.Subscriber("/mav/goal_reached", PoseStamped, lambda m: goals.append(m._connection_header["callerid"]))
         wall0 = time.time()
         finished, iterations = wait_finished(self, status, collisions, 1500.0)
         rospy.loginfo("exploration_objects: %s after %d iterations, sim %.1f s, wall %.0f s since the test started",
                       finished.termination_reason, iterations, rospy.get_time(), time.time() - wall0)
+        if rospy.get_param("~expect_setpoints", False):
+            rospy.loginfo("exploration_objects: %d setpoints streamed, goals reported by %s", setpoints[0], set(goals))
+            self.assertGreater(setpoints[0], 100)
+            self.assertGreater(len(goals), 0)
+            self.assertEqual(set(goals), {"/setpoint_streamer"})
         if rospy.get_param("~check_objects", False):
             self._check_objects()
 

@@ -6,7 +6,8 @@
 /// `camera/rgb/image_raw` (optional; paired with depth by stamp),
 /// `camera/camera_info`; pose from tf2 at the image stamp. Publishes
 /// `~occupied` (PointCloud2 xyzrgb, throttled), `~frontiers` (PointCloud2 xyz,
-/// throttled), `~map_update` (MapBlocks, changed blocks only), `~stats`
+/// throttled; active frontiers only), `~retired_frontiers` (PointCloud2 xyz,
+/// throttled; frontiers retired by FrontierEvidence), `~map_update` (MapBlocks, changed blocks only), `~stats`
 /// (MapStats), `frame_integrated`; serves `~compute_gains`, `~get_map`,
 /// `~save` (OctoMap .bt plus the own format).
 ///
@@ -27,6 +28,7 @@
 #include "semantic_exploration/ComputeGains.h"
 #include "semantic_exploration/GetMap.h"
 #include "semantic_exploration/SaveMap.h"
+#include "semantic_exploration/core/frontier_evidence.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 #include "semantic_exploration/ros/node_common.hpp"
 #include "semantic_exploration/ros/params.hpp"
@@ -67,8 +69,9 @@ class BackgroundMapNode {
   double start_free_radius_m_ = 0.5;  ///< unknown space this close to the first camera pose is assumed free, m
 
   std::unique_ptr<semexp::OccupancyMap> map_;
+  std::unique_ptr<semexp::FrontierEvidence> evidence_;  ///< frontiers looked at without resolving them
   ros::Subscriber depth_sub_, rgb_sub_, info_sub_;
-  ros::Publisher occupied_pub_, frontiers_pub_, update_pub_, stats_pub_, integrated_pub_;
+  ros::Publisher occupied_pub_, frontiers_pub_, retired_pub_, update_pub_, stats_pub_, integrated_pub_;
   ros::ServiceServer gains_srv_, get_map_srv_, save_srv_;
   ros::WallTimer flush_timer_;
   DropCounter drops_;

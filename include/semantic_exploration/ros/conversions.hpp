@@ -11,6 +11,7 @@
 #include <nav_msgs/Path.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <trajectory_msgs/MultiDOFJointTrajectory.h>
 
 #include <Eigen/Core>
 #include <string>
@@ -24,6 +25,7 @@
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
 #include "semantic_exploration/core/planning/interfaces.hpp"
 #include "semantic_exploration/core/planning/map_replica.hpp"
+#include "semantic_exploration/core/planning/trajectory.hpp"
 
 namespace semexp_ros {
 
@@ -68,6 +70,9 @@ std::vector<semexp::ObjectSummary> toObjectSummaries(const semantic_exploration:
 /// them, 0 included, row_step < width x point_step, or data other than
 /// row_step x height bytes), in which case `points_W` is untouched.
 std::string frontiersFromCloud(const sensor_msgs::PointCloud2& msg, std::vector<Eigen::Vector3d>& points_W);
+/// A float32 x, y, z cloud of `points_W` (m) in `frame` (the inverse of frontiersFromCloud).
+sensor_msgs::PointCloud2 toPointCloud(const std::vector<Eigen::Vector3d>& points_W, const ros::Time& stamp,
+                                      const std::string& frame);
 
 /// The candidates of an iteration, with their paths; the winner's path
 /// carries the winner's per-vertex yaws, the others start at current_yaw_rad
@@ -80,5 +85,27 @@ semantic_exploration::CandidateViewArray toCandidateViewArray(const semexp::Iter
 semantic_exploration::ExplorationStatus toExplorationStatus(const semexp::IterationResult& r, uint8_t state,
                                                             uint32_t iteration, const std::string& frame,
                                                             const ros::Time& stamp);
+
+/// Trajectory samples -> MultiDOFJointTrajectory with one joint, `joint`
+/// (the body frame): per point the pose (translation, yaw quaternion), the
+/// velocity (linear, angular z = yaw rate) and the acceleration (linear), in
+/// `frame`; time_from_start from the samples, header.stamp = `stamp`.
+trajectory_msgs::MultiDOFJointTrajectory toTrajectoryMsg(const std::vector<semexp::TrajectoryState>& samples,
+                                                         const std::string& frame, const std::string& joint,
+                                                         const ros::Time& stamp);
+
+/// MultiDOFJointTrajectory -> timed positions and yaws. Refuses (returns
+/// why, leaving `out` unchanged) a frame other than `frame` (an empty
+/// frame_id is taken as `frame`), other than one joint, a point without a
+/// transform, non-finite values, a zero quaternion, or time_from_start that
+/// is negative or does not increase. No points is valid: `out` becomes empty.
+std::string fromTrajectoryMsg(const trajectory_msgs::MultiDOFJointTrajectory& msg, const std::string& frame,
+                              semexp::SampledTrajectory& out);
+
+/// The display cut (display_cut node): copies the points of `in` whose z
+/// (a FLOAT32 field "z") is finite and <= max_z_m into `out`, with the same
+/// fields, header and endianness, as one row. Returns "" or why it cannot
+/// (no FLOAT32 z, data shorter than width x height x point_step).
+std::string cutCloudAboveZ(const sensor_msgs::PointCloud2& in, double max_z_m, sensor_msgs::PointCloud2& out);
 
 }  // namespace semexp_ros

@@ -21,8 +21,10 @@
 #include "semantic_exploration/core/exploration_config.hpp"
 #include "semantic_exploration/core/object_map_config.hpp"
 #include "semantic_exploration/core/planner_config.hpp"
+#include "semantic_exploration/core/frontier_evidence.hpp"
 #include "semantic_exploration/core/planning/frontier_retirement.hpp"
 #include "semantic_exploration/core/planning/termination.hpp"
+#include "semantic_exploration/core/planning/trajectory.hpp"
 
 namespace ros {
 class NodeHandle;
@@ -99,5 +101,22 @@ TfSettings loadTf(const ParamReader& p);                              ///< `tf_t
 PlannerNodeConfig loadPlannerNode(const ParamReader& p);  ///< `planner/{service_timeout_s,retry_period_s,goal_timeout_factor}`
 semexp::TerminationConfig loadTermination(const ParamReader& p);               ///< `termination/*`
 semexp::FrontierRetirementConfig loadFrontierRetirement(const ParamReader& p);  ///< `frontier_retirement/*`
+semexp::FrontierEvidenceConfig loadFrontierEvidence(const ParamReader& p);      ///< `frontier_evidence/*`
+
+/// `planner/{a_max_mps2,alpha_max_radps2,trajectory_sample_period_s}`: the trajectory's limits besides v_max, omega_max.
+semexp::TrajectoryConfig loadTrajectory(const ParamReader& p);
+
+/// Settings of the setpoint_streamer node (`setpoint_streamer/*`).
+struct SetpointStreamerConfig {
+  double rate_hz = 20.0;                ///< `rate_hz`: setpoints per second (of ROS time), Hz
+  double pose_timeout_s = 0.5;          ///< `pose_timeout_s`: stop streaming when the newest pose is older, s
+  double max_start_offset_m = 0.5;      ///< `max_start_offset_m`: refuse a trajectory starting farther from the MAV, m
+  double goal_tolerance_m = 0.1;        ///< `goal_tolerance_m`: goal reached within this distance of the end, m
+  double goal_yaw_tolerance_rad = 0.1;  ///< `goal_yaw_tolerance_rad`: and this yaw error, rad
+};
+SetpointStreamerConfig loadSetpointStreamer(const ParamReader& p);  ///< `setpoint_streamer/*`
+
+/// `display_cut/max_z_m`: the display_cut node shows the map up to this height in world, m.
+double loadDisplayCut(const ParamReader& p);
 
 }  // namespace semexp_ros

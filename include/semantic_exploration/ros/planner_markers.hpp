@@ -24,7 +24,8 @@ visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& 
 
 /// One line on the winner of an iteration for the log: its source, where,
 /// its gains, path and utility, and the frontiers and background share
-/// (background_share: seen from <= d_bg, negative if unknown).
-std::string winnerSummary(const semexp::IterationResult& r, double background_share);
+/// (background_share: seen from <= d_bg, negative if unknown; map_retired:
+/// frontier voxels the background map retired by evidence).
+std::string winnerSummary(const semexp::IterationResult& r, double background_share, std::size_t map_retired);
 
 }  // namespace semexp_ros

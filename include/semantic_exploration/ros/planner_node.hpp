@@ -11,7 +11,8 @@
 /// `background_map/compute_gains`, `object_map/compute_gains` (with the
 /// background hit depths for occlusion) and `depth_history/get_masks`, one
 /// batched call each per iteration. Publishes `~path` (nav_msgs/Path, yaw in
-/// orientation), `~candidates` (CandidateViewArray), `~candidate_markers`,
+/// orientation) and the same path time-parameterised as `~trajectory`
+/// (trajectory_msgs/MultiDOFJointTrajectory, core/planning/trajectory.hpp), `~candidates` (CandidateViewArray), `~candidate_markers`,
 /// `~gain_images/{entropy,background,object,combined}` (32FC1, the winner's)
 /// and `~status` (ExplorationStatus); serves `~plan_once` (std_srvs/Trigger).
 ///
@@ -84,6 +85,7 @@ class PlannerNode {
   semexp::Bounds bounds_;
   FrameNames frames_;
   PlannerNodeConfig node_config_;
+  semexp::TrajectoryConfig trajectory_;  ///< limits of ~trajectory besides config_'s v_max, omega_max
   std::unique_ptr<PoseSource> poses_;  ///< the MAV pose (tf2, latest)
   DropCounter drops_;
   std::unique_ptr<PlannerServices> services_;
@@ -96,6 +98,7 @@ class PlannerNode {
   bool have_frontiers_ = false;
   double explored_volume_m3_ = -1.0;  ///< from background_map/stats; negative until received
   double background_share_ = -1.0;    ///< surface share seen from <= d_bg, from background_map/stats; negative until received
+  std::size_t map_retired_frontiers_ = 0;  ///< frontier voxels the background map retired by evidence (its stats)
   semexp::TerminationConfig termination_;
   semexp::FrontierRetirementConfig retirement_;
 
@@ -109,6 +112,7 @@ class PlannerNode {
 
   ros::Subscriber update_sub_, frontiers_sub_, objects_sub_, goal_sub_, stats_sub_, rejected_sub_;
   ros::Publisher path_pub_, candidates_pub_, markers_pub_, status_pub_;
+  ros::Publisher trajectory_pub_;  ///< ~trajectory (MultiDOFJointTrajectory) of each published path
   ros::Publisher gain_pubs_[4];
   ros::ServiceServer plan_srv_;
   ros::Timer timer_;

@@ -34,6 +34,10 @@ Eigen::Vector3d CandidateSampler::clamp_to_bounds(const Eigen::Vector3d& p) cons
 }
 
 Eigen::Vector3d CandidateSampler::object_view_point(const ObjectSummary& o, double yaw) const {
+  return object_view_point(o, yaw, o.centroid_W.z());
+}
+
+Eigen::Vector3d CandidateSampler::object_view_point(const ObjectSummary& o, double yaw, double z_W) const {
   const Eigen::Vector3d dir(std::cos(yaw), std::sin(yaw), 0.0);
   // Distance from the centroid to where the horizontal ray leaves the box.
   double t_exit = std::numeric_limits<double>::infinity();
@@ -44,7 +48,9 @@ Eigen::Vector3d CandidateSampler::object_view_point(const ObjectSummary& o, doub
   }
   if (!std::isfinite(t_exit)) t_exit = 0.0;
   const double standoff = planner_.object_standoff_factor * exploration_.d_obj_m;
-  return clamp_to_bounds(o.centroid_W + (t_exit + standoff) * dir);
+  Eigen::Vector3d p = o.centroid_W + (t_exit + standoff) * dir;
+  p.z() = z_W;
+  return clamp_to_bounds(p);
 }
 
 std::vector<CandidateSample> CandidateSampler::sample(const std::vector<Eigen::Vector3d>& frontiers_W,
@@ -82,10 +88,11 @@ std::vector<CandidateSample> CandidateSampler::sample(const std::vector<Eigen::V
       s.source = CandidateSource::kObject;
       s.object_id = o.id;
       const double yaw0 = unit(rng_) * 2.0 * M_PI;
-      s.position_W = object_view_point(o, yaw0);
+      const double z = o.centroid_W.z() + unit(rng_) * std::max(0.0, o.bbox_max_W.z() - o.centroid_W.z());
+      s.position_W = object_view_point(o, yaw0, z);
       if (is_free) {
         for (int k = 0; k < 8; ++k) {
-          const Eigen::Vector3d p = object_view_point(o, yaw0 + k * M_PI / 4.0);
+          const Eigen::Vector3d p = object_view_point(o, yaw0 + k * M_PI / 4.0, z);
           if (is_free(p, planner_.clearance_radius_m())) {
             s.position_W = p;
             break;

@@ -26,9 +26,9 @@ CURVES = {
     "background_completeness_percent": ("background completeness", "%", "Fig. 7", "background_completeness",
                                         100.0, 0.0),
     "object_completeness_percent": ("object completeness", "%", "Fig. 7", "object_completeness", 100.0, 0.0),
-    "background_observed_percent": ("background observed from <= d_bg", "%", "Fig. 8",
+    "background_observed_percent": ("background map surface observed from <= d_bg", "%", "Fig. 8",
                                     "background_observed_share", 100.0, 0.0),
-    "object_observed_percent": ("object surface observed from <= d_obj", "%", "Fig. 8", "object_observed_share",
+    "object_observed_percent": ("object map surface observed from <= d_obj", "%", "Fig. 8", "object_observed_share",
                                 100.0, 0.0),
     "path_length_m": ("path length", "m", "", "path_length_m", 1.0, 0.0),
 }

@@ -120,6 +120,14 @@ class RunLog:
         n = sum(o.voxel_count for o in objs)
         return round(sum(o.observed_fraction * o.voxel_count for o in objs) / n, 4) if n else ""
 
+    def background_observed_share(self):
+        """Share of the background map's own observed surface (its occupied voxels) seen from
+        <= d_bg (MapStats.surface_observed_share, measured with each frontier cloud); "" before
+        the map has measured it (-1) or without stats. Over the reconstruction, not the ground
+        truth, as the paper's Fig. 8 seems to be (its object share drops for occluded artefacts)."""
+        share = self.stats.surface_observed_share if self.stats is not None else -1.0
+        return round(share, 4) if 0.0 <= share <= 1.0 else ""
+
     def set_found(self, gt_ids, sim_s: float) -> None:
         """The ground-truth ids a snapshot of the object map matches (GroundTruthIndex.found), taken at sim_s."""
         if not self._frozen:
@@ -152,6 +160,7 @@ class RunLog:
                 "found_at_s": round(self.found_at_s, 2) if self.found_at_s is not None else "",
                 "ground_truth_found_proxy": len(self.found_proxy(gt_objs)),
                 "object_observed_share": self.object_observed_share(),
+                "background_observed_share": self.background_observed_share(),
                 "path_length_m": round(self.path_length_m, 3), "collisions": self.collisions,
                 "planning_time_s": round(self.status.planning_time_s, 4) if self.status else 0.0,
                 "integration_time_ms": round(st.integration_time_ms, 3) if st else 0.0,

@@ -174,14 +174,16 @@ def cloud_xyz(msg) -> np.ndarray:
     return np.stack([raw[:, off[c]:off[c] + 4].copy().view(np.float32)[:, 0] for c in "xyz"], 1)
 
 
-def grab_occupied(topic: str = "/background_map/occupied", timeout_s: float = 5.0) -> Optional[np.ndarray]:
+def grab_occupied(topic: str = "/background_map/occupied", timeout_s: float = 5.0, since=None) -> Optional[np.ndarray]:
     """The background map's current ~occupied cloud (live, needs rospy.init_node): subscribing
-    makes the node send one; a cloud stamped before the call (what the latched topic
-    kept from an earlier subscription) is skipped. None if none came within timeout_s of wall time."""
+    makes the node send one; a cloud stamped before `since` (rospy.Time; default half a
+    second before the call: what the latched topic kept from an earlier subscription) is
+    skipped. None if none came within timeout_s of wall time."""
     import threading
     import rospy
     from sensor_msgs.msg import PointCloud2
-    since = rospy.get_rostime() - rospy.Duration(0.5)  # a frame or so: the node stamps the cloud with its last frame
+    if since is None:
+        since = rospy.get_rostime() - rospy.Duration(0.5)  # a frame or so: the cloud has its last frame's stamp
     got, ready = [], threading.Event()
 
     def on_cloud(msg):

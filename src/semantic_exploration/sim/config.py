@@ -206,6 +206,8 @@ class SimConfig:
     lockstep_nodes: List[str] = field(default_factory=list)
     lockstep_timeout_s: float = 5.0          # wall s to wait for one frame
     lockstep_startup_timeout_s: float = 30.0  # wall s to wait for a depth subscriber before the first frame
+    lockstep_planner: bool = False   # lockstep only: call planner/plan_once with sim time stopped (planner_lockstep.py)
+    lockstep_planner_retry_s: float = 1.0    # sim s between plan_once calls that gave no path
     start_pose: Optional[List[float]] = None  # [x, y, z, yaw] (m, rad); None = scene's start
     bounds_min_m: Optional[List[float]] = None  # accepted path region; None = scene bounds
     bounds_max_m: Optional[List[float]] = None
@@ -228,6 +230,9 @@ class SimConfig:
         _req(_finite(self.lockstep_timeout_s) and self.lockstep_timeout_s > 0, "lockstep_timeout_s", "must be > 0 s")
         _req(_finite(self.lockstep_startup_timeout_s) and self.lockstep_startup_timeout_s >= 0,
              "lockstep_startup_timeout_s", "must be >= 0 s")
+        _req(isinstance(self.lockstep_planner, bool), "lockstep_planner", "must be true or false")
+        _req(_finite(self.lockstep_planner_retry_s) and self.lockstep_planner_retry_s > 0, "lockstep_planner_retry_s",
+             "must be > 0 s")
         if self.start_pose is not None:
             _req(isinstance(self.start_pose, list) and len(self.start_pose) == 4 and all(map(_finite, self.start_pose)),
                  "start_pose", "must be [x, y, z, yaw] (m, rad) or empty")

@@ -11,275 +11,18 @@ cushions, beds, cabinets, plants, monitors/TVs, backpacks, keyboards.
 """
 
 import math
-from typing import Dict, List, Optional, Tuple
+from typing import List, Optional, Tuple
 
 import numpy as np
 
-from .scene import Scene
+from .furniture import armchair, backpack, bed, cabinet, chair, cushion, keyboard, monitor, plant, sofa, table
+from .mesh_builder import MeshBuilder, vary_colour
+from .scene_model import Scene
 
 WALL_T = 0.1      # wall thickness, m
 DOOR_W = 0.95     # doorway width, m
 DOOR_H = 2.1      # doorway height, m
 CORRIDOR_W = 1.5  # corridor width, m
-
-
-def _box_mesh():
-    v = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)], float)
-    # Outward-facing triangles of the unit cube (vertex index = 4x + 2y + z).
-    f = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
-                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]], np.int64)
-    return v, f
-
-
-def _cylinder_mesh(sections=12):
-    a = np.linspace(0, 2 * math.pi, sections, endpoint=False)
-    ring = np.stack([np.cos(a), np.sin(a)], 1)
-    v = np.concatenate([np.c_[ring, np.zeros(sections)], np.c_[ring, np.ones(sections)], [[0, 0, 0], [0, 0, 1]]])
-    f = []
-    for i in range(sections):
-        j = (i + 1) % sections
-        f += [[i, j, sections + j], [i, sections + j, sections + i],
-              [2 * sections, j, i], [2 * sections + 1, sections + i, sections + j]]
-    return v, np.array(f, np.int64)
-
-
-def _sphere_mesh():
-    # Icosahedron subdivided once (80 faces), unit radius.
-    t = (1 + 5 ** 0.5) / 2
-    v = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t], [0, -1, -t], [0, 1, -t],
-                  [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], float)
-    f = [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6],
-         [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10],
-         [8, 6, 7], [9, 8, 1]]
-    verts = list(v / np.linalg.norm(v, axis=1, keepdims=True))
-    mid = {}
-    out = []
-
-    def m(a, b):
-        key = (min(a, b), max(a, b))
-        if key not in mid:
-            p = verts[a] + verts[b]
-            verts.append(p / np.linalg.norm(p))
-            mid[key] = len(verts) - 1
-        return mid[key]
-    for a, b, c in f:
-        ab, bc, ca = m(a, b), m(b, c), m(c, a)
-        out += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-    return np.array(verts), np.array(out, np.int64)
-
-
-_BOX = _box_mesh()
-_CYL = _cylinder_mesh()
-_SPH = _sphere_mesh()
-
-
-class MeshBuilder:
-    """Accumulates parts (each tagged with an object id and a colour) into one scene."""
-
-    def __init__(self, rng: np.random.Generator):
-        self.rng = rng
-        self.v: List[np.ndarray] = []
-        self.f: List[np.ndarray] = []
-        self.ids: List[np.ndarray] = []
-        self.cols: List[np.ndarray] = []
-        self.n = 0
-        self.objects: Dict[int, str] = {}
-        self.next_id = 1
-
-    def new_object(self, label: str) -> int:
-        oid = self.next_id
-        self.next_id += 1
-        self.objects[oid] = label
-        return oid
-
-    def _add(self, verts, faces, oid, color):
-        self.v.append(verts)
-        self.f.append(faces + self.n)
-        self.ids.append(np.full(len(faces), oid, np.int32))
-        self.cols.append(np.tile(np.clip(np.asarray(color), 0, 255).astype(np.uint8), (len(faces), 1)))
-        self.n += len(verts)
-
-    def box(self, oid, color, center, size, pose=None):
-        v = _BOX[0] * np.asarray(size, float) + np.asarray(center, float)
-        self._add(_apply(pose, v), _BOX[1], oid, color)
-
-    def box_minmax(self, oid, color, lo, hi, pose=None):
-        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-        self.box(oid, color, (lo + hi) / 2, hi - lo, pose)
-
-    def cylinder(self, oid, color, base, radius, height, pose=None):
-        v = _CYL[0] * np.array([radius, radius, height]) + np.asarray(base, float)
-        self._add(_apply(pose, v), _CYL[1], oid, color)
-
-    def sphere(self, oid, color, center, radii, pose=None):
-        v = _SPH[0] * np.asarray(radii, float) + np.asarray(center, float)
-        self._add(_apply(pose, v), _SPH[1], oid, color)
-
-    def scene(self, name, start) -> Scene:
-        return Scene(np.concatenate(self.v), np.concatenate(self.f), np.concatenate(self.ids),
-                     np.concatenate(self.cols), self.objects, name=name, start=start)
-
-
-def _apply(pose, v):
-    """Applies pose (x, y, yaw) about z to local points."""
-    if pose is None:
-        return v
-    x, y, yaw = pose
-    c, s = math.cos(yaw), math.sin(yaw)
-    out = v.copy()
-    out[:, 0] = c * v[:, 0] - s * v[:, 1] + x
-    out[:, 1] = s * v[:, 0] + c * v[:, 1] + y
-    return out
-
-
-def _vary(rng, color, amount=18):
-    return np.asarray(color, float) + rng.integers(-amount, amount + 1, 3)
-
-
-# ---------------------------------------------------------------------------
-# Furniture, each in its local frame: origin on the floor at the footprint
-# centre, front towards +x. Returns the footprint half extents (hx, hy).
-# ---------------------------------------------------------------------------
-WOODS = [(139, 94, 60), (160, 120, 80), (110, 75, 45), (190, 160, 120), (90, 60, 40)]
-FABRICS = [(70, 90, 140), (150, 60, 60), (90, 130, 90), (120, 120, 120), (180, 150, 100), (60, 60, 70)]
-
-
-def chair(b: MeshBuilder, pose, z0=0.0):
-    rng = b.rng
-    oid = b.new_object("chair")
-    wood = _vary(rng, WOODS[rng.integers(len(WOODS))])
-    seat = _vary(rng, FABRICS[rng.integers(len(FABRICS))])
-    w, d, h = 0.44, 0.44, 0.45
-    for sx in (-1, 1):
-        for sy in (-1, 1):
-            b.box(oid, wood, (sx * (d / 2 - 0.03), sy * (w / 2 - 0.03), z0 + h / 2), (0.035, 0.035, h), pose)
-    b.box(oid, seat, (0, 0, z0 + h + 0.025), (d, w, 0.05), pose)
-    b.box(oid, wood, (-d / 2 + 0.02, 0, z0 + h + 0.05 + 0.22), (0.035, w, 0.36), pose)  # backrest
-    return oid, (d / 2, w / 2)
-
-
-def armchair(b: MeshBuilder, pose):
-    rng = b.rng
-    oid = b.new_object("chair")
-    fab = _vary(rng, FABRICS[rng.integers(len(FABRICS))])
-    b.box_minmax(oid, fab, (-0.38, -0.38, 0.0), (0.38, 0.38, 0.42), pose)
-    b.box_minmax(oid, fab, (-0.38, -0.38, 0.42), (-0.2, 0.38, 0.9), pose)
-    for sy in (-1, 1):
-        b.box_minmax(oid, _vary(rng, fab, 8), (-0.2, sy * 0.38 - 0.07, 0.42), (0.38, sy * 0.38 + 0.07, 0.62), pose)
-    return oid, (0.38, 0.45)
-
-
-def table(b: MeshBuilder, pose, length=1.4, width=0.85, height=0.75, label="table"):
-    rng = b.rng
-    oid = b.new_object(label)
-    wood = _vary(rng, WOODS[rng.integers(len(WOODS))])
-    b.box(oid, wood, (0, 0, height - 0.02), (width, length, 0.04), pose)
-    for sx in (-1, 1):
-        for sy in (-1, 1):
-            b.box(oid, _vary(rng, wood, 6), (sx * (width / 2 - 0.06), sy * (length / 2 - 0.06), (height - 0.04) / 2),
-                  (0.05, 0.05, height - 0.04), pose)
-    return oid, (width / 2, length / 2)
-
-
-def sofa(b: MeshBuilder, pose, length=2.0):
-    rng = b.rng
-    oid = b.new_object("sofa")
-    fab = _vary(rng, FABRICS[rng.integers(len(FABRICS))])
-    d = 0.88
-    b.box_minmax(oid, _vary(rng, fab, 5), (-d / 2, -length / 2, 0.08), (d / 2, length / 2, 0.42), pose)
-    b.box_minmax(oid, fab, (-d / 2, -length / 2 + 0.18, 0.42), (-d / 2 + 0.22, length / 2 - 0.18, 0.86), pose)
-    for sy in (-1, 1):
-        y0 = sy * length / 2
-        b.box_minmax(oid, fab, (-d / 2, min(y0, y0 - sy * 0.18), 0.08), (d / 2, max(y0, y0 - sy * 0.18), 0.64), pose)
-        for sx in (-1, 1):  # feet
-            b.box(oid, (40, 30, 25), (sx * (d / 2 - 0.06), y0 - sy * 0.06, 0.04), (0.05, 0.05, 0.08), pose)
-    return oid, (d / 2, length / 2)
-
-
-def cushion(b: MeshBuilder, pose, z0):
-    rng = b.rng
-    oid = b.new_object("cushion")
-    col = _vary(rng, FABRICS[rng.integers(len(FABRICS))], 30)
-    # Soft look: a flattened sphere over a thin box.
-    b.box(oid, col, (0, 0, z0 + 0.04), (0.12, 0.38, 0.08), pose)
-    b.sphere(oid, col, (0, 0, z0 + 0.2), (0.07, 0.2, 0.19), pose)
-    return oid, (0.1, 0.21)
-
-
-def bed(b: MeshBuilder, pose, width=1.5, length=2.05):
-    rng = b.rng
-    oid = b.new_object("bed")
-    wood = _vary(rng, WOODS[rng.integers(len(WOODS))])
-    sheet = _vary(rng, (225, 225, 215), 10)
-    b.box_minmax(oid, wood, (-length / 2, -width / 2, 0.05), (length / 2, width / 2, 0.32), pose)
-    b.box_minmax(oid, sheet, (-length / 2 + 0.08, -width / 2 + 0.04, 0.32), (length / 2 - 0.03, width / 2 - 0.04, 0.52),
-                 pose)
-    b.box_minmax(oid, wood, (-length / 2, -width / 2, 0.0), (-length / 2 + 0.08, width / 2, 1.05), pose)  # headboard
-    for sy in (-1, 1):
-        b.box(oid, (245, 245, 240), (-length / 2 + 0.3, sy * width / 4, 0.58), (0.35, width / 2 - 0.15, 0.12), pose)
-    return oid, (length / 2, width / 2)
-
-
-def cabinet(b: MeshBuilder, pose, width=0.9, depth=0.45, height=0.8):
-    rng = b.rng
-    oid = b.new_object("cabinet")
-    wood = _vary(rng, WOODS[rng.integers(len(WOODS))])
-    b.box_minmax(oid, _vary(rng, wood, 5), (-depth / 2, -width / 2, 0.0), (depth / 2, width / 2, 0.06), pose)
-    b.box_minmax(oid, wood, (-depth / 2, -width / 2, 0.06), (depth / 2 - 0.02, width / 2, height), pose)
-    n_doors = 2 if width > 0.6 else 1
-    for k in range(n_doors):
-        yc = -width / 2 + (k + 0.5) * width / n_doors
-        b.box(oid, _vary(rng, wood, 12), (depth / 2 - 0.01, yc, (height + 0.06) / 2),
-              (0.02, width / n_doors - 0.02, height - 0.1), pose)
-        b.box(oid, (200, 200, 205), (depth / 2 + 0.01, yc + (0.08 if k == 0 and n_doors == 2 else -0.08),
-                                     height * 0.6), (0.02, 0.02, 0.12), pose)
-    return oid, (depth / 2, width / 2), height
-
-
-def plant(b: MeshBuilder, pose):
-    rng = b.rng
-    oid = b.new_object("plant")
-    pot = _vary(rng, (180, 90, 60), 12)
-    b.cylinder(oid, pot, (0, 0, 0), 0.16, 0.32, pose)
-    b.cylinder(oid, (90, 70, 40), (0, 0, 0.32), 0.02, 0.45, pose)
-    for _ in range(int(rng.integers(4, 7))):
-        c = (rng.uniform(-0.12, 0.12), rng.uniform(-0.12, 0.12), rng.uniform(0.65, 1.05))
-        r = rng.uniform(0.12, 0.2)
-        b.sphere(oid, _vary(rng, (50, 120, 50), 25), c, (r, r, r * 0.8), pose)
-    return oid, (0.3, 0.3)
-
-
-def monitor(b: MeshBuilder, pose, z0, big=False):
-    rng = b.rng
-    oid = b.new_object("tv_monitor")
-    w, h = (1.0, 0.6) if big else (0.56, 0.34)
-    frame = _vary(rng, (35, 35, 38), 6)
-    b.box(oid, frame, (0, 0, z0 + 0.012), (0.2, 0.28, 0.025), pose)  # foot
-    b.box(oid, frame, (-0.03, 0, z0 + 0.1), (0.04, 0.05, 0.16), pose)  # neck
-    b.box(oid, frame, (0, 0, z0 + 0.16 + h / 2), (0.04, w, h), pose)  # panel
-    b.box(oid, (20, 25, 45), (0.021, 0, z0 + 0.16 + h / 2), (0.004, w - 0.04, h - 0.04), pose)  # screen
-    return oid, (0.1, w / 2)
-
-
-def keyboard(b: MeshBuilder, pose, z0):
-    oid = b.new_object("keyboard")
-    col = _vary(b.rng, (50, 50, 55), 10)
-    b.box(oid, col, (0, 0, z0 + 0.012), (0.15, 0.44, 0.024), pose)
-    for r in range(4):
-        b.box(oid, (200, 200, 200), (-0.05 + r * 0.033, 0, z0 + 0.028), (0.022, 0.40, 0.008), pose)
-    return oid, (0.075, 0.22)
-
-
-def backpack(b: MeshBuilder, pose, z0=0.0):
-    rng = b.rng
-    oid = b.new_object("backpack")
-    col = _vary(rng, [(200, 60, 40), (40, 80, 160), (60, 60, 60), (50, 120, 70)][rng.integers(4)], 15)
-    b.box(oid, col, (0, 0, z0 + 0.21), (0.18, 0.3, 0.42), pose)
-    b.cylinder(oid, col, (0, 0, z0 + 0.42), 0.09, 0.05, (pose[0], pose[1], pose[2]) if pose else None)
-    b.box(oid, _vary(rng, col, 20), (0.11, 0, z0 + 0.14), (0.06, 0.24, 0.2), pose)  # front pocket
-    for sy in (-1, 1):
-        b.box(oid, (30, 30, 30), (-0.1, sy * 0.09, z0 + 0.25), (0.02, 0.04, 0.34), pose)  # straps
-    return oid, (0.14, 0.16)
 
 
 # ---------------------------------------------------------------------------
@@ -512,9 +255,10 @@ def _split(rng, length, min_w=3.0, max_w=5.5):
 
 def _floor_and_ceiling(b: "MeshBuilder", rng, X: float, Y: float, H: float):
     """Floor and ceiling slabs over an X x Y footprint of height H; returns the wall object id and wall colour."""
-    wall_col = _vary(rng, (225, 220, 205), 10)
+    wall_col = vary_colour(rng, (225, 220, 205), 10)
     floor_id, ceil_id, wall_id = b.new_object("floor"), b.new_object("ceiling"), b.new_object("wall")
-    b.box_minmax(floor_id, _vary(rng, (150, 120, 90), 15), (-WALL_T, -WALL_T, -0.05), (X + WALL_T, Y + WALL_T, 0.0))
+    b.box_minmax(floor_id, vary_colour(rng, (150, 120, 90), 15), (-WALL_T, -WALL_T, -0.05),
+                 (X + WALL_T, Y + WALL_T, 0.0))
     b.box_minmax(ceil_id, (240, 240, 240), (-WALL_T, -WALL_T, H), (X + WALL_T, Y + WALL_T, H + 0.05))
     return wall_id, wall_col
 

@@ -7,6 +7,13 @@ turns, and changed by at most a_max * dt per step; so |v| <= v_max and
 |dv/dt| <= a_max hold by construction and straight segments are tracked
 exactly. Yaw works the same way with omega_max and alpha_max. The yaw target
 of a segment is the yaw of the waypoint it leads to.
+
+Instead of a path the MAV can track a moving setpoint (set_setpoint), as a
+flight controller's position control does with a setpoint stream: the
+velocity is steered towards the setpoint's own velocity (feed-forward,
+estimated by the caller) plus a correction towards it that still lets the
+MAV stop there, within the same limits; the setpoint moves on at its
+velocity between updates, for at most SETPOINT_HOLD_S.
 """
 
 import math
@@ -24,6 +31,10 @@ def wrap_angle(a: float) -> float:
 class PathFollower:
     #: Vertices where the path turns by less than this are passed without stopping, rad.
     CORNER_ANGLE_RAD = math.radians(5.0)
+    #: Gain of the correction towards a setpoint, 1/s.
+    SETPOINT_GAIN = 2.0
+    #: A setpoint not renewed for this long stops moving on (its velocity is taken as 0), s.
+    SETPOINT_HOLD_S = 0.25
 
     def __init__(self, cfg: MavConfig, start: Sequence[float]):
         cfg.validate()
@@ -35,6 +46,7 @@ class PathFollower:
         self.path: List[Tuple[np.ndarray, float]] = []
         self.i = 0
         self._stop_after: List[int] = []
+        self._setpoint: Optional[list] = None  # [position, yaw, velocity, yaw rate, age s]
 
     @property
     def pose(self) -> Tuple[float, float, float, float]:
@@ -44,8 +56,56 @@ class PathFollower:
     def active(self) -> bool:
         return bool(self.path)
 
+    def set_setpoint(self, target: Sequence[float], velocity: Sequence[float] = (0.0, 0.0, 0.0),
+                     yaw_rate: float = 0.0, age_s: float = 0.0, acceleration: Sequence[float] = (0.0, 0.0, 0.0),
+                     yaw_accel: float = 0.0) -> None:
+        """Tracks the setpoint (x, y, z, yaw), moving at `velocity` (m/s) and `yaw_rate` (rad/s)
+        and changing them at `acceleration` (m/s^2) and `yaw_accel` (rad/s^2), instead of a path
+        (which it replaces); `age_s`: how long ago it was sent (it has moved on since, for at most
+        SETPOINT_HOLD_S). Never reports a goal reached."""
+        self.path = []
+        self._setpoint = [np.array(target[:3], float), float(target[3]), np.array(velocity[:3], float),
+                          float(yaw_rate), 0.0, np.array(acceleration[:3], float), float(yaw_accel)]
+        self._advance_setpoint(min(max(float(age_s), 0.0), self.SETPOINT_HOLD_S))
+
+    def _advance_setpoint(self, dt: float) -> None:
+        """Moves the setpoint on by dt at its velocity and acceleration; it slows down to rest
+        but never turns back, and stops once SETPOINT_HOLD_S old."""
+        sp = self._setpoint
+        if sp[4] > self.SETPOINT_HOLD_S:
+            sp[2], sp[3], sp[5], sp[6] = np.zeros(3), 0.0, np.zeros(3), 0.0
+        v1 = sp[2] + sp[5] * dt
+        if float(v1 @ sp[2]) < 0.0:  # braking to rest within dt
+            v1, sp[5] = np.zeros(3), np.zeros(3)
+        sp[0] = sp[0] + 0.5 * (sp[2] + v1) * dt
+        sp[2] = v1
+        w1 = sp[3] + sp[6] * dt
+        if w1 * sp[3] < 0.0:
+            w1, sp[6] = 0.0, 0.0
+        sp[1] = wrap_angle(sp[1] + 0.5 * (sp[3] + w1) * dt)
+        sp[3] = w1
+        sp[4] += dt
+
+    def _step_setpoint(self, dt: float) -> None:
+        c = self.cfg
+        self._advance_setpoint(dt)  # the setpoint moves on until the next one arrives
+        sp = self._setpoint
+        e = sp[0] - self.p
+        dist = float(np.linalg.norm(e))
+        corr = min(self.SETPOINT_GAIN * dist, math.sqrt(2.0 * 0.9 * c.a_max_mps2 * dist))
+        self._accelerate(sp[2] + (e / dist * corr if dist > 1e-12 else 0.0), c.a_max_mps2 * dt)
+        self.p = self.p + self.v * dt
+        e_yaw = wrap_angle(sp[1] - self.yaw)
+        w_corr = math.copysign(min(self.SETPOINT_GAIN * abs(e_yaw),
+                                   math.sqrt(2.0 * 0.9 * c.alpha_max_radps2 * abs(e_yaw))), e_yaw)
+        w_target = max(-c.omega_max_radps, min(c.omega_max_radps, sp[3] + w_corr))
+        al_step = c.alpha_max_radps2 * dt
+        self.omega += max(-al_step, min(al_step, w_target - self.omega))
+        self.yaw = wrap_angle(self.yaw + self.omega * dt)
+
     def set_path(self, waypoints: Sequence[Sequence[float]]) -> None:
-        """Replaces the path; [] makes the MAV stop where it is (hover)."""
+        """Replaces the path (and any setpoint); [] makes the MAV stop where it is (hover)."""
+        self._setpoint = None
         self.path = [(np.array(w[:3], float), float(w[3])) for w in waypoints]
         self.i = 0
         n = len(self.path)
@@ -70,6 +130,9 @@ class PathFollower:
     def step(self, dt: float) -> bool:
         """Advances by dt seconds; returns True once when the path's end is reached."""
         c = self.cfg
+        if self._setpoint is not None:
+            self._step_setpoint(dt)
+            return False
         a_step = c.a_max_mps2 * dt
         # Translation.
         if self.path:
@@ -135,6 +198,38 @@ class PathFollower:
         s = float(np.linalg.norm(self.v))
         if s > self.cfg.v_max_mps:
             self.v *= self.cfg.v_max_mps / s
+
+
+class SetpointMotion:
+    """Velocity and acceleration of a setpoint stream (position, yaw) from consecutive setpoints:
+    a flight controller gets positions only. The velocity of the last interval is taken at its
+    end by adding the acceleration between the last two intervals; a setpoint that did not move
+    is at rest. Intervals longer than max_gap_s start afresh."""
+
+    def __init__(self, max_gap_s: float = 0.5):
+        self.max_gap_s = max_gap_s
+        self._last = None    # (t, position, yaw)
+        self._last_v = None  # (t at the interval's middle, velocity, yaw rate)
+
+    def update(self, t: float, target: Sequence[float]):
+        """(velocity, yaw rate, acceleration, yaw acceleration) of the setpoint `target` (x, y, z, yaw) sent at t (s)."""
+        p, yaw = np.array(target[:3], float), float(target[3])
+        last, last_v = self._last, self._last_v
+        self._last = (t, p, yaw)
+        zero = (np.zeros(3), 0.0, np.zeros(3), 0.0)
+        if last is None or not 0.0 < t - last[0] <= self.max_gap_s:
+            self._last_v = None
+            return zero
+        dt = t - last[0]
+        v, w = (p - last[1]) / dt, wrap_angle(yaw - last[2]) / dt
+        mid = t - 0.5 * dt
+        self._last_v = (mid, v, w)
+        if not v.any() and w == 0.0:
+            return zero
+        if last_v is None or not 0.0 < mid - last_v[0] <= self.max_gap_s:
+            return v, w, np.zeros(3), 0.0
+        a, alpha = (v - last_v[1]) / (mid - last_v[0]), (w - last_v[2]) / (mid - last_v[0])
+        return v + a * 0.5 * dt, w + alpha * 0.5 * dt, a, alpha
 
 
 def closest_points_on_triangles(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -206,11 +301,19 @@ class CollisionChecker:
         order = np.argsort(keys, kind="stable")
         self._tris = tri_of[order]
         self._keys, self._start, self._count = np.unique(keys[order], return_index=True, return_counts=True)
+        self._last = (b"", np.empty(0, np.int64))  # (cell range, its triangles): reused for many steps
 
     def _candidates(self, p: np.ndarray, r: float) -> np.ndarray:
         c0 = np.floor((p - r - self.origin) / self.cell).astype(np.int64)
         c1 = np.floor((p + r - self.origin) / self.cell).astype(np.int64)
         c0, c1 = np.maximum(c0, 0), np.minimum(c1, self.dims - 1)
+        key = c0.tobytes() + c1.tobytes()
+        if key != self._last[0]:
+            self._last = (key, self._cells_candidates(c0, c1))
+        return self._last[1]
+
+    def _cells_candidates(self, c0: np.ndarray, c1: np.ndarray) -> np.ndarray:
+        """Triangles binned into the cells c0..c1 (inclusive, clipped to the grid)."""
         if np.any(c1 < c0):
             return np.empty(0, np.int64)
         g = np.stack(np.meshgrid(*[np.arange(a, b + 1) for a, b in zip(c0, c1)], indexing="ij"), -1).reshape(-1, 3)

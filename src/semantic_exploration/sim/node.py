@@ -2,7 +2,10 @@
 detector would, for a scene rendered by :class:`Simulator`.
 
 Topics (relative names, resolved in the node's namespace):
-  sub  planner/path (nav_msgs/Path, yaw in orientation), frame_integrated (FrameIntegrated, lockstep),
+  sub  planner/path (nav_msgs/Path, yaw in orientation), or with ~follow "setpoints"
+       setpoint_position/local (geometry_msgs/PoseStamped in world, from setpoint_streamer; the MAV
+       tracks it with the setpoints' velocity as feed-forward and reports no goal: the streamer
+       does), frame_integrated (FrameIntegrated, lockstep),
        ~load_scene (std_msgs/String: "mesh" or "mesh;labels" of a scene to switch to),
        ~hide_detections (std_msgs/UInt32MultiArray: scene object ids the detector stops reporting
        from the next frame on, replacing detector/hidden_object_ids; [] = hide none)
@@ -56,7 +59,9 @@ from semantic_exploration.msg import Detection, Detections, DropCounts, FrameInt
 
 from .config import ConfigError, SimConfig, from_dict
 from .faults import FaultInjector
+from .planner_lockstep import PlannerLockstep
 from .scene import SceneError, export_ground_truth
+from .mav import PathFollower, SetpointMotion
 from .simulator import (PathError, Simulator, load_simulator, path_pose_count, quaternion_from_matrix,
                         waypoints_from_poses)
 
@@ -127,9 +132,19 @@ class MavSimNode:
         self._lock = threading.Condition()
         self._reported: Dict[str, int] = {}
         self._pending_path = None
+        self._pending_setpoint = None
         self._requests: "queue.Queue" = queue.Queue()
-        # Raw: a path's length is checked before it is deserialised (1e6 poses would hold the GIL for seconds).
-        rospy.Subscriber("planner/path", rospy.AnyMsg, self._on_path, queue_size=5)
+        # ~follow: what the MAV flies: "path" (planner/path) or "setpoints" (setpoint_position/local).
+        self.follow = rospy.get_param("~follow", "path")
+        if self.follow not in ("path", "setpoints"):
+            rospy.logfatal("mav_sim: ~follow must be \"path\" or \"setpoints\" (is %r)", self.follow)
+            raise ConfigError("follow: must be \"path\" or \"setpoints\"")
+        self._setpoint_motion = SetpointMotion(2 * PathFollower.SETPOINT_HOLD_S)  # the setpoints' velocity
+        if self.follow == "setpoints":
+            rospy.Subscriber("setpoint_position/local", PoseStamped, self._on_setpoint, queue_size=5)
+        else:
+            # Raw: a path's length is checked before it is deserialised (1e6 poses would hold the GIL for seconds).
+            rospy.Subscriber("planner/path", rospy.AnyMsg, self._on_path, queue_size=5)
         rospy.Subscriber("frame_integrated", FrameIntegrated, self._on_integrated, queue_size=50)
         rospy.Subscriber("~load_scene", String, lambda m: self._requests.put(m.data), queue_size=2)
         self._hidden = list(c.detector.hidden_object_ids)
@@ -140,11 +155,21 @@ class MavSimNode:
         # cannot report that frame (e.g. still connecting at start-up), so it does not wait for them
         self._absent = (None, set())  # (frame stamp ns, names)
         self._node_names = (0.0, set())  # (wall time of the query, short names of the master's nodes)
+        self._planner_lockstep = PlannerLockstep(
+            rospy.resolve_name("planner/plan_once"), c.lockstep_planner_retry_s, c.lockstep_timeout_s,
+            c.lockstep_startup_timeout_s) if c.lockstep and c.lockstep_planner else None
         self.pub_coll.publish(UInt32(0))
         self._publish_fault_counts(0)
 
     # ------------------------------------------------------------- callbacks
     def _on_path(self, raw: rospy.AnyMsg) -> None:
+        try:
+            self._take_path(raw)
+        finally:
+            if self._planner_lockstep is not None:
+                self._planner_lockstep.path_handled()
+
+    def _take_path(self, raw: rospy.AnyMsg) -> None:
         """Checks a path once, here: the physics loop only swaps it in."""
         limit = self.cfg.mav.max_path_poses
         try:
@@ -177,6 +202,25 @@ class MavSimNode:
         with self._lock:
             self._pending_path = (wps, sim)  # checked against `sim`
 
+    def _on_setpoint(self, msg: PoseStamped) -> None:
+        """A setpoint and its velocity from the previous one (the streamer samples a trajectory)."""
+        frame = msg.header.frame_id.lstrip("/")
+        sim = self.sim
+        try:
+            if frame and frame != self.cfg.frames.world:
+                raise PathError("in frame '%s' (expected '%s')" % (frame, self.cfg.frames.world))
+            p, q = msg.pose.position, msg.pose.orientation
+            wp = waypoints_from_poses([((p.x, p.y, p.z), (q.x, q.y, q.z, q.w))])
+            if sim is not None:
+                wp = sim.check_path(wp)
+        except PathError as e:
+            rospy.logerr_throttle(5.0, "mav_sim: ignored setpoint %s; keeping the previous one" % e)
+            return
+        t = msg.header.stamp.to_sec()
+        velocity, yaw_rate, accel, yaw_accel = self._setpoint_motion.update(t, wp[0])
+        with self._lock:
+            self._pending_setpoint = (wp[0], velocity, yaw_rate, t, accel, yaw_accel)
+
     def _on_hide(self, msg: UInt32MultiArray) -> None:
         self._hidden = [int(i) for i in msg.data]
         if self.sim is not None:
@@ -200,9 +244,10 @@ class MavSimNode:
         self.sim = sim
         lo, hi = sim.bounds
         rospy.loginfo("mav_sim: scene '%s': %d triangles, %d objects (%d of known classes), bounds [%s] - [%s], "
-                      "start (%.2f, %.2f, %.2f, yaw %.2f)", sim.scene.name, len(sim.scene.faces),
+                      "start (%.2f, %.2f, %.2f, yaw %.2f), rays through %s", sim.scene.name, len(sim.scene.faces),
                       len(sim.scene.objects), len(sim.scene.thing_ids(c.classes.names)),
-                      ", ".join("%.2f" % v for v in lo), ", ".join("%.2f" % v for v in hi), *sim.start)
+                      ", ".join("%.2f" % v for v in lo), ", ".join("%.2f" % v for v in hi), *sim.start,
+                      sim.renderer.backend)
         unl = getattr(sim.scene, "unlabelled_ids", [])
         if unl:
             rospy.logwarn("mav_sim: %d face object ids have no entry in the label table; treated as background",
@@ -321,7 +366,9 @@ class MavSimNode:
             if self.pub_depth.get_num_connections() == 0:
                 waiting.append("a subscriber of %s" % self.pub_depth.resolved_name)
             waiting += ["%s on %s" % (n, t) for t, n in self._unconnected_subscribers()]
-            waiting += ["lockstep node %s" % n for n in self._lockstep_nodes if self._node_exists(n)
+            # With lockstep_planner (deterministic runs) every lockstep node must be there before frame 0.
+            strict = self._planner_lockstep is not None
+            waiting += ["lockstep node %s" % n for n in self._lockstep_nodes if (strict or self._node_exists(n))
                         and not self._depth_connected(n)]
             now = time.monotonic()
             if not waiting:
@@ -406,6 +453,10 @@ class MavSimNode:
                 self.tf_static.sendTransform(self._transform(sim.T_BC, f.body, f.camera, t_ns))
             with self._lock:
                 pending, self._pending_path = self._pending_path, None
+                setpoint, self._pending_setpoint = self._pending_setpoint, None
+            if setpoint is not None:  # sent at its stamp; sim time may have run on since (no lockstep wait for it)
+                target, velocity, yaw_rate, stamp_s, accel, yaw_accel = setpoint
+                sim.follower.set_setpoint(target, velocity, yaw_rate, t_ns / NS - stamp_s, accel, yaw_accel)
             if pending is not None:
                 path, checked_by = pending
                 try:
@@ -425,6 +476,10 @@ class MavSimNode:
                         self._wait_for_subscribers()
                     else:
                         self._wait_lockstep(last_frame)
+                    pl = self._planner_lockstep
+                    if not first and pl is not None and pl.due(t_ns, not sim.follower.active):
+                        pl.plan(t_ns, lambda level, text: getattr(rospy, "log" + level)("mav_sim: " + text))
+                        continue  # the path (if any) is swapped in at the top; then this frame
                     anchor_wall, anchor_ns = time.monotonic(), t_ns
                 if first:
                     # The frame's time first, so that its stamp is not "before the first /clock" anywhere.
@@ -446,7 +501,10 @@ class MavSimNode:
             ev = sim.step(dt_ns / NS)
             t_ns += dt_ns
             self.pub_clock.publish(Clock(clock=_stamp(t_ns)))
-            if ev["goal_reached"]:
+            if ev["goal_reached"] and self._planner_lockstep is not None:
+                self._planner_lockstep.goal_reached(t_ns)
+                rospy.loginfo("mav_sim: goal reached at (%.2f, %.2f, %.2f, yaw %.2f)", *sim.pose)
+            elif ev["goal_reached"]:
                 self.pub_goal.publish(self._pose_msg(t_ns))
                 rospy.loginfo("mav_sim: goal reached at (%.2f, %.2f, %.2f, yaw %.2f)", *sim.pose)
             col = ev["collision"]

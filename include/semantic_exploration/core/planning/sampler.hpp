@@ -60,8 +60,12 @@ class CandidateSampler {
     return object.observed_fraction < planner_.object_observed_fraction;
   }
 
-  /// The view point next to `object` along horizontal direction yaw_rad.
+  /// The view point next to `object` along horizontal direction yaw_rad, at the centroid's height.
   Eigen::Vector3d object_view_point(const ObjectSummary& object, double yaw_rad) const;
+  /// The same at camera height z_W, m. Object candidates draw z_W between the
+  /// centroid and the top of the box: a level camera (49 deg vertical field of
+  /// view) at the centroid's height sees no top surface (a seat) from within d_obj.
+  Eigen::Vector3d object_view_point(const ObjectSummary& object, double yaw_rad, double z_W) const;
 
  private:
   Eigen::Vector3d clamp_to_bounds(const Eigen::Vector3d& p_W) const;

@@ -1,0 +1,41 @@
+"""A mission's final figures from its saved maps (run_mission.py and the bag evaluation use it)."""
+import os
+
+
+def evaluate(out, gt, classes, saved):
+    """Final figures from the saved meshes and map (empty where a map was not saved).
+    gt["start"] stands in for a ground truth exported without one."""
+    from semantic_exploration.eval import metrics
+    from semantic_exploration.eval.truth import GroundTruthIndex
+    res = {}
+    try:
+        doc = metrics.load_ground_truth(gt["gt_dir"])
+        if not doc.get("start") and gt.get("start"):
+            doc["start"] = list(gt["start"])
+        index = GroundTruthIndex(doc, classes)
+        # Observability in other processes while this one samples the scene and builds its trees.
+        index.start_observability()
+        index.background.tree
+        rec_dir = saved.get("object_map", {}).get("dir") or os.path.join(out, "objects")
+        if saved.get("object_map", {}).get("success") and os.path.exists(os.path.join(rec_dir, "objects.json")):
+            ev = index.evaluate_objects(metrics.load_reconstruction(rec_dir))
+            res["found"] = len(ev.found_gt_ids)
+            res["ground_truth"] = ev.n_ground_truth
+            res["objects"] = [{"map_id": m.map_id, "class": m.map_class, "gt_id": m.gt_id,
+                               "on_surface_fraction": m.on_surface_fraction,
+                               "rmse_m": m.score.rmse_m if m.score else None,
+                               "completeness": m.score.completeness if m.score else None,
+                               "observable_fraction": ev.observable_fraction.get(m.gt_id)} for m in ev.matches]
+        occ = [f for f in saved.get("background_map", {}).get("files", []) if f.endswith("occupied.ply")]
+        b = index.evaluate_background(metrics.read_ply_vertices(occ[0])) if occ else None
+        if b is not None:
+            res["background"] = {"rmse_m": b.rmse_m, "completeness": b.completeness,
+                                 "n_reconstructed": b.n_reconstructed, "observable_fraction": b.observable_fraction}
+        series = os.path.join(out, "snapshot", "series")
+        if os.path.isdir(series):  # the time series' accuracy and completeness, from the run's snapshots
+            from semantic_exploration.eval.snapshots import finish_series
+            rec = metrics.load_reconstruction(rec_dir) if "found" in res else None
+            res["timeseries"] = finish_series(index, series, os.path.join(out, "timeseries.csv"), rec, b)
+    except Exception as e:  # a failed evaluation must not lose the rest of the report
+        res["error"] = "%s: %s" % (type(e).__name__, e)
+    return res

@@ -1,0 +1,74 @@
+"""Planner lockstep (mav_sim's ``lockstep_planner``): the simulator asks the planner for
+each path itself, with sim time stopped, so that a run does not depend on how long
+planning takes in wall time.
+
+Without it, the MAV hovers while the planner plans and sim time runs on at the
+pace the mapping nodes allow: the path arrives at a sim time set by the
+machine's load, and everything after it differs between two runs. With it,
+whenever the MAV has no path (at the start, after reaching a goal, after a
+refused or failed plan) the simulator, at a frame boundary and once every
+lockstep node has integrated the last frame, calls ``planner/plan_once``
+(std_srvs/Trigger) and, if a path was published, waits for it before sim time
+moves on. A call that gives no path is repeated every ``retry_s`` of sim time.
+mav/goal_reached is not published then (the planner would plan a second time
+on it); the planner's own retries should be off (planner/retry_period_s long).
+"""
+import threading
+import time
+
+NS = 1_000_000_000
+
+
+class PlannerLockstep:
+    def __init__(self, service: str, retry_s: float, timeout_s: float, startup_timeout_s: float):
+        self.service, self.timeout_s, self.startup_timeout_s = service, timeout_s, startup_timeout_s
+        self.retry_ns = int(round(retry_s * NS))
+        self.next_ns = 0              # sim time of the next call, ns (0: at the next boundary)
+        self.calls = self.paths = 0
+        self._handled = 0             # paths received so far (followed or refused)
+        self._cv = threading.Condition()
+        self._proxy = None
+
+    def path_handled(self) -> None:
+        """Called by the path subscriber after each path message, accepted or refused."""
+        with self._cv:
+            self._handled += 1
+            self._cv.notify_all()
+
+    def goal_reached(self, t_ns: int) -> None:
+        self.next_ns = t_ns  # plan at the next frame boundary
+
+    def due(self, t_ns: int, idle: bool) -> bool:
+        return idle and t_ns >= self.next_ns
+
+    def plan(self, t_ns: int, log) -> bool:
+        """Calls plan_once (sim time stands still meanwhile); True once its path has
+        arrived. `log(level, text)` reports failures."""
+        import rospy
+        from std_srvs.srv import Trigger
+        self.calls += 1
+        self.next_ns = t_ns + self.retry_ns
+        with self._cv:
+            before = self._handled
+        try:
+            if self._proxy is None:
+                rospy.wait_for_service(self.service, timeout=self.startup_timeout_s)
+                self._proxy = rospy.ServiceProxy(self.service, Trigger, persistent=False)
+            res = self._proxy()
+        except Exception as e:  # a planner that is not up yet or died: hover, ask again later
+            log("warn", "lockstep_planner: %s failed (%s); asking again in %.1f s of sim time"
+                % (self.service, e, self.retry_ns / NS))
+            return False
+        if not res.success:
+            return False
+        deadline = time.monotonic() + self.timeout_s
+        with self._cv:
+            while self._handled == before:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    log("warn", "lockstep_planner: the planner published a path but none arrived within %.1f s; "
+                        "going on (this run is no longer repeatable)" % self.timeout_s)
+                    return False
+                self._cv.wait(left)
+        self.paths += 1
+        return True

@@ -1,0 +1,151 @@
+// Frontier voxels looked at from close by without being resolved are retired
+// (core/frontier_evidence.hpp), on a free ball carved into unknown space: every
+// voxel of its shell is a frontier, at a known distance from its centre.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "occupancy_test_scene.hpp"
+#include "semantic_exploration/core/frontier_evidence.hpp"
+#include "semantic_exploration/core/occupancy_map.hpp"
+
+using namespace semexp;
+using semexp_test::lookPose;
+
+namespace {
+
+Bounds ballBounds() {
+  Bounds b;
+  b.min_m = {-3.0, -3.0, -3.0};
+  b.max_m = {3.0, 3.0, 3.0};
+  return b;
+}
+
+// A map whose only known space is a free ball of radius 1 m at the origin.
+OccupancyMap freeBall() {
+  BackgroundMapConfig cfg;  // 4 cm voxels
+  OccupancyMap map(cfg, ballBounds());
+  map.markFreeSphere(Eigen::Vector3d::Zero(), 1.0);
+  map.updateFrontiers();
+  return map;
+}
+
+// The frontier voxel of the ball's shell nearest `p`.
+Eigen::Vector3d frontierNear(const OccupancyMap& map, const Eigen::Vector3d& p) {
+  Eigen::Vector3d best = Eigen::Vector3d::Constant(1e9);
+  map.forEachFrontier([&](const Eigen::Vector3d& c, double) {
+    if ((c - p).norm() < (best - p).norm()) best = c;
+  });
+  return best;
+}
+
+std::vector<float> constantDepth(const PinholeCamera& cam, float d) {
+  return std::vector<float>(static_cast<std::size_t>(cam.width) * cam.height, d);
+}
+
+}  // namespace
+
+TEST(FrontierEvidence, ThreeLooksFromDifferentPosesRetireAVoxelThatStaysAFrontier) {
+  const OccupancyMap map = freeBall();
+  ASSERT_GT(map.frontierCount(), 1000u);
+  const PinholeCamera cam;
+  const Eigen::Vector3d ahead = frontierNear(map, {1.0, 0.0, 0.0});   // on the +x axis, ~0.98 m out
+  const Eigen::Vector3d behind = frontierNear(map, {-1.0, 0.0, 0.0});
+  ASSERT_NEAR(ahead.x(), 0.98, 0.03);
+
+  FrontierEvidence ev(FrontierEvidenceConfig{});
+  const auto none = constantDepth(cam, 0.f);  // no return anywhere: a mirror or window fills the view
+  ASSERT_TRUE(ev.look(map, none.data(), cam, lookPose({0.0, 0.0, 0.0}, 0.0, 0.0)));
+  EXPECT_EQ(ev.looks(ahead), 1);
+  EXPECT_EQ(ev.looks(behind), 0);  // behind the camera
+  // The same pose again, or 0.2 m away with the same heading: not a different look.
+  EXPECT_FALSE(ev.look(map, none.data(), cam, lookPose({0.0, 0.0, 0.0}, 0.0, 0.0)));
+  EXPECT_FALSE(ev.look(map, none.data(), cam, lookPose({-0.2, 0.0, 0.0}, 0.0, 0.0)));
+  EXPECT_EQ(ev.looks(ahead), 1);
+  EXPECT_FALSE(ev.retired(ahead));
+  // 0.3 m further back (0.3 >= 0.25 m from the last counted pose), then turned by 20 deg (>= 15 deg).
+  ASSERT_TRUE(ev.look(map, none.data(), cam, lookPose({-0.3, 0.0, 0.0}, 0.0, 0.0)));
+  EXPECT_EQ(ev.looks(ahead), 2);
+  EXPECT_FALSE(ev.retired(ahead));
+  ASSERT_TRUE(ev.look(map, none.data(), cam, lookPose({-0.3, 0.0, 0.0}, 20.0 * M_PI / 180.0, 0.0)));
+  EXPECT_EQ(ev.looks(ahead), 3);
+  EXPECT_TRUE(ev.retired(ahead));
+  EXPECT_FALSE(ev.retired(behind));
+  EXPECT_GT(ev.retiredCount(), 0u);
+  EXPECT_LT(ev.retiredCount(), map.frontierCount());  // the half behind was never seen
+  EXPECT_EQ(ev.countedFrames(), 3u);
+}
+
+TEST(FrontierEvidence, AHitNearerThanTheVoxelByMoreThanTheMarginHidesIt) {
+  const OccupancyMap map = freeBall();
+  const PinholeCamera cam;
+  const Eigen::Vector3d ahead = frontierNear(map, {1.0, 0.0, 0.0});
+  const double z = ahead.x();  // z-depth from the origin looking along +x
+  const auto look = [&](float depth) {
+    FrontierEvidence ev(FrontierEvidenceConfig{});  // occlusion_margin_m 0.1
+    const auto d = constantDepth(cam, depth);
+    ev.look(map, d.data(), cam, lookPose({0.0, 0.0, 0.0}, 0.0, 0.0));
+    return ev.looks(ahead);
+  };
+  EXPECT_EQ(look(static_cast<float>(z + 0.5)), 1);   // surface behind it
+  EXPECT_EQ(look(static_cast<float>(z - 0.05)), 1);  // within the margin: the surface the voxel borders
+  EXPECT_EQ(look(static_cast<float>(z - 0.15)), 0);  // something 15 cm in front hid it
+}
+
+TEST(FrontierEvidence, OnlyVoxelsWithinRangeAndWellInsideTheImageCount) {
+  const OccupancyMap map = freeBall();
+  const PinholeCamera cam;  // hfov 62.7 deg
+  const auto none = constantDepth(cam, 0.f);
+  const Eigen::Vector3d ahead = frontierNear(map, {1.0, 0.0, 0.0});
+  {
+    FrontierEvidenceConfig c;
+    c.view_range_m = 0.9;  // the shell lies 0.98 m away
+    FrontierEvidence ev(c);
+    ev.look(map, none.data(), cam, lookPose({0.0, 0.0, 0.0}, 0.0, 0.0));
+    EXPECT_EQ(ev.looks(ahead), 0);
+    EXPECT_EQ(ev.retiredCount(), 0u);
+  }
+  // A shell voxel 31 deg off the axis lies at the image border (half the hfov is 31.4 deg): its
+  // neighbourhood leaves the image, so it is not a look; one 20 deg off the axis is.
+  const double a_edge = 31.0 * M_PI / 180.0, a_in = 20.0 * M_PI / 180.0;
+  const Eigen::Vector3d edge = frontierNear(map, {std::cos(a_edge), std::sin(a_edge), 0.0});
+  const Eigen::Vector3d inside = frontierNear(map, {std::cos(a_in), std::sin(a_in), 0.0});
+  FrontierEvidence ev(FrontierEvidenceConfig{});
+  ev.look(map, none.data(), cam, lookPose({0.0, 0.0, 0.0}, 0.0, 0.0));
+  EXPECT_EQ(ev.looks(edge), 0);
+  EXPECT_EQ(ev.looks(inside), 1);
+}
+
+TEST(FrontierEvidence, AResolvedVoxelIsForgotten) {
+  OccupancyMap map = freeBall();
+  const PinholeCamera cam;
+  const Eigen::Vector3d ahead = frontierNear(map, {1.0, 0.0, 0.0});
+  FrontierEvidence ev(FrontierEvidenceConfig{});
+  const auto none = constantDepth(cam, 0.f);
+  ev.look(map, none.data(), cam, lookPose({0.0, 0.0, 0.0}, 0.0, 0.0));
+  ASSERT_EQ(ev.looks(ahead), 1);
+  // A wall 2.013 m ahead, seen from the ball's centre: its rays carve the space past the shell.
+  semexp_test::BoxRoom room;
+  room.room = {{-2.9, -2.9, -2.9}, {2.013, 2.9, 2.9}};
+  const Eigen::Isometry3d T = lookPose({-0.3, 0.0, 0.0}, 0.0, 0.0);
+  map.integrate(room.render(cam, T).data(), nullptr, cam, T);
+  map.updateFrontiers();
+  ASSERT_TRUE(ev.look(map, room.render(cam, T).data(), cam, T));
+  EXPECT_EQ(ev.looks(ahead), 0);
+  EXPECT_FALSE(ev.retired(ahead));
+}
+
+TEST(FrontierEvidence, InvalidConfigNamesTheParameter) {
+  FrontierEvidenceConfig c;
+  c.looks_to_retire = 0;
+  try {
+    FrontierEvidence ev(c);
+    FAIL() << "accepted looks_to_retire 0";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("frontier_evidence/looks_to_retire"), std::string::npos);
+  }
+  c = FrontierEvidenceConfig{};
+  c.view_range_m = std::nan("");
+  EXPECT_THROW(FrontierEvidence{c}, ConfigError);
+}
