@@ -13,23 +13,17 @@
 
 namespace semexp {
 
+using occupancy::kNoDist;
+using occupancy::kScale;
+using occupancy::kUnknown;
+using occupancy::Summary;
+
 namespace {
-constexpr std::uint16_t kNoDist = 0xFFFF;
 constexpr char kMagic[8] = {'S', 'E', 'M', 'E', 'X', 'P', 'O', 'M'};
 constexpr std::uint32_t kVersion = 1;
 
-// log-odds (thousandths) -> MapBlocks int8 (tenths); keeps the sign so that a
-// replica classifies every voxel as the source does.
-inline std::int8_t encodeL(std::int16_t l) {
-  if (l == OccupancyMap::kUnknown) return MapBlocksData::kUnknownI8;
-  long q = std::lround(l / 100.0);
-  q = std::clamp(q, -127L, 127L);
-  if (l < 0 && q >= 0) q = -1;
-  return static_cast<std::int8_t>(q);
-}
-inline std::int16_t decodeL(std::int8_t q) {
-  return q == MapBlocksData::kUnknownI8 ? OccupancyMap::kUnknown : static_cast<std::int16_t>(q * 100);
-}
+inline std::int8_t encodeL(std::int16_t l) { return map_blocks::encodeMilli(l); }
+inline std::int16_t decodeL(std::int8_t q) { return map_blocks::decodeMilli(q); }
 
 template <class T>
 void put(std::ostream& f, const T& v) {
@@ -54,32 +48,32 @@ void getVec(std::ifstream& f, T* p, std::size_t n) {
 }  // namespace
 
 void OccupancyMap::encodeCell(int cell, std::int8_t* out) const {
-  const int b = cell_block_[cell];
+  const int b = store_.cell_block[cell];
   if (b < 0) {
-    std::fill_n(out, bs3_, encodeL(cell_value_[cell]));
+    std::fill_n(out, store_.bs3, encodeL(store_.cell_value[cell]));
     return;
   }
-  const std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
-  for (int i = 0; i < bs3_; ++i) out[i] = encodeL(L[i]);
+  const std::int16_t* L = store_.logOdds(b);
+  for (int i = 0; i < store_.bs3; ++i) out[i] = encodeL(L[i]);
 }
 
 MapBlocksData OccupancyMap::takeUpdate() {
   MapBlocksData m;
   m.sequence = ++sequence_;
   m.full = false;
-  m.resolution_m = res_;
-  m.block_size = bs_;
-  m.origin_m = origin_;
+  m.resolution_m = store_.res;
+  m.block_size = store_.bs;
+  m.origin_m = store_.origin;
   std::sort(dirty_cells_.begin(), dirty_cells_.end());
   m.coords.reserve(3 * dirty_cells_.size());
-  m.payload.resize(dirty_cells_.size() * static_cast<std::size_t>(bs3_));
+  m.payload.resize(dirty_cells_.size() * static_cast<std::size_t>(store_.bs3));
   std::size_t j = 0;
   for (int cell : dirty_cells_) {
-    cell_flags_[cell] &= static_cast<std::uint8_t>(~kDirty);
-    m.coords.push_back(cell % nb_.x());
-    m.coords.push_back((cell / nb_.x()) % nb_.y());
-    m.coords.push_back(cell / (nb_.x() * nb_.y()));
-    encodeCell(cell, m.payload.data() + j * bs3_);
+    dirty_[cell] = 0;
+    m.coords.push_back(cell % store_.nb.x());
+    m.coords.push_back((cell / store_.nb.x()) % store_.nb.y());
+    m.coords.push_back(cell / (store_.nb.x() * store_.nb.y()));
+    encodeCell(cell, m.payload.data() + j * store_.bs3);
     ++j;
   }
   dirty_cells_.clear();
@@ -90,19 +84,19 @@ MapBlocksData OccupancyMap::snapshot(bool uniform_as_values) const {
   MapBlocksData m;
   m.sequence = sequence_;
   m.full = true;
-  m.resolution_m = res_;
-  m.block_size = bs_;
-  m.origin_m = origin_;
+  m.resolution_m = store_.res;
+  m.block_size = store_.bs;
+  m.origin_m = store_.origin;
   std::size_t n = 0;
-  for (std::size_t c = 0; c < cell_block_.size(); ++c) n += levels_[0].s[c].known_any;
+  for (std::size_t c = 0; c < store_.cell_block.size(); ++c) n += store_.levels[0].s[c].known_any;
   if (!uniform_as_values) {
     m.coords.reserve(3 * n);
-    m.payload.reserve(n * static_cast<std::size_t>(bs3_));
+    m.payload.reserve(n * static_cast<std::size_t>(store_.bs3));
   }
-  std::vector<std::int8_t> block(static_cast<std::size_t>(bs3_));
-  for (int cell = 0; cell < static_cast<int>(cell_block_.size()); ++cell) {
-    if (!levels_[0].s[cell].known_any) continue;
-    const std::int32_t c[3] = {cell % nb_.x(), (cell / nb_.x()) % nb_.y(), cell / (nb_.x() * nb_.y())};
+  std::vector<std::int8_t> block(static_cast<std::size_t>(store_.bs3));
+  for (int cell = 0; cell < static_cast<int>(store_.cell_block.size()); ++cell) {
+    if (!store_.levels[0].s[cell].known_any) continue;
+    const std::int32_t c[3] = {cell % store_.nb.x(), (cell / store_.nb.x()) % store_.nb.y(), cell / (store_.nb.x() * store_.nb.y())};
     encodeCell(cell, block.data());
     // A voxel block may hold one value too (its voxels converged to the clamp): checked on the encoded values.
     if (uniform_as_values && std::all_of(block.begin(), block.end(), [&](std::int8_t q) { return q == block[0]; })) {
@@ -117,32 +111,16 @@ MapBlocksData OccupancyMap::snapshot(bool uniform_as_values) const {
 }
 
 void OccupancyMap::clearAll() {
-  block_cell_.clear();
-  block_l_.clear();
-  block_surf_.clear();
-  block_nfree_.clear();
-  block_nocc_.clear();
-  block_dist_.clear();
-  block_rgbw_.clear();
-  surf_free_.clear();
-  surf_slots_ = 0;
-  block_front_.clear();
-  block_hit_.clear();
-  free_slots_.clear();
-  block_count_ = 0;
+  store_.reset();
+  frontiers_.reset(store_.cellCount(), store_.fwords);
+  dirty_.assign(store_.cellCount(), 0);
   dirty_cells_.clear();
-  frontier_cand_.clear();
-  frontier_blocks_.clear();
-  frontier_cells_.clear();
-  frontier_voxels_ = 0;
-  frontier_block_count_ = frontier_cell_count_ = 0;
-  initGeometry();
 }
 
 bool OccupancyMap::applyBlocks(const MapBlocksData& m) {
-  if (m.encoding != MapBlocksData::kEncodingLogOddsI8 || m.block_size != bs_ ||
-      std::abs(m.resolution_m - res_) > 1e-6 * res_ || (m.origin_m - origin_).cwiseAbs().maxCoeff() > 1e-3 * res_ ||
-      m.coords.size() % 3 != 0 || m.payload.size() != m.blockCount() * static_cast<std::size_t>(bs3_) ||
+  if (m.encoding != MapBlocksData::kEncodingLogOddsI8 || m.block_size != store_.bs ||
+      std::abs(m.resolution_m - store_.res) > 1e-6 * store_.res || (m.origin_m - store_.origin).cwiseAbs().maxCoeff() > 1e-3 * store_.res ||
+      m.coords.size() % 3 != 0 || m.payload.size() != m.blockCount() * static_cast<std::size_t>(store_.bs3) ||
       m.uniform_coords.size() != 3 * m.uniform_values.size())
     return false;
   if (m.full) clearAll();
@@ -154,22 +132,21 @@ bool OccupancyMap::applyBlocks(const MapBlocksData& m) {
     const bool listed_uniform = j >= n_detailed;
     const std::int32_t* c = listed_uniform ? &m.uniform_coords[3 * (j - n_detailed)] : &m.coords[3 * j];
     const int x = c[0], y = c[1], z = c[2];
-    if (x < 0 || y < 0 || z < 0 || x >= nb_.x() || y >= nb_.y() || z >= nb_.z()) continue;
-    const int cell = cellIndex(x, y, z);
-    const std::int8_t* q = listed_uniform ? &m.uniform_values[j - n_detailed] : m.payload.data() + j * bs3_;
-    const bool uniform = listed_uniform || std::all_of(q, q + bs3_, [&](std::int8_t a) { return a == q[0]; });
-    cell_dist_[cell] = kNoDist;
+    if (x < 0 || y < 0 || z < 0 || x >= store_.nb.x() || y >= store_.nb.y() || z >= store_.nb.z()) continue;
+    const int cell = store_.cellIndex(x, y, z);
+    const std::int8_t* q = listed_uniform ? &m.uniform_values[j - n_detailed] : m.payload.data() + j * store_.bs3;
+    const bool uniform = listed_uniform || std::all_of(q, q + store_.bs3, [&](std::int8_t a) { return a == q[0]; });
+    store_.cell_dist[cell] = kNoDist;
     if (uniform) {
       releaseBlock(cell);
-      cell_value_[cell] = decodeL(q[0]);
+      store_.cell_value[cell] = decodeL(q[0]);
     } else {
-      cell_value_[cell] = kUnknown;
-      const int b = cell_block_[cell] >= 0 ? cell_block_[cell] : allocateBlock(cell);
-      std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
-      for (int i = 0; i < bs3_; ++i) L[i] = decodeL(q[i]);
-      if (block_surf_[b] >= 0) {  // colour and distance are not replicated
-        surf_free_.push_back(block_surf_[b]);
-        block_surf_[b] = -1;
+      store_.cell_value[cell] = kUnknown;
+      const int b = store_.cell_block[cell] >= 0 ? store_.cell_block[cell] : store_.allocateBlock(cell);
+      std::int16_t* L = store_.logOdds(b);
+      for (int i = 0; i < store_.bs3; ++i) L[i] = decodeL(q[i]);
+      if (store_.block_surf[b] >= 0) {  // colour and distance are not replicated
+        store_.releaseSurface(b);
       }
     }
     changed.push_back(cell);
@@ -202,29 +179,26 @@ void OccupancyMap::saveTo(std::ostream& f) const {
   for (int i = 0; i < 3; ++i) put(f, bounds_.min_m[i]);
   for (int i = 0; i < 3; ++i) put(f, bounds_.max_m[i]);
   put(f, sequence_);
-  putVec(f, cell_value_.data(), cell_value_.size());
-  putVec(f, cell_dist_.data(), cell_dist_.size());
-  put(f, static_cast<std::uint64_t>(block_count_));
-  for (int cell = 0; cell < static_cast<int>(cell_block_.size()); ++cell) {
-    const int b = cell_block_[cell];
+  putVec(f, store_.cell_value.data(), store_.cell_value.size());
+  putVec(f, store_.cell_dist.data(), store_.cell_dist.size());
+  put(f, static_cast<std::uint64_t>(store_.blockCount()));
+  for (int cell = 0; cell < static_cast<int>(store_.cell_block.size()); ++cell) {
+    const int b = store_.cell_block[cell];
     if (b < 0) continue;
-    const std::size_t o = static_cast<std::size_t>(b) * bs3_;
+    const std::size_t o = static_cast<std::size_t>(b) * store_.bs3;
     put(f, static_cast<std::int32_t>(cell));
-    putVec(f, block_l_.data() + o, bs3_);
-    const int sl = block_surf_[b];
+    putVec(f, store_.block_l.data() + o, store_.bs3);
+    const int sl = store_.block_surf[b];
     put(f, static_cast<std::uint8_t>(sl >= 0));
     if (sl >= 0) {
-      const std::size_t so = static_cast<std::size_t>(sl) * bs3_;
-      putVec(f, block_dist_.data() + so, bs3_);
-      if (cfg_.integrate_colour) putVec(f, block_rgbw_.data() + 4 * so, 4 * bs3_);
+      const std::size_t so = static_cast<std::size_t>(sl) * store_.bs3;
+      putVec(f, store_.surf_dist.data() + so, store_.bs3);
+      if (cfg_.integrate_colour) putVec(f, store_.surf_rgbw.data() + 4 * so, 4 * store_.bs3);
     }
-    putVec(f, block_front_.data() + static_cast<std::size_t>(b) * fwords_, fwords_);
+    putVec(f, frontiers_.blockBits(b), store_.fwords);
   }
   std::vector<int> fb, fc;  // live entries, in list order
-  for (int c : frontier_blocks_)
-    if (cell_flags_[c] & kBlockFrontier) fb.push_back(c);
-  for (int c : frontier_cells_)
-    if (cell_flags_[c] & kCoarseFrontier) fc.push_back(c);
+  frontiers_.liveLists(fb, fc);
   put(f, static_cast<std::uint64_t>(fb.size()));
   putVec(f, fb.data(), fb.size());
   put(f, static_cast<std::uint64_t>(fc.size()));
@@ -256,60 +230,50 @@ OccupancyMap OccupancyMap::load(const std::string& path) {
   for (int i = 0; i < 3; ++i) bounds.max_m[i] = get<double>(f);
   OccupancyMap m(cfg, bounds);
   m.sequence_ = get<std::uint64_t>(f);
-  getVec(f, m.cell_value_.data(), m.cell_value_.size());
-  getVec(f, m.cell_dist_.data(), m.cell_dist_.size());
+  getVec(f, m.store_.cell_value.data(), m.store_.cell_value.size());
+  getVec(f, m.store_.cell_dist.data(), m.store_.cell_dist.size());
   const std::uint64_t nblocks = get<std::uint64_t>(f);
   std::vector<int> cells;
   for (std::uint64_t j = 0; j < nblocks; ++j) {
     const std::int32_t cell = get<std::int32_t>(f);
-    if (cell < 0 || cell >= static_cast<std::int32_t>(m.cell_block_.size()) || m.cell_block_[cell] >= 0)
+    if (cell < 0 || cell >= static_cast<std::int32_t>(m.store_.cell_block.size()) || m.store_.cell_block[cell] >= 0)
       throw std::runtime_error(path + ": corrupt block table");
-    const int b = m.allocateBlock(cell);
-    const std::size_t o = static_cast<std::size_t>(b) * m.bs3_;
-    getVec(f, m.block_l_.data() + o, m.bs3_);
+    const int b = m.store_.allocateBlock(cell);
+    const std::size_t o = static_cast<std::size_t>(b) * m.store_.bs3;
+    getVec(f, m.store_.block_l.data() + o, m.store_.bs3);
     if (get<std::uint8_t>(f)) {
-      const std::size_t so = static_cast<std::size_t>(m.ensureSurface(b)) * m.bs3_;
-      getVec(f, m.block_dist_.data() + so, m.bs3_);
-      if (cfg.integrate_colour) getVec(f, m.block_rgbw_.data() + 4 * so, 4 * m.bs3_);
+      const std::size_t so = static_cast<std::size_t>(m.store_.ensureSurface(b)) * m.store_.bs3;
+      getVec(f, m.store_.surf_dist.data() + so, m.store_.bs3);
+      if (cfg.integrate_colour) getVec(f, m.store_.surf_rgbw.data() + 4 * so, 4 * m.store_.bs3);
     }
-    getVec(f, m.block_front_.data() + static_cast<std::size_t>(b) * m.fwords_, m.fwords_);
+    getVec(f, m.frontiers_.mutableBlockBits(m.store_, b), m.store_.fwords);
   }
-  for (int c = 0; c < static_cast<int>(m.cell_block_.size()); ++c) cells.push_back(c);
+  for (int c = 0; c < static_cast<int>(m.store_.cell_block.size()); ++c) cells.push_back(c);
   m.refreshSummaries(cells, false);
-  m.frontier_blocks_.resize(get<std::uint64_t>(f));
-  getVec(f, m.frontier_blocks_.data(), m.frontier_blocks_.size());
-  m.frontier_cells_.resize(get<std::uint64_t>(f));
-  getVec(f, m.frontier_cells_.data(), m.frontier_cells_.size());
-  for (int c : m.frontier_cells_) {
-    if (m.cell_block_.at(c) >= 0) throw std::runtime_error(path + ": corrupt frontier table");
-    m.cell_flags_[c] |= kCoarseFrontier | kListedCell;
-  }
-  m.frontier_cell_count_ = m.frontier_cells_.size();
-  for (int c : m.frontier_blocks_) {
-    if (m.cell_block_.at(c) < 0) throw std::runtime_error(path + ": corrupt frontier table");
-    m.cell_flags_[c] |= kBlockFrontier | kListedBlock;
-    m.frontier_voxels_ += static_cast<std::size_t>(m.blockFrontierBits(c));
-  }
-  m.frontier_block_count_ = m.frontier_blocks_.size();
+  std::vector<int> fb(get<std::uint64_t>(f));
+  getVec(f, fb.data(), fb.size());
+  std::vector<int> fc(get<std::uint64_t>(f));
+  getVec(f, fc.data(), fc.size());
+  if (!m.frontiers_.restore(m.store_, fb, fc)) throw std::runtime_error(path + ": corrupt frontier table");
   return m;
 }
 
 void OccupancyMap::exportOctomap(const std::string& path) const {
-  octomap::OcTree tree(res_);
+  octomap::OcTree tree(store_.res);
   tree.setClampingThresMin(1.0 / (1.0 + std::exp(-cfg_.log_odds_min)));
   tree.setClampingThresMax(1.0 / (1.0 + std::exp(-cfg_.log_odds_max)));
-  for (int cell = 0; cell < static_cast<int>(cell_block_.size()); ++cell) {
-    if (!levels_[0].s[cell].known_any) continue;
-    const int bz = cell / (nb_.x() * nb_.y()), by = (cell / nb_.x()) % nb_.y(), bx = cell % nb_.x();
-    const int b = cell_block_[cell];
+  for (int cell = 0; cell < static_cast<int>(store_.cell_block.size()); ++cell) {
+    if (!store_.levels[0].s[cell].known_any) continue;
+    const int bz = cell / (store_.nb.x() * store_.nb.y()), by = (cell / store_.nb.x()) % store_.nb.y(), bx = cell % store_.nb.x();
+    const int b = store_.cell_block[cell];
     int i = 0;
-    for (int z = 0; z < bs_; ++z)
-      for (int y = 0; y < bs_; ++y)
-        for (int x = 0; x < bs_; ++x, ++i) {
-          const std::int16_t l = b < 0 ? cell_value_[cell] : block_l_[static_cast<std::size_t>(b) * bs3_ + i];
+    for (int z = 0; z < store_.bs; ++z)
+      for (int y = 0; y < store_.bs; ++y)
+        for (int x = 0; x < store_.bs; ++x, ++i) {
+          const std::int16_t l = b < 0 ? store_.cell_value[cell] : store_.block_l[static_cast<std::size_t>(b) * store_.bs3 + i];
           if (l == kUnknown) continue;
           const Eigen::Vector3d c =
-              origin_ + (Eigen::Vector3d(bx * bs_ + x, by * bs_ + y, bz * bs_ + z) + Eigen::Vector3d::Constant(0.5)) * res_;
+              store_.origin + (Eigen::Vector3d(bx * store_.bs + x, by * store_.bs + y, bz * store_.bs + z) + Eigen::Vector3d::Constant(0.5)) * store_.res;
           tree.setNodeValue(octomap::point3d(static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z())),
                             static_cast<float>(l / kScale), true);
         }

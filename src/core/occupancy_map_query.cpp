@@ -10,29 +10,17 @@
 
 namespace semexp {
 
+using occupancy::kNoDist;
+using occupancy::kScale;
+using occupancy::kUnknown;
+using occupancy::Summary;
+
 namespace {
-constexpr std::uint16_t kNoDist = 0xFFFF;
 
 inline VoxelState stateOf(std::int16_t l) {
-  if (l == OccupancyMap::kUnknown) return VoxelState::kUnknown;
+  if (l == kUnknown) return VoxelState::kUnknown;
   return l >= 0 ? VoxelState::kOccupied : VoxelState::kFree;
 }
-}  // namespace
-
-std::int16_t OccupancyMap::voxelValue(int x, int y, int z) const {
-  if (x < 0 || y < 0 || z < 0 || x >= nb_.x() * bs_ || y >= nb_.y() * bs_ || z >= nb_.z() * bs_) return kUnknown;
-  const int cell = cellIndex(x >> bshift_, y >> bshift_, z >> bshift_);
-  const int b = cell_block_[cell];
-  if (b < 0) return cell_value_[cell];
-  const int m = bs_ - 1;
-  return block_l_[static_cast<std::size_t>(b) * bs3_ + ((x & m) + bs_ * ((y & m) + bs_ * (z & m)))];
-}
-
-namespace {
-struct Leaf {
-  int cell = -1;
-  int vox = -1;
-};
 }  // namespace
 
 static bool locate(const Eigen::Vector3d& p_W, const Eigen::Vector3d& origin, double res, const Eigen::Vector3i& nb,
@@ -47,14 +35,14 @@ static bool locate(const Eigen::Vector3d& p_W, const Eigen::Vector3d& origin, do
 
 VoxelState OccupancyMap::state(const Eigen::Vector3d& p_W) const {
   Eigen::Vector3i v;
-  if (!locate(p_W, origin_, res_, nb_, bs_, v)) return VoxelState::kUnknown;
-  return stateOf(voxelValue(v.x(), v.y(), v.z()));
+  if (!locate(p_W, store_.origin, store_.res, store_.nb, store_.bs, v)) return VoxelState::kUnknown;
+  return stateOf(store_.voxelValue(v.x(), v.y(), v.z()));
 }
 
 bool OccupancyMap::logOdds(const Eigen::Vector3d& p_W, double& l) const {
   Eigen::Vector3i v;
-  if (!locate(p_W, origin_, res_, nb_, bs_, v)) return false;
-  const std::int16_t s = voxelValue(v.x(), v.y(), v.z());
+  if (!locate(p_W, store_.origin, store_.res, store_.nb, store_.bs, v)) return false;
+  const std::int16_t s = store_.voxelValue(v.x(), v.y(), v.z());
   if (s == kUnknown) return false;
   l = s / kScale;
   return true;
@@ -62,14 +50,14 @@ bool OccupancyMap::logOdds(const Eigen::Vector3d& p_W, double& l) const {
 
 bool OccupancyMap::colour(const Eigen::Vector3d& p_W, std::uint8_t rgb[3]) const {
   Eigen::Vector3i v;
-  if (!cfg_.integrate_colour || !locate(p_W, origin_, res_, nb_, bs_, v)) return false;
-  const int cell = cellIndex(v.x() >> bshift_, v.y() >> bshift_, v.z() >> bshift_);
-  const int b = cell_block_[cell];
+  if (!cfg_.integrate_colour || !locate(p_W, store_.origin, store_.res, store_.nb, store_.bs, v)) return false;
+  const int cell = store_.cellIndex(v.x() >> store_.bshift, v.y() >> store_.bshift, v.z() >> store_.bshift);
+  const int b = store_.cell_block[cell];
   if (b < 0) return false;
-  const int m = bs_ - 1;
-  if (block_surf_[b] < 0) return false;
-  const std::uint8_t* c = block_rgbw_.data() + 4 * (static_cast<std::size_t>(block_surf_[b]) * bs3_ +
-                                                    ((v.x() & m) + bs_ * ((v.y() & m) + bs_ * (v.z() & m))));
+  const int m = store_.bs - 1;
+  if (store_.block_surf[b] < 0) return false;
+  const std::uint8_t* c = store_.surf_rgbw.data() + 4 * (static_cast<std::size_t>(store_.block_surf[b]) * store_.bs3 +
+                                                    ((v.x() & m) + store_.bs * ((v.y() & m) + store_.bs * (v.z() & m))));
   if (c[3] == 0) return false;
   std::copy(c, c + 3, rgb);
   return true;
@@ -78,34 +66,34 @@ bool OccupancyMap::colour(const Eigen::Vector3d& p_W, std::uint8_t rgb[3]) const
 double OccupancyMap::minObservedDistance(const Eigen::Vector3d& p_W) const {
   Eigen::Vector3i v;
   const double inf = std::numeric_limits<double>::infinity();
-  if (!locate(p_W, origin_, res_, nb_, bs_, v)) return inf;
-  const int cell = cellIndex(v.x() >> bshift_, v.y() >> bshift_, v.z() >> bshift_);
-  const int b = cell_block_[cell];
-  const int m = bs_ - 1;
+  if (!locate(p_W, store_.origin, store_.res, store_.nb, store_.bs, v)) return inf;
+  const int cell = store_.cellIndex(v.x() >> store_.bshift, v.y() >> store_.bshift, v.z() >> store_.bshift);
+  const int b = store_.cell_block[cell];
+  const int m = store_.bs - 1;
   const std::uint16_t d =
-      b < 0 ? cell_dist_[cell]
-      : block_surf_[b] < 0
+      b < 0 ? store_.cell_dist[cell]
+      : store_.block_surf[b] < 0
           ? kNoDist
-          : block_dist_[static_cast<std::size_t>(block_surf_[b]) * bs3_ + ((v.x() & m) + bs_ * ((v.y() & m) + bs_ * (v.z() & m)))];
+          : store_.surf_dist[static_cast<std::size_t>(store_.block_surf[b]) * store_.bs3 + ((v.x() & m) + store_.bs * ((v.y() & m) + store_.bs * (v.z() & m)))];
   return d == kNoDist ? inf : d / 1000.0;
 }
 
 // ---------------------------------------------------------------- sphere
 
 bool OccupancyMap::isSphereFree(const Eigen::Vector3d& centre_W, double radius_m) const {
-  const Eigen::Vector3d c = (centre_W - origin_) / res_;
-  const double rad = radius_m / res_;
+  const Eigen::Vector3d c = (centre_W - store_.origin) / store_.res;
+  const double rad = radius_m / store_.res;
   if (!c.allFinite() || !(rad >= 0.0)) return false;
   for (int i = 0; i < 3; ++i)
-    if (c[i] - rad < 0.0 || c[i] + rad > static_cast<double>(nb_[i]) * bs_) return false;  // reaches outside the map
+    if (c[i] - rad < 0.0 || c[i] + rad > static_cast<double>(store_.nb[i]) * store_.bs) return false;  // reaches outside the map
   if (rad == 0.0) return state(centre_W) == VoxelState::kFree;
-  return sphereFreeRec(static_cast<int>(levels_.size()) - 1, 0, 0, 0, c, rad);
+  return sphereFreeRec(static_cast<int>(store_.levels.size()) - 1, 0, 0, 0, c, rad);
 }
 
 bool OccupancyMap::sphereFreeRec(int k, int ix, int iy, int iz, const Eigen::Vector3d& c, double rad) const {
-  const int S = bs_ << k;
+  const int S = store_.bs << k;
   const Eigen::Vector3i lo(ix * S, iy * S, iz * S);
-  const Eigen::Vector3i hi = (lo.array() + S).min(nb_.array() * bs_);
+  const Eigen::Vector3i hi = (lo.array() + S).min(store_.nb.array() * store_.bs);
   double d2 = 0.0, far2 = 0.0;
   for (int i = 0; i < 3; ++i) {
     const double a = lo[i] - c[i], b = c[i] - hi[i];
@@ -116,15 +104,15 @@ bool OccupancyMap::sphereFreeRec(int k, int ix, int iy, int iz, const Eigen::Vec
   }
   const double r2 = rad * rad;
   if (d2 >= r2) return true;  // does not intersect
-  const Level& L = levels_[k];
+  const occupancy::SummaryLevel& L = store_.levels[k];
   const Summary& s = L.s[ix + L.dims.x() * (iy + L.dims.y() * iz)];
   if (s.known_any && !s.unknown_any && s.max_l < 0) return true;  // all free below
   if (far2 <= r2) return false;                                    // wholly inside and not all free
   if (k == 0) {
-    const int cell = cellIndex(ix, iy, iz);
-    const int b = cell_block_[cell];
+    const int cell = store_.cellIndex(ix, iy, iz);
+    const int b = store_.cell_block[cell];
     if (b < 0) return false;  // uniform, not free
-    const std::int16_t* Lv = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
+    const std::int16_t* Lv = store_.logOdds(b);
     int vlo[3], vhi[3];
     for (int i = 0; i < 3; ++i) {
       vlo[i] = std::max(lo[i], static_cast<int>(std::floor(c[i] - rad)));
@@ -137,14 +125,14 @@ bool OccupancyMap::sphereFreeRec(int k, int ix, int iy, int iz, const Eigen::Vec
         for (int x = vlo[0]; x <= vhi[0]; ++x) {
           const double ex = std::max({x - c.x(), 0.0, c.x() - (x + 1)});
           if (ex * ex + ey * ey + ez * ez >= r2) continue;
-          const std::int16_t l = Lv[(x - lo[0]) + bs_ * ((y - lo[1]) + bs_ * (z - lo[2]))];
+          const std::int16_t l = Lv[(x - lo[0]) + store_.bs * ((y - lo[1]) + store_.bs * (z - lo[2]))];
           if (l == kUnknown || l >= 0) return false;
         }
       }
     }
     return true;
   }
-  const Eigen::Vector3i& cd = levels_[k - 1].dims;
+  const Eigen::Vector3i& cd = store_.levels[k - 1].dims;
   for (int dz = 0; dz < 2; ++dz)
     for (int dy = 0; dy < 2; ++dy)
       for (int dx = 0; dx < 2; ++dx) {
@@ -162,14 +150,14 @@ bool OccupancyMap::sphereFreeRec(int k, int ix, int iy, int iz, const Eigen::Vec
 template <class F>
 void OccupancyMap::march(const Eigen::Vector3d& o_W, const Eigen::Vector3d& dir_W, double t0, double t1, F&& f) const {
   const Eigen::Vector3d d = dir_W.normalized();
-  const Eigen::Vector3d o = (o_W - origin_) / res_;
+  const Eigen::Vector3d o = (o_W - store_.origin) / store_.res;
   const double inf = std::numeric_limits<double>::infinity();
   const Eigen::Vector3d inv(d.x() != 0 ? 1.0 / d.x() : inf, d.y() != 0 ? 1.0 / d.y() : inf,
                             d.z() != 0 ? 1.0 / d.z() : inf);
-  const Eigen::Vector3i nv = nb_ * bs_;
-  const int m = bs_ - 1;
-  double t = t0 / res_;
-  double tend = t1 / res_;
+  const Eigen::Vector3i nv = store_.nb * store_.bs;
+  const int m = store_.bs - 1;
+  double t = t0 / store_.res;
+  double tend = t1 / store_.res;
   for (int i = 0; i < 3; ++i) {  // coarse nodes may reach past the map: stop where the ray leaves it
     if (d[i] > 0) tend = std::min(tend, (nv[i] - o[i]) * inv[i]);
     if (d[i] < 0) tend = std::min(tend, (0.0 - o[i]) * inv[i]);
@@ -181,16 +169,16 @@ void OccupancyMap::march(const Eigen::Vector3d& o_W, const Eigen::Vector3d& dir_
       if (!(p[i] >= 0.0) || p[i] >= nv[i]) return;
       v[i] = static_cast<int>(p[i]);
     }
-    const int cx = v[0] >> bshift_, cy = v[1] >> bshift_, cz = v[2] >> bshift_;
-    const int cell = cellIndex(cx, cy, cz);
-    const int b = cell_block_[cell];
+    const int cx = v[0] >> store_.bshift, cy = v[1] >> store_.bshift, cz = v[2] >> store_.bshift;
+    const int cell = store_.cellIndex(cx, cy, cz);
+    const int b = store_.cell_block[cell];
     std::int16_t l;
     int vox = -1;
     int size = 1;
     int lo[3];
     if (b >= 0) {
       // Inside a dense block: integer 3D DDA voxel by voxel until the ray leaves it.
-      const std::int16_t* Lb = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
+      const std::int16_t* Lb = store_.logOdds(b);
       int idx[3], step[3];
       double tmax[3], tdelta[3];
       for (int i = 0; i < 3; ++i) {
@@ -200,11 +188,11 @@ void OccupancyMap::march(const Eigen::Vector3d& o_W, const Eigen::Vector3d& dir_
         tdelta[i] = step[i] != 0 ? std::abs(inv[i]) : inf;
       }
       while (true) {
-        const int vx = idx[0] + bs_ * (idx[1] + bs_ * idx[2]);
+        const int vx = idx[0] + store_.bs * (idx[1] + store_.bs * idx[2]);
         const int a = tmax[0] < tmax[1] ? (tmax[0] < tmax[2] ? 0 : 2) : (tmax[1] < tmax[2] ? 1 : 2);
         double tx = tmax[a];
         if (!(tx > t)) tx = t + 1e-6;
-        if (!f(t * res_, std::min(tx, tend) * res_, Lb[vx], cell, vx)) return;
+        if (!f(t * store_.res, std::min(tx, tend) * store_.res, Lb[vx], cell, vx)) return;
         t = tx;
         if (t >= tend) return;
         idx[a] += step[a];
@@ -213,17 +201,17 @@ void OccupancyMap::march(const Eigen::Vector3d& o_W, const Eigen::Vector3d& dir_
       }
       continue;
     } else {
-      l = cell_value_[cell];
+      l = store_.cell_value[cell];
       int k = 0;
-      for (int kk = 1; kk < static_cast<int>(levels_.size()); ++kk) {
-        const Level& L = levels_[kk];
+      for (int kk = 1; kk < static_cast<int>(store_.levels.size()); ++kk) {
+        const occupancy::SummaryLevel& L = store_.levels[kk];
         const Summary& s = L.s[(cx >> kk) + L.dims.x() * ((cy >> kk) + L.dims.y() * (cz >> kk))];
         const bool same = l == kUnknown ? !s.known_any : (!s.unknown_any && s.min_l == l && s.max_l == l);
         if (!same) break;
         k = kk;
       }
-      size = bs_ << k;
-      const int sh = bshift_ + k;
+      size = store_.bs << k;
+      const int sh = store_.bshift + k;
       for (int i = 0; i < 3; ++i) lo[i] = (v[i] >> sh) << sh;
     }
     double texit = inf;
@@ -234,7 +222,7 @@ void OccupancyMap::march(const Eigen::Vector3d& o_W, const Eigen::Vector3d& dir_
         texit = std::min(texit, (lo[i] - o[i]) * inv[i]);
     }
     if (!(texit > t)) texit = t + 1e-6;
-    if (!f(t * res_, std::min(texit, tend) * res_, l, cell, vox)) return;
+    if (!f(t * store_.res, std::min(texit, tend) * store_.res, l, cell, vox)) return;
     t = texit;
   }
 }
@@ -252,13 +240,13 @@ RaycastHit OccupancyMap::raycast(const Eigen::Vector3d& origin_W, const Eigen::V
     hit.state = stateOf(l);
     hit.distance_m = t_in;
     if (vox >= 0) {
-      const int bz = cell / (nb_.x() * nb_.y()), by = (cell / nb_.x()) % nb_.y(), bx = cell % nb_.x();
-      const Eigen::Vector3i vi(bx * bs_ + vox % bs_, by * bs_ + (vox / bs_) % bs_, bz * bs_ + vox / (bs_ * bs_));
-      hit.voxel_centre_W = origin_ + (vi.cast<double>() + Eigen::Vector3d::Constant(0.5)) * res_;
+      const int bz = cell / (store_.nb.x() * store_.nb.y()), by = (cell / store_.nb.x()) % store_.nb.y(), bx = cell % store_.nb.x();
+      const Eigen::Vector3i vi(bx * store_.bs + vox % store_.bs, by * store_.bs + (vox / store_.bs) % store_.bs, bz * store_.bs + vox / (store_.bs * store_.bs));
+      hit.voxel_centre_W = store_.origin + (vi.cast<double>() + Eigen::Vector3d::Constant(0.5)) * store_.res;
     } else {
       // centre of the finest voxel at the entry point
-      const Eigen::Vector3d p = ((origin_W + d * (t_in + 1e-7 * res_)) - origin_) / res_;
-      hit.voxel_centre_W = origin_ + (p.array().floor() + 0.5).matrix() * res_;
+      const Eigen::Vector3d p = ((origin_W + d * (t_in + 1e-7 * store_.res)) - store_.origin) / store_.res;
+      hit.voxel_centre_W = store_.origin + (p.array().floor() + 0.5).matrix() * store_.res;
     }
     return false;
   });
@@ -298,17 +286,17 @@ std::vector<GainImages> OccupancyMap::computeGains(const std::vector<Eigen::Vect
         if (l != kUnknown && l >= 0) {
           g.hit_depth_m[i] = static_cast<float>(a);
           // leaf centre and its minimum observed distance
-          const int bz = cell / (nb_.x() * nb_.y()), by = (cell / nb_.x()) % nb_.y(), bx = cell % nb_.x();
+          const int bz = cell / (store_.nb.x() * store_.nb.y()), by = (cell / store_.nb.x()) % store_.nb.y(), bx = cell % store_.nb.x();
           Eigen::Vector3d centre;
           std::uint16_t dmm;
           if (vox >= 0) {
-            const Eigen::Vector3i vi(bx * bs_ + vox % bs_, by * bs_ + (vox / bs_) % bs_, bz * bs_ + vox / (bs_ * bs_));
-            centre = origin_ + (vi.cast<double>() + Eigen::Vector3d::Constant(0.5)) * res_;
-            const int sl = block_surf_[cell_block_[cell]];
-            dmm = sl < 0 ? kNoDist : block_dist_[static_cast<std::size_t>(sl) * bs3_ + vox];
+            const Eigen::Vector3i vi(bx * store_.bs + vox % store_.bs, by * store_.bs + (vox / store_.bs) % store_.bs, bz * store_.bs + vox / (store_.bs * store_.bs));
+            centre = store_.origin + (vi.cast<double>() + Eigen::Vector3d::Constant(0.5)) * store_.res;
+            const int sl = store_.block_surf[store_.cell_block[cell]];
+            dmm = sl < 0 ? kNoDist : store_.surf_dist[static_cast<std::size_t>(sl) * store_.bs3 + vox];
           } else {
-            centre = origin_ + (Eigen::Vector3d(bx, by, bz) * bs_ + Eigen::Vector3d::Constant(0.5 * bs_)) * res_;
-            dmm = cell_dist_[cell];
+            centre = store_.origin + (Eigen::Vector3d(bx, by, bz) * store_.bs + Eigen::Vector3d::Constant(0.5 * store_.bs)) * store_.res;
+            dmm = store_.cell_dist[cell];
           }
           const double d_node = dmm == kNoDist ? std::numeric_limits<double>::infinity() : dmm / 1000.0;
           const double d_exp = (centre - pos).norm();
@@ -334,28 +322,28 @@ std::vector<GainImages> OccupancyMap::computeGains(const std::vector<Eigen::Vect
 void OccupancyMap::forEachOccupied(
     const std::function<void(const Eigen::Vector3d&, double, const std::uint8_t*)>& f) const {
   const std::uint8_t grey[3] = {128, 128, 128};
-  for (int cell = 0; cell < static_cast<int>(cell_block_.size()); ++cell) {
-    const Summary& s = levels_[0].s[cell];
+  for (int cell = 0; cell < static_cast<int>(store_.cell_block.size()); ++cell) {
+    const Summary& s = store_.levels[0].s[cell];
     if (!s.known_any || s.max_l < 0) continue;
-    const int bz = cell / (nb_.x() * nb_.y()), by = (cell / nb_.x()) % nb_.y(), bx = cell % nb_.x();
-    const int b = cell_block_[cell];
+    const int bz = cell / (store_.nb.x() * store_.nb.y()), by = (cell / store_.nb.x()) % store_.nb.y(), bx = cell % store_.nb.x();
+    const int b = store_.cell_block[cell];
     if (b < 0) {
-      f(origin_ + (Eigen::Vector3d(bx, by, bz) * bs_ + Eigen::Vector3d::Constant(0.5 * bs_)) * res_, bs_ * res_, grey);
+      f(store_.origin + (Eigen::Vector3d(bx, by, bz) * store_.bs + Eigen::Vector3d::Constant(0.5 * store_.bs)) * store_.res, store_.bs * store_.res, grey);
       continue;
     }
-    const std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
+    const std::int16_t* L = store_.logOdds(b);
     int i = 0;
-    for (int z = 0; z < bs_; ++z)
-      for (int y = 0; y < bs_; ++y)
-        for (int x = 0; x < bs_; ++x, ++i) {
+    for (int z = 0; z < store_.bs; ++z)
+      for (int y = 0; y < store_.bs; ++y)
+        for (int x = 0; x < store_.bs; ++x, ++i) {
           if (L[i] == kUnknown || L[i] < 0) continue;
           const std::uint8_t* c = grey;
-          if (cfg_.integrate_colour && block_surf_[b] >= 0) {
-            const std::uint8_t* cc = block_rgbw_.data() + 4 * (static_cast<std::size_t>(block_surf_[b]) * bs3_ + i);
+          if (cfg_.integrate_colour && store_.block_surf[b] >= 0) {
+            const std::uint8_t* cc = store_.surf_rgbw.data() + 4 * (static_cast<std::size_t>(store_.block_surf[b]) * store_.bs3 + i);
             if (cc[3] > 0) c = cc;
           }
-          f(origin_ + (Eigen::Vector3d(bx * bs_ + x, by * bs_ + y, bz * bs_ + z) + Eigen::Vector3d::Constant(0.5)) * res_,
-            res_, c);
+          f(store_.origin + (Eigen::Vector3d(bx * store_.bs + x, by * store_.bs + y, bz * store_.bs + z) + Eigen::Vector3d::Constant(0.5)) * store_.res,
+            store_.res, c);
         }
   }
 }
@@ -366,24 +354,24 @@ OccupancyMap::SurfaceObservation OccupancyMap::surfaceObservedWithin(double d_m)
   const double d_mm = std::floor(d_m * 1000.0 + 0.5);
   const auto within = [d_mm](std::uint16_t d) { return d != kNoDist && d <= d_mm; };
   const auto isFree = [](std::int16_t v) { return v != kUnknown && v < 0; };
-  const int m = bs_ - 1;
+  const int m = store_.bs - 1;
   // Whether voxel (x, y, z) of the grid has a free 6-neighbour: the voxel bounds observed free space, so it
   // is surface, not the inside of a wall that noisy far returns marked occupied.
   const auto exposed = [&](int x, int y, int z) {
-    return isFree(voxelValue(x + 1, y, z)) || isFree(voxelValue(x - 1, y, z)) || isFree(voxelValue(x, y + 1, z)) ||
-           isFree(voxelValue(x, y - 1, z)) || isFree(voxelValue(x, y, z + 1)) || isFree(voxelValue(x, y, z - 1));
+    return isFree(store_.voxelValue(x + 1, y, z)) || isFree(store_.voxelValue(x - 1, y, z)) || isFree(store_.voxelValue(x, y + 1, z)) ||
+           isFree(store_.voxelValue(x, y - 1, z)) || isFree(store_.voxelValue(x, y, z + 1)) || isFree(store_.voxelValue(x, y, z - 1));
   };
-  for (int cell = 0; cell < static_cast<int>(cell_block_.size()); ++cell) {
-    const Summary& s = levels_[0].s[cell];
+  for (int cell = 0; cell < static_cast<int>(store_.cell_block.size()); ++cell) {
+    const Summary& s = store_.levels[0].s[cell];
     if (!s.known_any || s.max_l < 0) continue;  // nothing occupied below
-    const int bz = cell / (nb_.x() * nb_.y()), by = (cell / nb_.x()) % nb_.y(), bx = cell % nb_.x();
-    const int gx0 = bx * bs_, gy0 = by * bs_, gz0 = bz * bs_;
-    const int b = cell_block_[cell];
+    const int bz = cell / (store_.nb.x() * store_.nb.y()), by = (cell / store_.nb.x()) % store_.nb.y(), bx = cell % store_.nb.x();
+    const int gx0 = bx * store_.bs, gy0 = by * store_.bs, gz0 = bz * store_.bs;
+    const int b = store_.cell_block[cell];
     if (b < 0) {  // a uniform occupied cell: only voxels on its faces can touch free space
-      const bool near = within(cell_dist_[cell]);
-      for (int z = 0; z < bs_; ++z)
-        for (int y = 0; y < bs_; ++y)
-          for (int x = 0; x < bs_; ++x) {
+      const bool near = within(store_.cell_dist[cell]);
+      for (int z = 0; z < store_.bs; ++z)
+        for (int y = 0; y < store_.bs; ++y)
+          for (int x = 0; x < store_.bs; ++x) {
             if (x != 0 && x != m && y != 0 && y != m && z != 0 && z != m) continue;
             if (!exposed(gx0 + x, gy0 + y, gz0 + z)) continue;
             ++out.occupied_voxels;
@@ -391,13 +379,13 @@ OccupancyMap::SurfaceObservation OccupancyMap::surfaceObservedWithin(double d_m)
           }
       continue;
     }
-    const std::int16_t* L = block_l_.data() + static_cast<std::size_t>(b) * bs3_;
+    const std::int16_t* L = store_.logOdds(b);
     const std::uint16_t* D =
-        block_surf_[b] >= 0 ? block_dist_.data() + static_cast<std::size_t>(block_surf_[b]) * bs3_ : nullptr;
-    const int s1 = bs_, s2 = bs_ * bs_;
-    for (int i = 0; i < bs3_; ++i) {
+        store_.block_surf[b] >= 0 ? store_.dist(store_.block_surf[b]) : nullptr;
+    const int s1 = store_.bs, s2 = store_.bs * store_.bs;
+    for (int i = 0; i < store_.bs3; ++i) {
       if (L[i] == kUnknown || L[i] < 0) continue;
-      const int x = i & m, y = (i >> bshift_) & m, z = i >> (2 * bshift_);
+      const int x = i & m, y = (i >> store_.bshift) & m, z = i >> (2 * store_.bshift);
       const bool inner = x > 0 && x < m && y > 0 && y < m && z > 0 && z < m;
       const bool ex = inner ? isFree(L[i + 1]) || isFree(L[i - 1]) || isFree(L[i + s1]) || isFree(L[i - s1]) ||
                                   isFree(L[i + s2]) || isFree(L[i - s2])

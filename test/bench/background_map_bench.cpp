@@ -11,6 +11,8 @@
 // Also: memory of both maps, frontier update time per frame (and whether it
 // stays flat as the map grows) and one batch of 20 gain raycasts of 36 x 10.
 //
+// Integration runs on one thread and on two (integration_threads), same map.
+//
 // Usage: bench_background_map [--data DIR] [--frames N] [--ours-only] [--out FILE]
 //   --frames: house frames (0 skips the house); --ours-only skips OctoMap (profiling).
 //   DIR defaults to ../shared/data/box-room-tum relative to the repository.
@@ -159,15 +161,37 @@ double threadCpuMs() {
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
 }
+// CPU time of all threads of the process, ms (the two-thread integration's total work).
+double processCpuMs() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
+}
 
 bool g_ours_only = false;  // --ours-only: skip OctoMap (for profiling our side)
 
 void run(const std::string& name, const std::vector<Frame>& frames, const semexp::PinholeCamera& cam,
          const semexp::Bounds& bounds, semexp_bench::Reporter& rep) {
   semexp::BackgroundMapConfig cfg;  // 4 cm, colour and minimum distance on
+  cfg.integration_threads = 1;
   semexp::OccupancyMap map(cfg, bounds);
   octomap::OcTree tree(cfg.resolution_m);
-  std::vector<double> ours, fr, oct, ours_cpu, fr_cpu, oct_cpu;
+  std::vector<double> ours, fr, oct, ours_cpu, fr_cpu, oct_cpu, ours2, ours2_cpu;
+  // The same frames on two threads first (wall time: the second thread's CPU
+  // is not this thread's), then on one; the maps are identical.
+  {
+    semexp::BackgroundMapConfig cfg2 = cfg;
+    cfg2.integration_threads = 2;
+    semexp::OccupancyMap map2(cfg2, bounds);
+    for (const Frame& f : frames) {
+      const auto t0 = Clock::now();
+      const double c0 = processCpuMs();
+      map2.integrate(f.depth_m.data(), f.rgb.empty() ? nullptr : f.rgb.data(), cam, f.T_WC);
+      ours2.push_back(msSince(t0));
+      ours2_cpu.push_back(processCpuMs() - c0);
+      map2.updateFrontiers();
+    }
+  }
   for (const Frame& f : frames) {
     auto t0 = Clock::now();
     double c0 = threadCpuMs();
@@ -227,13 +251,17 @@ void run(const std::string& name, const std::vector<Frame>& frames, const semexp
     if (g.size() != pos.size()) return;
   }
 
-  std::printf("\n== %s: %zu frames of %dx%d, r = %.2f m, d_max = %.0f m, one core ==\n", name.c_str(), frames.size(),
+  std::printf("\n== %s: %zu frames of %dx%d, r = %.2f m, d_max = %.0f m ==\n", name.c_str(), frames.size(),
               cam.width, cam.height, cfg.resolution_m, cam.d_max_m);
   const double mo_cpu = median(ours_cpu), mt_cpu = median(oct_cpu);
   std::printf("  integrate (colour + min distance)  ours %8.2f ms/frame   OctoMap %8.2f ms/frame   speed-up %.1fx  (wall, median)\n",
               mo, mt, mt / mo);
   std::printf("                                     ours %8.2f ms/frame   OctoMap %8.2f ms/frame   speed-up %.1fx  (thread CPU, median)\n",
               mo_cpu, mt_cpu, mt_cpu / mo_cpu);
+  const double mo2 = median(ours2);
+  std::printf("  integrate on 2 threads             ours %8.2f ms/frame   OctoMap %8.2f ms/frame   speed-up %.1fx  (wall, median; %.2fx one thread)\n",
+              mo2, mt, mt / mo2, mo / mo2);
+  std::printf("                                     ours %8.2f ms/frame CPU of both threads (median)\n", median(ours2_cpu));
   std::printf("  memory                             ours %8.2f MB         OctoMap %8.2f MB\n", map.memoryBytes() / 1e6,
               tree.memoryUsage() / 1e6);
   std::printf("  explored volume                    ours %8.2f m^3        OctoMap %8.2f m^3\n", map.exploredVolume(),
@@ -244,6 +272,11 @@ void run(const std::string& name, const std::vector<Frame>& frames, const semexp
               median(gain_cpu));
   rep.add("background_map." + name + ".integrate_ms_per_frame", mo, "ms", "octomap", mt);
   rep.add("background_map." + name + ".speedup_vs_octomap", mt / mo, "x");
+  rep.add("background_map." + name + ".speedup_vs_octomap.threads_1", mt / mo, "x");
+  rep.add("background_map." + name + ".speedup_vs_octomap.threads_2", mt / mo2, "x");
+  rep.add("background_map." + name + ".integrate_ms_per_frame.threads_2", mo2, "ms", "octomap", mt);
+  rep.add("background_map." + name + ".two_thread_speedup", mo / mo2, "x");
+  rep.add("background_map." + name + ".integrate_cpu_ms_per_frame.threads_2", median(ours2_cpu), "ms");
   rep.add("background_map." + name + ".integrate_cpu_ms_per_frame", mo_cpu, "ms", "octomap", mt_cpu);
   rep.add("background_map." + name + ".frontier_update_cpu_ms_per_frame", median(fr_cpu), "ms");
   rep.add("background_map." + name + ".gain_batch_20x36x10_cpu_ms", median(gain_cpu), "ms");

@@ -22,6 +22,7 @@ struct BackgroundMapConfig {
   double surface_front_m = 0.0;    ///< voxels whose centre lies less than this in front of the measured depth count as surface (occupied), not free, m
   double surface_front_quadratic_per_m = 0.0;  ///< noise-aware margin: the surface starts max(surface_front_m, this * d^2) in front of depth d, 1/m (e.g. 2 x the sensor's s of sigma = s d^2)
   double publish_period_s = 1.0;   ///< minimum period between ~occupied point clouds, s
+  int integration_threads = 2;     ///< threads that integrate a frame, the caller's included (same map for any count)
 
   void validate(const std::string& ns = "background_map/") const {
     require(std::isfinite(resolution_m) && resolution_m > 0, ns + "resolution_m", "must be > 0 m");
@@ -38,6 +39,7 @@ struct BackgroundMapConfig {
     require(log_odds_min > -30 && log_odds_max < 30 && log_odds_free > -30 && log_odds_occupied < 30,
             ns + "log_odds_min", "log-odds parameters must lie in (-30, 30)");
     require(publish_period_s >= 0, ns + "publish_period_s", "must be >= 0 s");
+    require(integration_threads >= 1 && integration_threads <= 64, ns + "integration_threads", "must be in [1, 64]");
   }
 };
 

@@ -17,6 +17,11 @@
 /// Log-odds are stored as int16 in thousandths. A voxel is occupied when its
 /// log-odds are >= 0 (OctoMap's convention), free when < 0, unknown when never
 /// updated.
+///
+/// The parts, each in core/occupancy/ with its own test: BlockStore (cells,
+/// block and surface pools, summaries), DepthPyramid (min/max depth),
+/// Integrator (the walk and the voxel update, on a small thread pool) and
+/// FrontierTracker (frontier flags, lists and bits).
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -29,6 +34,10 @@
 #include "semantic_exploration/core/background_map_config.hpp"
 #include "semantic_exploration/core/bounds.hpp"
 #include "semantic_exploration/core/camera.hpp"
+#include "semantic_exploration/core/map_blocks.hpp"
+#include "semantic_exploration/core/occupancy/block_store.hpp"
+#include "semantic_exploration/core/occupancy/frontier_tracker.hpp"
+#include "semantic_exploration/core/occupancy/integrator.hpp"
 #include "semantic_exploration/core/spherical_grid.hpp"
 
 namespace cv {
@@ -36,40 +45,6 @@ class Mat;
 }
 
 namespace semexp {
-
-enum class VoxelState : std::uint8_t { kUnknown = 0, kFree = 1, kOccupied = 2 };
-
-/// ROS-free twin of msg/MapBlocks.msg (see there for the field meanings).
-struct MapBlocksData {
-  static constexpr std::uint8_t kEncodingLogOddsI8 = 0;  ///< log-odds * 10 rounded, -128 unknown
-  static constexpr std::int8_t kUnknownI8 = -128;
-
-  std::uint64_t sequence = 0;  ///< 1 for the first update; a full map carries the last published sequence
-  bool full = false;           ///< true: the blocks are the whole map
-  double resolution_m = 0.0;   ///< finest voxel edge, m
-  int block_size = 0;          ///< voxels per block edge
-  Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();  ///< minimum corner of voxel (0,0,0), world, m
-  std::uint8_t encoding = kEncodingLogOddsI8;
-  std::vector<std::int32_t> coords;  ///< 3 per block (x, y, z) block coordinates
-  std::vector<std::int8_t> payload;  ///< block_size^3 per block, x fastest, then y, then z
-  /// Blocks whose voxels all hold one value (a compact snapshot): 3 coordinates and one value each.
-  std::vector<std::int32_t> uniform_coords;
-  std::vector<std::int8_t> uniform_values;
-
-  std::size_t blockCount() const { return coords.size() / 3; }
-  /// Bytes of coordinates and values: what the message carries besides its header.
-  std::size_t byteSize() const {
-    return 4 * (coords.size() + uniform_coords.size()) + payload.size() + uniform_values.size();
-  }
-};
-
-/// Result of one integrate() call.
-struct IntegrationStats {
-  std::size_t invalid_pixels = 0;   ///< depth pixels that were 0/NaN/inf/negative/out of [d_min, d_max]
-  std::size_t changed_cells = 0;    ///< cells (blocks or uniform leaves) whose log-odds changed
-  std::size_t voxels_updated = 0;   ///< voxels updated one by one (surface band, frustum border)
-  std::size_t blocks_allocated = 0; ///< blocks allocated in this frame
-};
 
 /// First hit of a raycast.
 struct RaycastHit {
@@ -97,7 +72,9 @@ struct GainImages {
 
 /// Multi-resolution occupancy map with colour, minimum observed distance and
 /// incrementally maintained frontiers. Not thread-safe for writes; const
-/// queries may run concurrently with each other.
+/// queries may run concurrently with each other. integrate() itself spreads
+/// its work over config.integration_threads threads, with the same result for
+/// any count.
 class OccupancyMap {
  public:
   /// The map covers `bounds` rounded outwards to whole blocks; voxel (0,0,0)'s
@@ -172,7 +149,7 @@ class OccupancyMap {
   double occupiedVolume() const;  ///< m^3
   double exploredVolume() const { return freeVolume() + occupiedVolume(); }
   std::size_t memoryBytes() const;
-  std::size_t blockCount() const { return block_count_; }
+  std::size_t blockCount() const { return store_.blockCount(); }
   std::size_t frontierCount() const;
   /// Centre and edge length (m) of every frontier leaf: voxels, or whole
   /// uniform cells where those are the finest allocated level.
@@ -181,12 +158,12 @@ class OccupancyMap {
   void forEachOccupied(
       const std::function<void(const Eigen::Vector3d& centre_W, double size_m, const std::uint8_t rgb[3])>& f) const;
 
-  double resolution() const { return res_; }
-  int blockSize() const { return bs_; }
-  const Eigen::Vector3d& origin() const { return origin_; }
+  double resolution() const { return store_.res; }
+  int blockSize() const { return store_.bs; }
+  const Eigen::Vector3d& origin() const { return store_.origin; }
   /// World box actually covered (bounds rounded out to whole blocks), m.
-  Eigen::Vector3d extentMin() const { return origin_; }
-  Eigen::Vector3d extentMax() const { return origin_ + nb_.cast<double>() * (bs_ * res_); }
+  Eigen::Vector3d extentMin() const { return store_.origin; }
+  Eigen::Vector3d extentMax() const { return store_.origin + store_.nb.cast<double>() * (store_.bs * store_.res); }
   const BackgroundMapConfig& config() const { return cfg_; }
 
   // ------------------------------------------------------- serialisation
@@ -217,106 +194,34 @@ class OccupancyMap {
   /// faces; the layout of writePly), e.g. for evaluation against a mesh.
   void exportOccupiedPly(const std::string& path) const;
 
-  // Internals shared by the implementation files (not part of the API).
-  struct Summary {
-    std::int16_t min_l;      ///< min log-odds over known voxels below
-    std::int16_t max_l;      ///< max log-odds over known voxels below
-    std::uint8_t known_any;  ///< some voxel below is known
-    std::uint8_t unknown_any;  ///< some voxel below is unknown
-  };
-  static constexpr std::int16_t kUnknown = INT16_MIN;  ///< log-odds sentinel of unknown voxels
-  static constexpr double kScale = 1000.0;              ///< stored log-odds per unit log-odds
-  // cell_flags_ bits
-  static constexpr std::uint8_t kDirty = 1;           ///< changed since the last takeUpdate()
-  static constexpr std::uint8_t kFrontierCand = 2;    ///< changed since the last updateFrontiers()
-  static constexpr std::uint8_t kCoarseFrontier = 4;  ///< uniform cell that is a frontier
-  static constexpr std::uint8_t kBlockFrontier = 8;   ///< block with frontier bits
-  static constexpr std::uint8_t kListedBlock = 16;    ///< in frontier_blocks_
-  static constexpr std::uint8_t kListedCell = 32;     ///< in frontier_cells_
-  static constexpr std::uint8_t kVisited = 64;        ///< scratch of updateFrontiers()
-
  private:
   void saveTo(std::ostream& f) const;  ///< the own format's bytes (save())
-  struct FrameCtx;
-  struct Level {
-    Eigen::Vector3i dims;
-    std::vector<Summary> s;
-  };
-
-  void initGeometry();
-  int cellIndex(int bx, int by, int bz) const { return bx + nb_.x() * (by + nb_.y() * bz); }
-  int allocateBlock(int cell);
-  int ensureSurface(int b);  ///< surface slot of block b, allocated (distances never, no colour) if missing
-  void releaseBlock(int cell);
-  // integration (occupancy_map.cpp)
-  void visitNode(FrameCtx& ctx, int k, int ix, int iy, int iz);
-  void freeRegion(FrameCtx& ctx, int k, int ix, int iy, int iz);
-  void freeCell(FrameCtx& ctx, int cell);
-  void updateCellVoxels(FrameCtx& ctx, int cell);
-  /// Recomputes summaries of `cells` and their ancestors; `track` also queues
-  /// them for the next update message and frontier check.
-  void refreshSummaries(std::vector<int>& cells, bool track = true);
+  /// Recomputes summaries of `cells` and their ancestors (`summaries`: the
+  /// cells' own, if already computed); a block of equal free voxels becomes a
+  /// uniform leaf again. `track` also queues the cells for the next update
+  /// message and frontier check.
+  void refreshSummaries(const std::vector<int>& cells, bool track = true,
+                        const std::vector<occupancy::Summary>* summaries = nullptr);
+  void releaseBlock(int cell);  ///< store_.releaseBlock, telling the frontier tracker first
   void clearAll();
   void encodeCell(int cell, std::int8_t* out) const;
-  Summary cellSummary(int cell);  ///< also refreshes the block's free/occupied counts
   // queries (occupancy_map_query.cpp)
   bool sphereFreeRec(int k, int ix, int iy, int iz, const Eigen::Vector3d& c_v, double rad_v) const;
-  std::int16_t voxelValue(int x, int y, int z) const;  ///< kUnknown outside
-  std::int16_t voxelValueOrKnown(int x, int y, int z) const;  ///< 0 (known) outside
   template <class F>
   void march(const Eigen::Vector3d& o_W, const Eigen::Vector3d& dir_W, double t0, double t1, F&& f) const;
-  // frontiers (occupancy_map_frontiers.cpp)
-  void recheckBlockFrontiers(int cell, bool full);
-  void checkFrontierCell(int cell, bool full);
-  int blockFrontierBits(int cell) const;
-  bool cellIsFrontier(int cell) const;
 
   BackgroundMapConfig cfg_;
   Bounds bounds_;
-  double res_ = 0.04;
-  int bs_ = 8, bshift_ = 3, bs3_ = 512, fwords_ = 8;
-  Eigen::Vector3d origin_;
-  Eigen::Vector3i nb_;  ///< cells per axis
-  std::int16_t l_free_, l_occ_, l_min_, l_max_;
+  occupancy::BlockStore store_;
+  occupancy::Integrator integrator_;
+  occupancy::FrontierTracker frontiers_;
+  std::int16_t l_free_, l_min_, l_max_;
   std::vector<float> entropy_lut_;  ///< reducible entropy of log-odds l_min_ + i (computeGains)
-
-  // per cell
-  std::vector<std::int32_t> cell_block_;   ///< block slot or -1 (uniform leaf)
-  std::vector<std::int16_t> cell_value_;   ///< log-odds of a uniform leaf
-  std::vector<std::uint16_t> cell_dist_;   ///< min observed distance of a uniform leaf, mm (0xFFFF never)
-  std::vector<std::uint8_t> cell_flags_;   ///< k* bits above
-  std::vector<std::uint32_t> cell_stamp_;  ///< frame stamp (dedupe of changed cells)
-  // per block slot (structure of arrays)
-  std::vector<std::int32_t> block_cell_;   ///< owning cell or -1 (free slot)
-  std::vector<std::int16_t> block_l_;      ///< bs3 per block
-  // Surface data (distance, colour) only for blocks that ever held an occupied
-  // voxel: most blocks (frustum borders, free space near surfaces) never do.
-  std::vector<std::int32_t> block_surf_;   ///< surface slot of each block or -1
-  std::vector<std::uint32_t> block_nfree_, block_nocc_;  ///< free / occupied voxels per block (volumes without a scan)
-  std::vector<std::uint16_t> block_dist_;  ///< bs3 per surface slot, mm (0xFFFF never)
-  std::vector<std::uint8_t> block_rgbw_;   ///< 4 per voxel (r, g, b, weight) per surface slot if colour is on
-  std::vector<std::int32_t> surf_free_;    ///< released surface slots
-  std::size_t surf_slots_ = 0;             ///< surface slots ever allocated
-  std::vector<std::uint64_t> block_front_; ///< frontier bits, fwords_ per block
-  std::vector<std::uint64_t> block_hit_;   ///< per-frame bits of voxels holding a measured endpoint, fwords_ per block
-  std::vector<int> hit_cells_;             ///< cells with endpoint bits in the current frame
-  std::vector<std::int32_t> free_slots_;
-  std::size_t block_count_ = 0;
-  std::vector<Level> levels_;  ///< levels_[0]: per cell; levels_[k]: cells of 2^k x 2^k x 2^k cells
-
-  std::vector<int> dirty_cells_;     ///< changed since the last takeUpdate()
-  std::vector<int> frontier_cand_;   ///< changed since the last updateFrontiers()
-  std::vector<int> frontier_blocks_; ///< cells whose block has frontier bits (entries without kBlockFrontier are stale)
-  std::vector<int> frontier_cells_;  ///< uniform cells that are frontiers (entries without kCoarseFrontier are stale)
-  std::size_t frontier_voxels_ = 0;  ///< set frontier bits over all blocks
-  std::size_t frontier_block_count_ = 0, frontier_cell_count_ = 0;
-  std::uint32_t stamp_ = 0;
+  std::vector<std::uint8_t> dirty_;  ///< per cell: changed since the last takeUpdate()
+  std::vector<int> dirty_cells_;     ///< the cells with dirty_ set
   std::uint64_t sequence_ = 0;
   std::vector<int> changed_scratch_;  ///< reused per-frame list of changed cells
-  std::vector<float> depth_buf_;  ///< validated depth of the current frame (0 = invalid)
-  std::vector<float> free_buf_;   ///< per pixel: voxels with depth below this are carved free (0 = invalid)
-  std::vector<std::vector<float>> pyr_min_, pyr_max_;
-  std::vector<Eigen::Vector2i> pyr_dims_;
+  std::vector<occupancy::Summary> summary_scratch_;  ///< their summaries
 };
 
 }  // namespace semexp

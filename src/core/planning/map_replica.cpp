@@ -6,7 +6,7 @@
 namespace semexp {
 
 namespace {
-constexpr std::int8_t kUnknownValue = -128;
+constexpr std::int8_t kUnknownValue = map_blocks::kUnknownI8;
 // Block coordinates are packed 21 bits each (+-1M blocks per axis).
 constexpr std::int64_t kOffset = 1 << 20;
 }  // namespace
@@ -84,8 +84,7 @@ MapReplica::State MapReplica::state(const Eigen::Vector3d& p) const {
   if (it == blocks_.end()) return State::kUnknown;
   const Eigen::Vector3i l = v - b * block_size_;
   const std::int8_t x = it->second.at((static_cast<std::size_t>(l.z()) * block_size_ + l.y()) * block_size_ + l.x());
-  if (x == kUnknownValue) return State::kUnknown;
-  return x < free_below_ ? State::kFree : State::kOccupied;
+  return map_blocks::stateOf(x, free_below_);
 }
 
 bool MapReplica::sphere_check(const Eigen::Vector3d& p, double r, bool allow_unknown) const {

@@ -4,10 +4,8 @@
 /// (DESIGN Section 3 "Why a map replica"), answering the sphere queries of
 /// path planning without a service round trip.
 ///
-/// Payload encoding (MapBlocks ENCODING_LOG_ODDS_I8): one int8 per voxel, x
-/// fastest, then y, then z; log-odds * 10 rounded; -128 = unknown. A voxel is
-/// free when its value is < free_below (default 0, i.e. log-odds < 0), else
-/// occupied. Missing blocks are unknown. A block whose voxels all hold one
+/// Payload encoding: core/map_blocks.hpp. A voxel is free when its value is
+/// < free_below (default 0, i.e. log-odds < 0), else occupied. Missing blocks are unknown. A block whose voxels all hold one
 /// value may come as that value alone (Update::uniform_*, a compact GetMap
 /// snapshot) and is kept as one value.
 
@@ -18,11 +16,13 @@
 #include <unordered_map>
 #include <vector>
 
+#include "semantic_exploration/core/map_blocks.hpp"
+
 namespace semexp {
 
 class MapReplica {
  public:
-  enum class State : std::uint8_t { kUnknown, kFree, kOccupied };
+  using State = VoxelState;  ///< the codec's one state enum
   enum class Result {
     kApplied,   ///< the update was applied
     kGap,       ///< a sequence number was skipped (or the first update is incremental): resync with a full map

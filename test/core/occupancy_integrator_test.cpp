@@ -1,0 +1,153 @@
+// Integrator: one frame onto a wall with known answers, and the same map
+// from 1, 2 and 3 threads.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "occupancy_test_scene.hpp"
+#include "semantic_exploration/core/occupancy/integrator.hpp"
+#include "semantic_exploration/core/occupancy_map.hpp"
+
+using semexp::BackgroundMapConfig;
+using semexp::Bounds;
+using semexp::PinholeCamera;
+using semexp::occupancy::BlockStore;
+using semexp::occupancy::Integrator;
+using semexp::occupancy::kUnknown;
+
+namespace {
+
+PinholeCamera smallCamera() {
+  PinholeCamera c;
+  c.width = 64;
+  c.height = 48;
+  c.fx = c.fy = 50.0;
+  c.cx = 31.5;
+  c.cy = 23.5;
+  c.d_min_m = 0.1;
+  c.d_max_m = 10.0;
+  return c;
+}
+
+// Temporary directory, removed with its files when the test ends.
+struct TempDir {
+  std::string path;
+  TempDir() {
+    char tmpl[] = "/tmp/semexp_integrator_XXXXXX";
+    const char* p = mkdtemp(tmpl);
+    path = p ? p : "/tmp";
+  }
+  ~TempDir() {
+    for (const char* f : {"/a.map", "/b.map"}) std::remove((path + f).c_str());
+    rmdir(path.c_str());
+  }
+};
+
+std::string bytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+}
+
+}  // namespace
+
+TEST(Integrator, AWallInFrontOfTheCamera) {
+  BackgroundMapConfig cfg;
+  cfg.resolution_m = 0.1;
+  cfg.block_size = 4;
+  cfg.integration_threads = 1;
+  Bounds bounds;
+  bounds.min_m = {-0.8, -0.8, 0.0};
+  bounds.max_m = {0.8, 0.8, 1.6};
+  BlockStore store(cfg.resolution_m, cfg.block_size, bounds, cfg.integrate_colour);
+  Integrator integ(cfg);
+  const PinholeCamera cam = smallCamera();
+  // Camera at (0.05, 0.05, -0.3) looking along world +z (optical = world axes),
+  // a wall at z-depth 1.35 m, i.e. world z = 1.05; three invalid pixels.
+  Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
+  T_WC.translation() = Eigen::Vector3d(0.05, 0.05, -0.3);
+  std::vector<float> depth(static_cast<std::size_t>(cam.width) * cam.height, 1.35f);
+  depth[0] = std::numeric_limits<float>::quiet_NaN();
+  depth[1] = 0.f;
+  depth[2] = 11.f;
+  std::vector<int> changed;
+  const auto st = integ.integrate(store, depth.data(), nullptr, cam, T_WC, changed);
+  EXPECT_EQ(st.invalid_pixels, 3u);
+  EXPECT_GT(st.changed_cells, 0u);
+  EXPECT_EQ(st.changed_cells, changed.size());
+  // The optical axis runs through the centres of voxels x = y = 8 (0.05 m).
+  EXPECT_EQ(store.voxelValue(8, 8, 0), -400);   // z 0.05: free, log-odds -0.4
+  EXPECT_EQ(store.voxelValue(8, 8, 9), -400);   // z 0.95: in front of the wall
+  EXPECT_EQ(store.voxelValue(8, 8, 10), 850);   // z 1.05: holds the endpoints, +0.85
+  EXPECT_EQ(store.voxelValue(8, 8, 11), kUnknown);  // z 1.15: behind the band (2 cm)
+  // The wall's cell got a block and a surface slot with the distance 1.35 m.
+  const int cell = store.cellIndex(2, 2, 2);
+  ASSERT_GE(store.cell_block[cell], 0);
+  const int sl = store.block_surf[store.cell_block[cell]];
+  ASSERT_GE(sl, 0);
+  EXPECT_EQ(store.dist(sl)[store.voxelIndex(0, 0, 2)], 1350);
+  // every changed cell once
+  std::vector<int> sorted = changed;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_EQ(std::unique(sorted.begin(), sorted.end()), sorted.end());
+}
+
+TEST(Integrator, ThreadCountDoesNotChangeTheMap) {
+  const semexp_test::BoxRoom room = semexp_test::standardRoom();
+  const PinholeCamera cam = smallCamera();
+  Bounds bounds;
+  bounds.min_m = {-3.2, -2.2, -0.2};
+  bounds.max_m = {3.2, 2.7, 2.9};
+  std::vector<std::vector<float>> frames;
+  std::vector<Eigen::Isometry3d> poses;
+  for (int i = 0; i < 12; ++i) {
+    poses.push_back(semexp_test::lookPose(Eigen::Vector3d(-1.0 + 0.15 * i, 0.2, 1.3), 0.55 * i, 0.2));
+    frames.push_back(room.render(cam, poses.back()));
+  }
+  std::vector<std::uint8_t> rgb(static_cast<std::size_t>(cam.width) * cam.height * 3);
+  for (std::size_t j = 0; j < rgb.size(); ++j) rgb[j] = static_cast<std::uint8_t>((j * 13) & 0xFF);
+  TempDir dir;
+  std::string saved[4];
+  std::vector<semexp::MapBlocksData> updates[4];
+  std::size_t frontiers[4];
+  for (int threads = 1; threads <= 3; ++threads) {
+    BackgroundMapConfig cfg;
+    cfg.integration_threads = threads;
+    semexp::OccupancyMap map(cfg, bounds);
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      map.integrate(frames[i].data(), rgb.data(), cam, poses[i]);
+      map.updateFrontiers();
+      updates[threads].push_back(map.takeUpdate());
+    }
+    const std::string path = dir.path + (threads == 1 ? "/a.map" : "/b.map");
+    map.save(path);
+    saved[threads] = bytes(path);
+    frontiers[threads] = map.frontierCount();
+  }
+  ASSERT_GT(saved[1].size(), 1000u);
+  for (int threads = 2; threads <= 3; ++threads) {
+    // The own format holds every voxel's log-odds, distance, colour and frontier bits.
+    EXPECT_TRUE(saved[threads] == saved[1]) << threads << " threads";
+    EXPECT_EQ(frontiers[threads], frontiers[1]);
+    ASSERT_EQ(updates[threads].size(), updates[1].size());
+    for (std::size_t i = 0; i < updates[1].size(); ++i) {
+      EXPECT_EQ(updates[threads][i].coords, updates[1][i].coords) << "frame " << i;
+      EXPECT_EQ(updates[threads][i].payload, updates[1][i].payload) << "frame " << i;
+    }
+  }
+}
+
+TEST(Integrator, UsesTheConfiguredThreads) {
+  BackgroundMapConfig cfg;
+  cfg.integration_threads = 3;
+  EXPECT_EQ(Integrator(cfg).threads(), 3);
+  cfg.integration_threads = 0;
+  EXPECT_THROW(cfg.validate(), semexp::ConfigError);
+}
