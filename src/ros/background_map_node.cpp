@@ -135,8 +135,12 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
   last_integration_ms_ = static_cast<float>((ros::WallTime::now() - t_int).toSec() * 1e3);
   const auto t_fr = ros::WallTime::now();
   map_->updateFrontiers();
-  // depthToMeters returns a fresh (continuous) CV_32F image.
-  if (depth_m.isContinuous()) evidence_->look(*map_, depth_m.ptr<float>(), camera_, T_WC);
+  try {
+    const cv::Mat depth = depth_m.isContinuous() ? depth_m : depth_m.clone();
+    evidence_->look(*map_, depth.ptr<float>(), camera_, T_WC);
+  } catch (const std::exception& e) {  // the frame is integrated; only this frame's looks are lost
+    ROS_ERROR_THROTTLE(5.0, "background_map: frontier evidence skipped for a frame: %s", e.what());
+  }
   last_frontier_ms_ = static_cast<float>((ros::WallTime::now() - t_fr).toSec() * 1e3);
   invalid_depth_pixels_ += st.invalid_pixels;
   if (st.invalid_pixels > 0)
@@ -160,7 +164,7 @@ void BackgroundMapNode::publishStats(const std_msgs::Header& header) {
   s.occupied_volume_m3 = map_->occupiedVolume();
   s.explored_volume_m3 = s.free_volume_m3 + s.occupied_volume_m3;
   s.frontier_count = static_cast<std::uint32_t>(map_->frontierCount());
-  s.retired_frontier_count = static_cast<std::uint32_t>(evidence_->retiredCount());
+  s.retired_frontier_count = static_cast<std::uint32_t>(retired_frontiers_);
   s.surface_voxels = surface_.occupied_voxels;
   s.surface_observed_share = surface_measured_ ? surface_.share() : -1.0;
   s.block_count = static_cast<std::uint32_t>(map_->blockCount());
@@ -192,6 +196,7 @@ void BackgroundMapNode::publishClouds(const ros::Time& stamp) {
     map_->forEachFrontier([&](const Eigen::Vector3d& c, double) {
       (evidence_->retired(c) ? retired : active).push_back(c);
     });
+    retired_frontiers_ = retired.size();
     frontiers_pub_.publish(toPointCloud(active, stamp, frames_.world));
     retired_pub_.publish(toPointCloud(retired, stamp, frames_.world));
     last_frontier_pub_ = now;

@@ -46,7 +46,7 @@ std::vector<float> constantDepth(const PinholeCamera& cam, float d) {
 
 }  // namespace
 
-TEST(FrontierEvidence, ThreeLooksFromDifferentPosesRetireAVoxelThatStaysAFrontier) {
+TEST(FrontierEvidence, ThreeLooksFromDifferentPlacesRetireAVoxelThatStaysAFrontier) {
   const OccupancyMap map = freeBall();
   ASSERT_GT(map.frontierCount(), 1000u);
   const PinholeCamera cam;
@@ -56,25 +56,57 @@ TEST(FrontierEvidence, ThreeLooksFromDifferentPosesRetireAVoxelThatStaysAFrontie
 
   FrontierEvidence ev(FrontierEvidenceConfig{});
   const auto none = constantDepth(cam, 0.f);  // no return anywhere: a mirror or window fills the view
-  ASSERT_TRUE(ev.look(map, none.data(), cam, lookPose({0.0, 0.0, 0.0}, 0.0, 0.0)));
+  EXPECT_GT(ev.look(map, none.data(), cam, lookPose({0.0, 0.0, 0.0}, 0.0, 0.0)), 0u);
   EXPECT_EQ(ev.looks(ahead), 1);
   EXPECT_EQ(ev.looks(behind), 0);  // behind the camera
-  // The same pose again, or 0.2 m away with the same heading: not a different look.
-  EXPECT_FALSE(ev.look(map, none.data(), cam, lookPose({0.0, 0.0, 0.0}, 0.0, 0.0)));
-  EXPECT_FALSE(ev.look(map, none.data(), cam, lookPose({-0.2, 0.0, 0.0}, 0.0, 0.0)));
+  // The same pose again, 0.2 m back (< 0.25 m), or turned on the spot (the ray to the voxel is the same):
+  // not a different look.
+  ev.look(map, none.data(), cam, lookPose({0.0, 0.0, 0.0}, 0.0, 0.0));
+  ev.look(map, none.data(), cam, lookPose({-0.2, 0.0, 0.0}, 0.0, 0.0));
+  EXPECT_EQ(ev.looks(ahead), 1);
+  ev.look(map, none.data(), cam, lookPose({0.0, 0.0, 0.0}, 20.0 * M_PI / 180.0, 0.0));
   EXPECT_EQ(ev.looks(ahead), 1);
   EXPECT_FALSE(ev.retired(ahead));
-  // 0.3 m further back (0.3 >= 0.25 m from the last counted pose), then turned by 20 deg (>= 15 deg).
-  ASSERT_TRUE(ev.look(map, none.data(), cam, lookPose({-0.3, 0.0, 0.0}, 0.0, 0.0)));
+  // 0.3 m back (0.3 >= 0.25 m from the last counted look at the origin), then 0.3 m to the side of that.
+  ev.look(map, none.data(), cam, lookPose({-0.3, 0.0, 0.0}, 0.0, 0.0));
   EXPECT_EQ(ev.looks(ahead), 2);
   EXPECT_FALSE(ev.retired(ahead));
-  ASSERT_TRUE(ev.look(map, none.data(), cam, lookPose({-0.3, 0.0, 0.0}, 20.0 * M_PI / 180.0, 0.0)));
+  // A third place, 0.3 m to the side of the second.
+  ev.look(map, none.data(), cam, lookPose({-0.3, 0.3, 0.0}, 0.0, 0.0));
   EXPECT_EQ(ev.looks(ahead), 3);
   EXPECT_TRUE(ev.retired(ahead));
   EXPECT_FALSE(ev.retired(behind));
   EXPECT_GT(ev.retiredCount(), 0u);
   EXPECT_LT(ev.retiredCount(), map.frontierCount());  // the half behind was never seen
-  EXPECT_EQ(ev.countedFrames(), 3u);
+}
+
+TEST(FrontierEvidence, TurningTheRayCountsAsANewLook) {
+  // With the separation out of reach only the ray to the voxel 0.98 m ahead decides: 0.1 m to the side
+  // turns it by atan(0.1 / 0.98) = 5.8 deg (< 15 deg, no look), 0.3 m to the side by 17.0 deg (a look).
+  const OccupancyMap map = freeBall();
+  const PinholeCamera cam;
+  const Eigen::Vector3d ahead = frontierNear(map, {1.0, 0.0, 0.0});
+  FrontierEvidenceConfig c;
+  c.min_look_separation_m = 10.0;  // only the turn of the ray decides
+  FrontierEvidence ev(c);
+  const auto none = constantDepth(cam, 0.f);
+  ev.look(map, none.data(), cam, lookPose({0.0, 0.0, 0.0}, 0.0, 0.0));
+  ASSERT_EQ(ev.looks(ahead), 1);
+  ev.look(map, none.data(), cam, lookPose({0.0, 0.1, 0.0}, 0.0, 0.0));
+  EXPECT_EQ(ev.looks(ahead), 1);
+  ev.look(map, none.data(), cam, lookPose({0.0, 0.3, 0.0}, 0.0, 0.0));
+  EXPECT_EQ(ev.looks(ahead), 2);
+}
+
+TEST(FrontierEvidence, DisabledCountsNothing) {
+  const OccupancyMap map = freeBall();
+  const PinholeCamera cam;
+  FrontierEvidenceConfig c;
+  c.enabled = false;
+  FrontierEvidence ev(c);
+  const auto none = constantDepth(cam, 0.f);
+  EXPECT_EQ(ev.look(map, none.data(), cam, lookPose({0.0, 0.0, 0.0}, 0.0, 0.0)), 0u);
+  EXPECT_EQ(ev.looks(frontierNear(map, {1.0, 0.0, 0.0})), 0);
 }
 
 TEST(FrontierEvidence, AHitNearerThanTheVoxelByMoreThanTheMarginHidesIt) {
@@ -131,7 +163,7 @@ TEST(FrontierEvidence, AResolvedVoxelIsForgotten) {
   const Eigen::Isometry3d T = lookPose({-0.3, 0.0, 0.0}, 0.0, 0.0);
   map.integrate(room.render(cam, T).data(), nullptr, cam, T);
   map.updateFrontiers();
-  ASSERT_TRUE(ev.look(map, room.render(cam, T).data(), cam, T));
+  ev.look(map, room.render(cam, T).data(), cam, T);
   EXPECT_EQ(ev.looks(ahead), 0);
   EXPECT_FALSE(ev.retired(ahead));
 }
@@ -147,5 +179,8 @@ TEST(FrontierEvidence, InvalidConfigNamesTheParameter) {
   }
   c = FrontierEvidenceConfig{};
   c.view_range_m = std::nan("");
+  EXPECT_THROW(FrontierEvidence{c}, ConfigError);
+  c = FrontierEvidenceConfig{};
+  c.looks_to_retire = 256;  // counts are kept in 8 bits
   EXPECT_THROW(FrontierEvidence{c}, ConfigError);
 }

@@ -102,3 +102,25 @@ TEST(SurfaceObservation, AWallSeenFrom2mAndAnotherFrom4m) {
   EXPECT_GT(after.within_voxels, s.within_voxels);
   EXPECT_EQ(after.within_voxels, bruteForce(map, 3.0).within);
 }
+
+// A thick occupied band (surface_band_m 0.12: 3-4 voxels behind each hit) puts occupied voxels behind the
+// exposed layer; only the exposed layer counts as surface.
+TEST(SurfaceObservation, OccupiedVoxelsBehindTheExposedLayerAreNotSurface) {
+  BackgroundMapConfig cfg;
+  cfg.surface_band_m = 0.12;
+  PinholeCamera cam;
+  const BoxRoom scene = twoWalls();
+  OccupancyMap map(cfg, twoWallBounds());
+  const Eigen::Isometry3d T_near = lookPose({0.0, 0.0, 0.0}, 0.0, 0.0);
+  map.integrate(scene.render(cam, T_near).data(), nullptr, cam, T_near);
+  std::size_t occupied = 0;
+  map.forEachOccupied([&](const Eigen::Vector3d&, double size_m, const std::uint8_t*) {
+    occupied += static_cast<std::size_t>(std::lround(std::pow(size_m / map.resolution(), 3)));
+  });
+  const Counts c = bruteForce(map, 3.0);
+  ASSERT_GT(c.all, 1000u);
+  EXPECT_GT(occupied, 2 * c.all);  // the band is at least 3 voxels deep; the exposed layer is one
+  const OccupancyMap::SurfaceObservation s = map.surfaceObservedWithin(3.0);
+  EXPECT_EQ(s.occupied_voxels, c.all);
+  EXPECT_EQ(s.within_voxels, c.within);
+}

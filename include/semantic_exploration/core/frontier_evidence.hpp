@@ -12,13 +12,17 @@
 /// 3x3x3 neighbourhood projects inside the image (so the unknown neighbour
 /// was in the field of view too); the depth at its pixel is either missing
 /// (no return: window, mirror, beyond range) or not nearer than the voxel by
-/// more than occlusion_margin_m (nothing hid it). Only frames whose camera
-/// moved at least min_look_separation_m or turned at least
-/// min_look_rotation_rad since the last counted frame count, so the looks
-/// come from different poses. looks_to_retire looks retire a voxel. A voxel
-/// that stops being a frontier is forgotten.
+/// more than occlusion_margin_m (nothing hid it). A look counts for a voxel
+/// only if the camera centre moved at least min_look_separation_m since that
+/// voxel's last counted look, or the ray to the voxel turned by at least
+/// min_look_rotation_rad: the looks come from different places, not from
+/// one ray seen again. looks_to_retire looks retire a voxel. A voxel that
+/// stops being a frontier is forgotten. Coarse frontier leaves (uniform
+/// cells larger than a voxel) are never retired: their centre names no
+/// voxel of their own.
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <unordered_map>
@@ -34,13 +38,13 @@ struct FrontierEvidenceConfig {
   bool enabled = true;                  ///< false: every frontier stays active
   double view_range_m = 3.0;            ///< farthest look that counts, m (the paper's d_bg: closer than that a ray resolves a voxel)
   int looks_to_retire = 3;              ///< looks from different poses that did not resolve a voxel before it is retired
-  double min_look_separation_m = 0.25;  ///< camera travel between frames whose looks count, m
-  double min_look_rotation_rad = 0.26;  ///< or camera rotation between them, rad (15 deg)
+  double min_look_separation_m = 0.25;  ///< camera travel since a voxel's last counted look, m
+  double min_look_rotation_rad = 0.26;  ///< or turn of the ray to the voxel since then, rad (15 deg)
   double occlusion_margin_m = 0.1;      ///< depth nearer than the voxel by more than this hid it, m
 
   void validate(const std::string& ns = "frontier_evidence/") const {
     require(std::isfinite(view_range_m) && view_range_m > 0, ns + "view_range_m", "must be > 0 m");
-    require(looks_to_retire > 0, ns + "looks_to_retire", "must be > 0");
+    require(looks_to_retire > 0 && looks_to_retire <= 255, ns + "looks_to_retire", "must be in [1, 255]");
     require(std::isfinite(min_look_separation_m) && min_look_separation_m >= 0, ns + "min_look_separation_m",
             "must be >= 0 m");
     require(std::isfinite(min_look_rotation_rad) && min_look_rotation_rad >= 0, ns + "min_look_rotation_rad",
@@ -57,9 +61,10 @@ class FrontierEvidence {
 
   /// Counts the looks of one integrated depth frame (row-major z-depth, m,
   /// camera.width x camera.height; 0 or non-finite = no return) at the map's
-  /// current frontiers; call after map.updateFrontiers(). Returns false (and
-  /// counts nothing) for a frame too close to the last counted pose.
-  bool look(const OccupancyMap& map, const float* depth_m, const PinholeCamera& camera,
+  /// current frontiers and forgets voxels that are no frontier any more; call
+  /// after map.updateFrontiers(), with every integrated frame (one hash
+  /// lookup per frontier voxel). Returns how many voxels got a look.
+  std::size_t look(const OccupancyMap& map, const float* depth_m, const PinholeCamera& camera,
             const Eigen::Isometry3d& T_WC);
 
   /// Whether the frontier leaf centred at p_W (as given by
@@ -68,20 +73,23 @@ class FrontierEvidence {
   /// Looks counted at the frontier leaf centred at p_W.
   int looks(const Eigen::Vector3d& p_W) const;
 
-  std::size_t retiredCount() const { return retired_; }  ///< retired frontier leaves after the last look()
-  std::size_t countedFrames() const { return counted_frames_; }
+  std::size_t retiredCount() const { return retired_; }  ///< retired frontier voxels at the last look()
   const FrontierEvidenceConfig& config() const { return config_; }
 
  private:
   std::uint64_t key(const Eigen::Vector3d& p_W) const;
+  /// Whether the voxel at p_W is in clear view of the camera at o_W (see the file comment).
+  bool sees(const Eigen::Vector3d& p_W, const Eigen::Vector3d& o_W, const Eigen::Isometry3d& T_CW, double r,
+            const float* depth_m, const PinholeCamera& camera) const;
 
   FrontierEvidenceConfig config_;
   double key_resolution_m_ = 0.0;  ///< the map's resolution, set at the first look
-  std::unordered_map<std::uint64_t, std::uint8_t> looks_;
-  bool have_last_ = false;
-  Eigen::Isometry3d last_T_WC_ = Eigen::Isometry3d::Identity();
+  struct Entry {
+    std::uint8_t looks = 0;
+    Eigen::Vector3f camera_W = Eigen::Vector3f::Zero();  ///< camera centre of the last counted look, m
+  };
+  std::unordered_map<std::uint64_t, Entry> entries_;
   std::size_t retired_ = 0;
-  std::size_t counted_frames_ = 0;
 };
 
 }  // namespace semexp
