@@ -64,7 +64,9 @@ bool FrontierEvidence::sees(const Eigen::Vector3d& p_W, const Eigen::Vector3d& o
   // image: the unknown neighbour was in the field of view as well.
   const double half = 1.5 * r;
   if (z - half <= camera.d_min_m || (p_W - o_W).norm() > config_.view_range_m) return false;
-  const double u = camera.fx * p_C.x() / z + camera.cx, v = camera.fy * p_C.y() / z + camera.cy;
+  Eigen::Vector2f uv;
+  if (!camera.project(p_C.cast<float>(), uv)) return false;
+  const double u = uv.x(), v = uv.y();
   const double mu = camera.fx * half / (z - half), mv = camera.fy * half / (z - half);
   if (u - mu < 0 || v - mv < 0 || u + mu > camera.width - 1 || v + mv > camera.height - 1) return false;
   const int iu = static_cast<int>(std::lround(u)), iv = static_cast<int>(std::lround(v));

@@ -164,7 +164,7 @@ void BackgroundMapNode::publishStats(const std_msgs::Header& header) {
   s.occupied_volume_m3 = map_->occupiedVolume();
   s.explored_volume_m3 = s.free_volume_m3 + s.occupied_volume_m3;
   s.frontier_count = static_cast<std::uint32_t>(map_->frontierCount());
-  s.retired_frontier_count = static_cast<std::uint32_t>(retired_frontiers_);
+  s.retired_frontier_count = static_cast<std::uint32_t>(evidence_->retiredCount());
   s.surface_voxels = surface_.occupied_voxels;
   s.surface_observed_share = surface_measured_ ? surface_.share() : -1.0;
   s.block_count = static_cast<std::uint32_t>(map_->blockCount());
@@ -196,7 +196,6 @@ void BackgroundMapNode::publishClouds(const ros::Time& stamp) {
     map_->forEachFrontier([&](const Eigen::Vector3d& c, double) {
       (evidence_->retired(c) ? retired : active).push_back(c);
     });
-    retired_frontiers_ = retired.size();
     frontiers_pub_.publish(toPointCloud(active, stamp, frames_.world));
     retired_pub_.publish(toPointCloud(retired, stamp, frames_.world));
     last_frontier_pub_ = now;

@@ -60,7 +60,6 @@ class BackgroundMapNode : public CameraNode {
 
   std::unique_ptr<semexp::OccupancyMap> map_;
   std::unique_ptr<semexp::FrontierEvidence> evidence_;  ///< frontiers looked at without resolving them
-  std::size_t retired_frontiers_ = 0;  ///< retired frontier voxels in the last ~retired_frontiers cloud
   ros::Subscriber depth_sub_, rgb_sub_;
   ros::Publisher occupied_pub_, frontiers_pub_, retired_pub_, update_pub_, stats_pub_;
   ros::ServiceServer gains_srv_, get_map_srv_, save_srv_;
