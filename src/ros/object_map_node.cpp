@@ -122,6 +122,12 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
     ROS_INFO("object_map: new object %u (%s)", id, map_->object(id)->class_name.c_str());
   for (const auto& m : r.merged) ROS_INFO("object_map: object %u is part of object %u: merged", m.first, m.second);
   last_stamp_ = matched->header.stamp;
+  // Said again at the first frame: the start-up line goes out before any
+  // /rosout subscriber has connected to a respawned node, so it can be lost.
+  if (!integrated_any_)
+    ROS_INFO("object_map: first frame since start integrated with %zu object(s); objects are rebuilt from new "
+             "observations", map_->objects().size());
+  integrated_any_ = true;
   // Objects before the report: whoever waits for the report (lockstep) then has this frame's objects.
   if ((ros::WallTime::now() - last_publish_).toSec() >= config_.publish_period_s) publishObjects(last_stamp_);
   reportFrame(matched->header, true, timer);

@@ -54,6 +54,7 @@ class ObjectMapNode : public CameraNode {
   semexp::ExplorationConfig exploration_;
   std::unique_ptr<semexp::ObjectMap> map_;
   ros::Time last_stamp_;
+  bool integrated_any_ = false;  ///< For the once-only first-frame log line.
   /// Last render_instances answer, reused by the frame it was made for if the map did not change since.
   struct CachedRender {
     ros::Time stamp;
