@@ -32,6 +32,7 @@ the frame, so that neither a mapping node nor rosbag record misses frame 0.
 A lockstep node that exists on the master but had no connection to the depth
 topic when a frame went out cannot report that frame and is not waited for on
 it (logged), so a node that connects late never stalls the simulator.
+Both waits are in frame_lockstep.py.
 
 Faults (FaultsConfig, off by default): a sim-time window without world->body
 tf and mav/pose, detection instance images at another resolution, and camera
@@ -42,11 +43,10 @@ not wait for a frame that was not sent).
 import queue
 import threading
 import time
-from typing import Dict, Optional
+from typing import Optional
 
 import numpy as np
 
-import rosgraph
 import rospy
 import tf2_ros
 from geometry_msgs.msg import PoseStamped, TransformStamped
@@ -59,6 +59,7 @@ from semantic_exploration.msg import Detection, Detections, DropCounts, FrameInt
 
 from .config import ConfigError, SimConfig, from_dict
 from .faults import FaultInjector
+from .frame_lockstep import FrameLockstep
 from .planner_lockstep import PlannerLockstep
 from .scene import SceneError, export_ground_truth
 from .mav import PathFollower, SetpointMotion
@@ -82,10 +83,6 @@ def _image(arr: np.ndarray, encoding: str, header) -> Image:
     m.step = arr.strides[0]
     m.data = arr.tobytes()
     return m
-
-
-def _short_name(n: str) -> str:
-    return n.rstrip("/").rsplit("/", 1)[-1]
 
 
 class MavSimNode:
@@ -129,8 +126,7 @@ class MavSimNode:
         self.tf = tf2_ros.TransformBroadcaster()
         self.tf_static = tf2_ros.StaticTransformBroadcaster()
 
-        self._lock = threading.Condition()
-        self._reported: Dict[str, int] = {}
+        self._lock = threading.Lock()  # the pending path and setpoint, between callbacks and the loop
         self._pending_path = None
         self._pending_setpoint = None
         self._requests: "queue.Queue" = queue.Queue()
@@ -145,19 +141,16 @@ class MavSimNode:
         else:
             # Raw: a path's length is checked before it is deserialised (1e6 poses would hold the GIL for seconds).
             rospy.Subscriber("planner/path", rospy.AnyMsg, self._on_path, queue_size=5)
-        rospy.Subscriber("frame_integrated", FrameIntegrated, self._on_integrated, queue_size=50)
         rospy.Subscriber("~load_scene", String, lambda m: self._requests.put(m.data), queue_size=2)
         self._hidden = list(c.detector.hidden_object_ids)
         rospy.Subscriber("~hide_detections", UInt32MultiArray, self._on_hide, queue_size=5)
-        self._lockstep_nodes = [_short_name(n) for n in c.lockstep_nodes]
-        self._timeouts = 0
-        # lockstep nodes that exist but had no depth connection when the last frame went out: they
-        # cannot report that frame (e.g. still connecting at start-up), so it does not wait for them
-        self._absent = (None, set())  # (frame stamp ns, names)
-        self._node_names = (0.0, set())  # (wall time of the query, short names of the master's nodes)
         self._planner_lockstep = PlannerLockstep(
             rospy.resolve_name("planner/plan_once"), c.lockstep_planner_retry_s, c.lockstep_timeout_s,
             c.lockstep_startup_timeout_s) if c.lockstep and c.lockstep_planner else None
+        # With lockstep_planner (deterministic runs) every lockstep node must be there before frame 0.
+        self._frames = FrameLockstep(c.lockstep_nodes, c.lockstep_timeout_s, c.lockstep_startup_timeout_s,
+                                     self.pub_depth, self._frame_publishers, strict=self._planner_lockstep is not None)
+        rospy.Subscriber("frame_integrated", FrameIntegrated, self._frames.on_integrated, queue_size=50)
         self.pub_coll.publish(UInt32(0))
         self._publish_fault_counts(0)
 
@@ -230,12 +223,6 @@ class MavSimNode:
     def _reject(self, why: str) -> None:
         rospy.logerr("mav_sim: rejected %s; keeping the previous path", why)
         self.pub_rejected.publish(String(why))
-
-    def _on_integrated(self, msg: FrameIntegrated) -> None:
-        name = _short_name(msg.node)
-        with self._lock:
-            self._reported[name] = max(self._reported.get(name, 0), msg.header.stamp.to_nsec())
-            self._lock.notify_all()
 
     # ---------------------------------------------------------------- helpers
     def _install(self, sim: Simulator) -> None:
@@ -316,98 +303,9 @@ class MavSimNode:
                            for d in out["detections"]]
         self.pub_det.publish(dets)
 
-    def _wait_lockstep(self, frame_ns: int) -> None:
-        """Blocks (wall time) until every lockstep node has reported frame_ns."""
-        deadline = time.monotonic() + self.cfg.lockstep_timeout_s
-        with self._lock:
-            while not rospy.is_shutdown():
-                missing = [n for n in self._lockstep_nodes if self._reported.get(n, -1) < frame_ns
-                           and not (frame_ns == self._absent[0] and n in self._absent[1])]
-                if not missing:
-                    return
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    self._timeouts += 1
-                    if self._timeouts <= 3 or self._timeouts % 20 == 0:  # keep the log readable
-                        rospy.logwarn("mav_sim: lockstep: no frame_integrated from %s for frame %.3f s after %.1f s; "
-                                      "continuing (%d timeouts so far)", ", ".join(missing), frame_ns / NS,
-                                      self.cfg.lockstep_timeout_s, self._timeouts)
-                    return
-                self._lock.wait(min(left, 0.1))
-
     def _frame_publishers(self):
         return [self.pub_depth, self.pub_rgb, self.pub_info, self.pub_info_depth, self.pub_info_rgb, self.pub_inst,
                 self.pub_cls, self.pub_det, self.pub_clock, self.tf.pub_tf, self.tf_static.pub_tf]
-
-    def _unconnected_subscribers(self):
-        """(topic, subscriber node) pairs the master lists for the frame topics that
-        have no connection to this node yet (a subscriber still connecting)."""
-        try:
-            _, subs, _ = rosgraph.Master(rospy.get_name()).getSystemState()
-        except Exception:  # master busy: judge by the connections alone
-            return []
-        subs = dict(subs)
-        me = rospy.get_name()
-        out = []
-        for pub in self._frame_publishers():
-            for node in subs.get(pub.resolved_name, []):
-                if node != me and not pub.impl.has_connection(node):
-                    out.append((pub.resolved_name, node))
-        return out
-
-    def _wait_for_subscribers(self) -> None:
-        """Before the first frame: waits (wall time) until the depth topic has a
-        subscriber, every lockstep node that exists subscribes to it, and every
-        subscriber of the frame topics is connected; at most lockstep_startup_timeout_s."""
-        deadline = time.monotonic() + self.cfg.lockstep_startup_timeout_s
-        stable_since = None
-        while not rospy.is_shutdown():
-            waiting = []
-            if self.pub_depth.get_num_connections() == 0:
-                waiting.append("a subscriber of %s" % self.pub_depth.resolved_name)
-            waiting += ["%s on %s" % (n, t) for t, n in self._unconnected_subscribers()]
-            # With lockstep_planner (deterministic runs) every lockstep node must be there before frame 0.
-            strict = self._planner_lockstep is not None
-            waiting += ["lockstep node %s" % n for n in self._lockstep_nodes if (strict or self._node_exists(n))
-                        and not self._depth_connected(n)]
-            now = time.monotonic()
-            if not waiting:
-                stable_since = stable_since or now
-                if now - stable_since >= 0.3:  # nodes that start together register within a moment
-                    return
-            else:
-                stable_since = None
-            if now > deadline:
-                rospy.logwarn("mav_sim: lockstep: still waiting for %s after %.0f s; starting anyway",
-                              ", ".join(waiting), self.cfg.lockstep_startup_timeout_s)
-                return
-            time.sleep(0.05)
-
-    def _node_exists(self, short: str, max_age_s: float = 0.0) -> bool:
-        """Whether the master knows a node of this short name (asks it again after max_age_s wall s)."""
-        when, names = self._node_names
-        if time.monotonic() - when > max_age_s:
-            try:
-                pubs, subs, srvs = rosgraph.Master(rospy.get_name()).getSystemState()
-                names = {_short_name(n) for g in (pubs, subs, srvs) for _, nodes in g for n in nodes}
-                self._node_names = (time.monotonic(), names)
-            except Exception:
-                pass
-        return short in names
-
-    def _note_absent(self, t_ns: int) -> None:
-        """Records the lockstep nodes that exist but cannot receive the frame at t_ns."""
-        absent = {n for n in self._lockstep_nodes if not self._depth_connected(n) and self._node_exists(n, 1.0)}
-        if absent != self._absent[1]:
-            if absent:
-                rospy.logwarn("mav_sim: lockstep: %s not connected to %s at frame %.3f s; not waiting for it "
-                              "until it is", ", ".join(sorted(absent)), self.pub_depth.resolved_name, t_ns / NS)
-            else:
-                rospy.loginfo("mav_sim: lockstep: every lockstep node is connected (frame %.3f s)", t_ns / NS)
-        self._absent = (t_ns, absent)
-
-    def _depth_connected(self, short: str) -> bool:
-        return any(_short_name(c.endpoint_id) == short for c in list(self.pub_depth.impl.connections))
 
     def _handle_requests(self) -> bool:
         """Applies queued scene switches; returns True if the scene changed."""
@@ -473,9 +371,9 @@ class MavSimNode:
                 first = last_frame is None
                 if c.lockstep:
                     if first:
-                        self._wait_for_subscribers()
+                        self._frames.wait_for_subscribers()
                     else:
-                        self._wait_lockstep(last_frame)
+                        self._frames.wait_frame(last_frame)
                     pl = self._planner_lockstep
                     if not first and pl is not None and pl.due(t_ns, not sim.follower.active):
                         pl.plan(t_ns, lambda level, text: getattr(rospy, "log" + level)("mav_sim: " + text))
@@ -488,7 +386,7 @@ class MavSimNode:
                 self._publish_body(t_ns)
                 if not self.faults.drop_frame(t_ns):
                     if c.lockstep:
-                        self._note_absent(t_ns)
+                        self._frames.note_absent(t_ns)
                     self._publish_frame(t_ns)
                     last_frame = t_ns
                 self._publish_fault_counts(t_ns)
