@@ -90,7 +90,7 @@ bool PlannerNode::applyBlocks(const semantic_exploration::MapBlocks& msg, bool& 
       gap = u.sequence == 1 && replica_.sequence() > 1;
       return false;
     case semexp::MapReplica::Result::kGap: gap = true; return false;
-    case semexp::MapReplica::Result::kBadInput: drops_.drop("bad_map_update", replica_.last_error()); return false;
+    case semexp::MapReplica::Result::kBadInput: drops_.drop("bad_map_update", replica_.lastError()); return false;
   }
   return false;
 }
@@ -102,7 +102,7 @@ bool PlannerNode::resync() {
   srv.response.map.full = true;
   const bool ok = applyBlocks(srv.response.map, gap);
   if (ok) ROS_INFO("planner: map replica resynced at sequence %lu (%zu blocks)",
-                   static_cast<unsigned long>(replica_.sequence()), replica_.block_count());
+                   static_cast<unsigned long>(replica_.sequence()), replica_.blockCount());
   return ok;
 }
 
@@ -232,9 +232,9 @@ bool PlannerNode::iterate(std::string& message) {
   const semexp::MapReplica& replica = replica_;
   const semexp::Bounds bounds = bounds_;
   prov.is_free = [&replica, bounds](const Eigen::Vector3d& p, double r) {
-    return bounds.contains(p) && replica.sphere_free(p, r);
+    return bounds.contains(p) && replica.sphereFree(p, r);
   };
-  prov.not_occupied = [&replica](const Eigen::Vector3d& p, double r) { return replica.sphere_not_occupied(p, r); };
+  prov.not_occupied = [&replica](const Eigen::Vector3d& p, double r) { return replica.sphereNotOccupied(p, r); };
   prov.gains = [this](const std::vector<Eigen::Vector3d>& ps) {
     return services_->gains(ps, objects_, replica_.resolution_m());
   };

@@ -60,10 +60,10 @@ TEST(MapSnapshot, ALargeFreeMapResyncsInAFewBytesPerBlock) {
   // The replica keeps them as one value each too, and reads them back.
   MapReplica replica;
   ASSERT_EQ(replica.apply(toUpdate(snap)), MapReplica::Result::kApplied);
-  EXPECT_EQ(replica.block_count(), blocks);
+  EXPECT_EQ(replica.blockCount(), blocks);
   EXPECT_EQ(replica.state({25.02, 25.02, 5.02}), MapReplica::State::kFree);
-  EXPECT_TRUE(replica.sphere_free({25.0, 25.0, 5.0}, 2.0));
-  EXPECT_FALSE(replica.sphere_free({25.0, 25.0, 0.1}, 0.2));  // below z = 0: unknown
+  EXPECT_TRUE(replica.sphereFree({25.0, 25.0, 5.0}, 2.0));
+  EXPECT_FALSE(replica.sphereFree({25.0, 25.0, 0.1}, 0.2));  // below z = 0: unknown
 }
 
 TEST(MapSnapshot, CompactAndFullSnapshotsDecodeToTheSameMap) {
@@ -132,8 +132,8 @@ TEST(MapSnapshot, CompactAndFullSnapshotsDecodeToTheSameMap) {
   for (double x = 0.3; x < 4.8; x += 0.1)
     for (double r : {0.1, 0.3, 0.6}) {
       const Eigen::Vector3d p(x, 2.0, 1.2);
-      EXPECT_EQ(from_full.sphere_free(p, r), from_compact.sphere_free(p, r)) << x << " " << r;
-      EXPECT_EQ(from_full.sphere_not_occupied(p, r), from_compact.sphere_not_occupied(p, r)) << x << " " << r;
+      EXPECT_EQ(from_full.sphereFree(p, r), from_compact.sphereFree(p, r)) << x << " " << r;
+      EXPECT_EQ(from_full.sphereNotOccupied(p, r), from_compact.sphereNotOccupied(p, r)) << x << " " << r;
     }
 }
 

@@ -153,7 +153,7 @@ TEST(ClosedLoop, ExploresTwoRoomsUntilTermination) {
       const int checks = std::max(1, static_cast<int>(std::ceil(len / 0.02)));
       for (int k = 0; k <= checks; ++k) {
         const Eigen::Vector3d q = path[i] + (path[i + 1] - path[i]) * (static_cast<double>(k) / checks);
-        if (!truth.sphere_not_occupied(q, config.mav_radius_m)) ++collisions;
+        if (!truth.sphereNotOccupied(q, config.mav_radius_m)) ++collisions;
       }
       const int frames = std::max(1, static_cast<int>(std::ceil(std::max(len / 0.3, std::abs(dyaw) / 0.4))));
       for (int k = 1; k <= frames; ++k) {

@@ -43,7 +43,7 @@ struct ExplorationTest : ::testing::Test {
     config.p_frontier = 1.0;
     config.time_budget_s = 0.2;
     config.planning_threads = 2;
-    providers.is_free = [this](const Eigen::Vector3d& p, double r) { return grid.sphere_free(p, r); };
+    providers.is_free = [this](const Eigen::Vector3d& p, double r) { return grid.sphereFree(p, r); };
     // Entropy 0.2 towards yaw 0 for x < 3, 0.6 for x >= 3.
     providers.gains = [](const std::vector<Eigen::Vector3d>& ps) {
       std::vector<GainSet> out(ps.size());
@@ -64,7 +64,7 @@ struct ExplorationTest : ::testing::Test {
 // B at (5,1,1): 4 m = 2.667 s, gain 0.6 -> u = 0.225. A wins; yaw 0 both.
 TEST_F(ExplorationTest, UtilityPicksKnownWinner) {
   ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
-  EXPECT_EQ(planner.window_columns(), 6);
+  EXPECT_EQ(planner.windowColumns(), 6);
   const IterationResult r = planner.plan(inputs(), providers);
   ASSERT_EQ(r.candidates.size(), 2u);
   ASSERT_GE(r.winner, 0) << r.message;
@@ -215,7 +215,7 @@ TEST_F(ExplorationTest, TerminationNoReachableCandidate) {
     const IterationResult r = planner.plan(inputs(), providers);
     EXPECT_EQ(r.winner, -1);
     EXPECT_TRUE(r.path_W.empty());
-    EXPECT_EQ(planner.failed_iterations(), it);
+    EXPECT_EQ(planner.failedIterations(), it);
     EXPECT_EQ(r.finished, it == 3) << r.message;
     if (it == 3) {
       EXPECT_EQ(r.termination_reason, "no_reachable_candidate");
@@ -230,7 +230,7 @@ TEST_F(ExplorationTest, TerminationNoReachableCandidate) {
 TEST_F(ExplorationTest, EmptyMapReportsNoPathAndStops) {
   config.max_failed_iterations = 2;
   grid = TestGrid(room_bounds(), 0.05, TestGrid::kUnknown);
-  providers.not_occupied = [this](const Eigen::Vector3d& p, double r) { return grid.sphere_not_occupied(p, r); };
+  providers.not_occupied = [this](const Eigen::Vector3d& p, double r) { return grid.sphereNotOccupied(p, r); };
   int gain_calls = 0;
   providers.gains = [&gain_calls](const std::vector<Eigen::Vector3d>& ps) {
     ++gain_calls;
@@ -259,7 +259,7 @@ TEST_F(ExplorationTest, EmptyMapReportsNoPathAndStops) {
 TEST_F(ExplorationTest, StartInUnknownSpaceEscapes) {
   grid = TestGrid(room_bounds(), 0.05, TestGrid::kUnknown);
   grid.fill_box({1.5, 0.0, 0.0}, {6.0, 4.0, 2.0}, TestGrid::kFree);
-  providers.not_occupied = [this](const Eigen::Vector3d& p, double r) { return grid.sphere_not_occupied(p, r); };
+  providers.not_occupied = [this](const Eigen::Vector3d& p, double r) { return grid.sphereNotOccupied(p, r); };
   ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
   ExplorationInputs in = inputs();
   in.position_W = {1.4, 1.0, 1.0};
@@ -278,9 +278,9 @@ TEST_F(ExplorationTest, StartInUnknownSpaceEscapes) {
     for (int k = 0; k <= 100; ++k) {
       const Eigen::Vector3d q = a + (b - a) * (k / 100.0);
       if (i == 1) {
-        ASSERT_TRUE(grid.sphere_not_occupied(q, radius)) << q.transpose();
+        ASSERT_TRUE(grid.sphereNotOccupied(q, radius)) << q.transpose();
       } else {
-        ASSERT_TRUE(grid.sphere_free(q, radius)) << q.transpose();
+        ASSERT_TRUE(grid.sphereFree(q, radius)) << q.transpose();
       }
     }
   }
@@ -303,7 +303,7 @@ TEST_F(ExplorationTest, NoCandidateWithPositiveGain) {
     EXPECT_EQ(r.candidates_reachable, lazy ? 0 : 2);
     EXPECT_EQ(r.winner, -1);
     EXPECT_TRUE(r.path_W.empty());
-    EXPECT_EQ(planner.failed_iterations(), 1);
+    EXPECT_EQ(planner.failedIterations(), 1);
     const char* why = lazy ? "none of 2 candidates has a positive gain at its view position (1 of "
                            : "2 candidates reachable, none with a positive gain (1 of ";
     EXPECT_EQ(r.message.rfind(why, 0), 0u) << r.message;
@@ -319,7 +319,7 @@ TEST_F(ExplorationTest, ProviderFailureIsReportedNotCounted) {
   EXPECT_TRUE(r.provider_error);
   EXPECT_FALSE(r.finished);
   EXPECT_EQ(r.winner, -1);
-  EXPECT_EQ(planner.failed_iterations(), 0);
+  EXPECT_EQ(planner.failedIterations(), 0);
   EXPECT_NE(r.message.find("timed out"), std::string::npos);
   // Wrong number of results is an error too.
   providers.gains = [](const std::vector<Eigen::Vector3d>&) { return std::vector<GainSet>(1); };

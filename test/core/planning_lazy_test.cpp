@@ -43,7 +43,7 @@ TestGrid wall_with_doorway() {
 
 PathPlanner make_planner(const PlannerConfig& c, const TestGrid& g) {
   return PathPlanner(c, g.bounds(), g.resolution(), [&g](const Eigen::Vector3d& p, double r) {
-    return g.sphere_free(p, r);
+    return g.sphereFree(p, r);
   });
 }
 
@@ -57,13 +57,13 @@ TEST(DeterministicPaths, SameSeedSamePathWhateverTheThreadOrder) {
   const Eigen::Vector3d start(1, 1, 1);
   std::vector<Eigen::Vector3d> goals;
   for (int i = 0; i < 8; ++i) goals.emplace_back(3.6 + 0.3 * i, 0.5 + 0.35 * i, 0.4 + 0.15 * i);
-  const auto first = planner.plan_all(start, goals, 11);
-  const auto second = planner.plan_all(start, goals, 11);
+  const auto first = planner.planAll(start, goals, 11);
+  const auto second = planner.planAll(start, goals, 11);
   std::vector<PlannedPath> reverse(goals.size());
   std::thread([&]() {
-    for (std::size_t k = goals.size(); k-- > 0;) reverse[k] = planner.plan(start, goals[k], path_seed(11, 0, k));
+    for (std::size_t k = goals.size(); k-- > 0;) reverse[k] = planner.plan(start, goals[k], pathSeed(11, 0, k));
   }).join();
-  const auto other = planner.plan_all(start, goals, 12);
+  const auto other = planner.planAll(start, goals, 12);
   int planner_runs = 0, differ = 0;
   for (std::size_t i = 0; i < goals.size(); ++i) {
     SCOPED_TRACE(i);
@@ -84,15 +84,15 @@ TEST(DeterministicPaths, ExactSolutionEndsAtTheResolvedGoal) {
   const PlannerConfig config = deterministic_config();
   const TestGrid g = wall_with_doorway();
   const PathPlanner planner = make_planner(config, g);
-  const PlanningStart from = planner.planning_start({1, 1, 1});
+  const PlanningStart from = planner.planningStart({1, 1, 1});
   ASSERT_TRUE(from.ok);
   for (std::uint32_t seed = 0; seed < 6; ++seed) {
-    const ResolvedGoal goal = planner.resolve_goal(from, {4.5 + 0.1 * seed, 1.0, 1.0});
+    const ResolvedGoal goal = planner.resolveGoal(from, {4.5 + 0.1 * seed, 1.0, 1.0});
     ASSERT_TRUE(goal.valid);
     const PlannedPath p = planner.plan(from, goal, seed);
     ASSERT_EQ(p.status, PlannedPath::Status::kExact) << seed;
     EXPECT_TRUE(p.path_W.back() == goal.goal_W) << seed;
-    EXPECT_TRUE(planner.path_valid(p.path_W));
+    EXPECT_TRUE(planner.pathValid(p.path_W));
   }
 }
 
@@ -134,13 +134,13 @@ struct RandomWorld {
     frontiers = grid.frontiers();
     do {
       start = {u(0.5, 7.5), u(0.5, 5.5), u(0.5, 2.0)};
-    } while (!grid.sphere_free(start, 0.3));
+    } while (!grid.sphereFree(start, 0.3));
   }
 };
 
 IterationResult plan_once(const PlannerConfig& config, const RandomWorld& w, double yaw_rad) {
   ExplorationProviders prov;
-  prov.is_free = [&w](const Eigen::Vector3d& p, double r) { return w.grid.sphere_free(p, r); };
+  prov.is_free = [&w](const Eigen::Vector3d& p, double r) { return w.grid.sphereFree(p, r); };
   prov.gains = entropy_of(w.grid);
   ExplorationPlanner planner(config, ExplorationConfig(), w.grid.bounds(), PinholeCamera(), w.grid.resolution());
   ExplorationInputs in;
@@ -222,7 +222,7 @@ struct PocketTest : ::testing::Test {
     grid.fill_box({3.8, 2.3, 0.0}, {5.7, 3.7, 2.0}, TestGrid::kOccupied);
     grid.fill_box({4.05, 2.55, 0.4}, {5.45, 3.45, 1.6}, TestGrid::kFree);
     config.planning_threads = 1;
-    prov.is_free = [this](const Eigen::Vector3d& p, double r) { return grid.sphere_free(p, r); };
+    prov.is_free = [this](const Eigen::Vector3d& p, double r) { return grid.sphereFree(p, r); };
     prov.gains = [this](const std::vector<Eigen::Vector3d>& ps) {
       ++gain_calls;
       std::vector<GainSet> out(ps.size());
@@ -290,7 +290,7 @@ TEST(LazyPlanning, TiesGoToTheLowerIndexAsInTheExhaustiveScan) {
   PlannerConfig config = deterministic_config();
   config.planning_threads = 1;
   ExplorationProviders prov;
-  prov.is_free = [&grid](const Eigen::Vector3d& p, double r) { return grid.sphere_free(p, r); };
+  prov.is_free = [&grid](const Eigen::Vector3d& p, double r) { return grid.sphereFree(p, r); };
   prov.gains = [](const std::vector<Eigen::Vector3d>& ps) {
     std::vector<GainSet> out(ps.size());
     for (auto& g : out) g.entropy = GainImage(36, 10, 0.3f);

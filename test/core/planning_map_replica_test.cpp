@@ -52,18 +52,18 @@ TEST_F(ReplicaTest, SphereQueriesAndStates) {
   EXPECT_EQ(m.state({1.65, 0.45, 0.45}), MapReplica::State::kUnknown);
   EXPECT_EQ(m.state({-0.05, 0.45, 0.45}), MapReplica::State::kUnknown);
   // Centre (0.7, 0.45, 0.45): 0.3 m from the occupied box's face at x = 0.4.
-  EXPECT_TRUE(m.sphere_free({0.7, 0.45, 0.45}, 0.25));
-  EXPECT_FALSE(m.sphere_free({0.7, 0.45, 0.45}, 0.31));
-  EXPECT_FALSE(m.sphere_not_occupied({0.7, 0.45, 0.45}, 0.31));
+  EXPECT_TRUE(m.sphereFree({0.7, 0.45, 0.45}, 0.25));
+  EXPECT_FALSE(m.sphereFree({0.7, 0.45, 0.45}, 0.31));
+  EXPECT_FALSE(m.sphereNotOccupied({0.7, 0.45, 0.45}, 0.31));
   // Near the unknown at x = 1.6: free only if the sphere stays below it.
-  EXPECT_TRUE(m.sphere_free({1.4, 0.4, 0.4}, 0.19));
-  EXPECT_FALSE(m.sphere_free({1.4, 0.4, 0.4}, 0.21));
-  EXPECT_TRUE(m.sphere_not_occupied({1.4, 0.4, 0.4}, 0.21));  // unknown allowed
+  EXPECT_TRUE(m.sphereFree({1.4, 0.4, 0.4}, 0.19));
+  EXPECT_FALSE(m.sphereFree({1.4, 0.4, 0.4}, 0.21));
+  EXPECT_TRUE(m.sphereNotOccupied({1.4, 0.4, 0.4}, 0.21));  // unknown allowed
   // Below the origin (negative block coordinates): unknown.
-  EXPECT_FALSE(m.sphere_free({0.3, 0.3, 0.1}, 0.15));
+  EXPECT_FALSE(m.sphereFree({0.3, 0.3, 0.1}, 0.15));
   // (0.3, 0.3, 0.25) is sqrt(0.1^2 + 0.15^2) = 0.180 m from the occupied box.
-  EXPECT_TRUE(m.sphere_free({0.3, 0.3, 0.25}, 0.15));
-  EXPECT_FALSE(m.sphere_free({0.3, 0.3, 0.25}, 0.19));
+  EXPECT_TRUE(m.sphereFree({0.3, 0.3, 0.25}, 0.15));
+  EXPECT_FALSE(m.sphereFree({0.3, 0.3, 0.25}, 0.19));
 }
 
 TEST_F(ReplicaTest, SequenceHandling) {
@@ -81,7 +81,7 @@ TEST_F(ReplicaTest, SequenceHandling) {
   payload.clear();
   add_block(5, 5, 5, -4);
   EXPECT_EQ(m.apply(update(9, true)), MapReplica::Result::kApplied);
-  EXPECT_EQ(m.block_count(), 1u);
+  EXPECT_EQ(m.blockCount(), 1u);
   EXPECT_EQ(m.state({0.1, 0.1, 0.1}), MapReplica::State::kUnknown);
   EXPECT_EQ(m.state({4.05, 4.05, 4.05}), MapReplica::State::kFree);
   payload.pop_back();
@@ -160,7 +160,7 @@ TEST(ReplicaOfOccupancyMap, AgreesWithTheMap) {
     const MapReplica::State t = replica.state(p);
     same += static_cast<int>(s) == static_cast<int>(t);  // same enum order: unknown, free, occupied
     same_late += late.state(p) == t;
-    const bool mf = map.isSphereFree(p, 0.125), rf = replica.sphere_free(p, 0.125);
+    const bool mf = map.isSphereFree(p, 0.125), rf = replica.sphereFree(p, 0.125);
     map_free += mf;
     free_agree += mf == rf;
     unsafe += rf && !mf;  // the replica must never call free what the map does not

@@ -11,7 +11,7 @@
 
 #include "semantic_exploration/core/object_map.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
-#include "semantic_exploration/core/planning/gain.hpp"
+#include "semantic_exploration/core/planning/candidate_evaluation.hpp"
 #include "semantic_exploration/core/planning/interfaces.hpp"
 #include "tsdf_test_scenes.hpp"
 
@@ -71,7 +71,7 @@ ObjectGains objectGains(const Maps& m, const Eigen::Vector3d& p, const Spherical
   GainSettings gs;
   const auto bg = m.background.computeGains({p}, grid, gs);
   std::vector<float> limits = bg[0].hit_depth_m;
-  if (with_margin) limits = object_occlusion_depths_m(limits, cfg.resolution_m);
+  if (with_margin) limits = objectOcclusionDepths_m(limits, cfg.resolution_m);
   ObjectGains out;
   m.objects.computeGains({p}, grid, limits, kDObj, kDMax, out.gains, out.hits);
   return out;
@@ -80,12 +80,12 @@ ObjectGains objectGains(const Maps& m, const Eigen::Vector3d& p, const Spherical
 }  // namespace
 
 TEST(ObjectOcclusionDepths, AddTwoVoxelsAndKeepNonFinite) {
-  const std::vector<float> d = object_occlusion_depths_m({1.0f, 10.0f, std::numeric_limits<float>::quiet_NaN()}, 0.04);
+  const std::vector<float> d = objectOcclusionDepths_m({1.0f, 10.0f, std::numeric_limits<float>::quiet_NaN()}, 0.04);
   ASSERT_EQ(d.size(), 3u);
   EXPECT_FLOAT_EQ(d[0], 1.08f);
   EXPECT_FLOAT_EQ(d[1], 10.08f);
   EXPECT_TRUE(std::isnan(d[2]));
-  EXPECT_THROW(object_occlusion_depths_m({1.0f}, 0.0), std::invalid_argument);
+  EXPECT_THROW(objectOcclusionDepths_m({1.0f}, 0.0), std::invalid_argument);
 }
 
 TEST(ObjectOcclusionDepths, CloseViewOfAnObjectInTheBackgroundMapHasObjectGain) {
@@ -160,7 +160,7 @@ TEST(ObjectRayLimits, PassThroughAnObjectsBoxButStopAtOtherOccluders) {
   // The background's first occupied voxel is the chair's front at ~1.0 m: the
   // ray goes on to where it leaves the box grown by 2 r, plus 2 r.
   std::vector<float> hits(n, 1.0f / static_cast<float>(dir.x()));
-  std::vector<float> lim = object_ray_limits_m(Eigen::Vector3d::Zero(), grid, hits, r, {chair});
+  std::vector<float> lim = objectRayLimits_m(Eigen::Vector3d::Zero(), grid, hits, r, {chair});
   EXPECT_NEAR(lim[v * grid.width + u], 1.58 / dir.x() + 0.08, 1e-5);
   // dir.x = cos(2.457 deg) cos(5 deg) = 0.999081 * 0.996195 = 0.995280: 1.58 / 0.995280 + 0.08 = 1.6675
   EXPECT_NEAR(lim[v * grid.width + u], 1.6675, 1e-3);
@@ -168,11 +168,11 @@ TEST(ObjectRayLimits, PassThroughAnObjectsBoxButStopAtOtherOccluders) {
   EXPECT_NEAR(lim[v * grid.width + 0], hits[0] + 0.08, 1e-5);
   // A wall 0.3 m in front of the chair hides it: the limit stays at the wall.
   hits.assign(n, 0.7f);
-  lim = object_ray_limits_m(Eigen::Vector3d::Zero(), grid, hits, r, {chair});
+  lim = objectRayLimits_m(Eigen::Vector3d::Zero(), grid, hits, r, {chair});
   EXPECT_NEAR(lim[v * grid.width + u], 0.78, 1e-5);
   // No objects: the plain margin; a wrong image size throws.
-  EXPECT_EQ(object_ray_limits_m(Eigen::Vector3d::Zero(), grid, hits, r, {}), object_occlusion_depths_m(hits, r));
-  EXPECT_THROW(object_ray_limits_m(Eigen::Vector3d::Zero(), grid, std::vector<float>(3, 1.f), r, {chair}),
+  EXPECT_EQ(objectRayLimits_m(Eigen::Vector3d::Zero(), grid, hits, r, {}), objectOcclusionDepths_m(hits, r));
+  EXPECT_THROW(objectRayLimits_m(Eigen::Vector3d::Zero(), grid, std::vector<float>(3, 1.f), r, {chair}),
                std::invalid_argument);
 }
 
@@ -194,8 +194,8 @@ TEST(ObjectRayLimits, BatchConcatenatesPerPositionAndSkipsWithoutHitDepths) {
   hits[1] = GainImage(36, 10, 2.0f);
   const std::vector<float> all = objectRayLimitsBatch(ps, grid, hits, r, {chair});
   ASSERT_EQ(all.size(), 2 * n);
-  const auto first = object_ray_limits_m(ps[0], grid, hits[0].values, r, {chair});
-  const auto second = object_ray_limits_m(ps[1], grid, hits[1].values, r, {chair});
+  const auto first = objectRayLimits_m(ps[0], grid, hits[0].values, r, {chair});
+  const auto second = objectRayLimits_m(ps[1], grid, hits[1].values, r, {chair});
   EXPECT_TRUE(std::equal(first.begin(), first.end(), all.begin()));
   EXPECT_TRUE(std::equal(second.begin(), second.end(), all.begin() + n));
   EXPECT_NEAR(all[n], 2.08, 1e-5);  // 2.0 m hit + 2 r

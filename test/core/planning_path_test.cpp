@@ -45,7 +45,7 @@ void expect_safe_path(const TestGrid& g, const std::vector<Eigen::Vector3d>& pat
     for (int k = 0; k <= n; ++k) {
       const Eigen::Vector3d p = a + (b - a) * (static_cast<double>(k) / n);
       ASSERT_TRUE(g.bounds().contains(p)) << p.transpose();
-      ASSERT_TRUE(g.sphere_free(p, R)) << "collision at " << p.transpose();
+      ASSERT_TRUE(g.sphereFree(p, R)) << "collision at " << p.transpose();
     }
   }
 }
@@ -57,9 +57,9 @@ struct PathPlannerTest : ::testing::Test {
     config.planning_threads = 2;
   }
   PathPlanner make(const TestGrid& g, bool with_escape = false) const {
-    CollisionQuery free = [&g](const Eigen::Vector3d& p, double r) { return g.sphere_free(p, r); };
+    CollisionQuery free = [&g](const Eigen::Vector3d& p, double r) { return g.sphereFree(p, r); };
     CollisionQuery not_occ;
-    if (with_escape) not_occ = [&g](const Eigen::Vector3d& p, double r) { return g.sphere_not_occupied(p, r); };
+    if (with_escape) not_occ = [&g](const Eigen::Vector3d& p, double r) { return g.sphereNotOccupied(p, r); };
     return PathPlanner(config, g.bounds(), g.resolution(), free, not_occ);
   }
 };
@@ -102,7 +102,7 @@ TEST_F(PathPlannerTest, GoalBehindWallThroughDoorway) {
     // (voxel corners (2.875, 2.625) and (3.125, 2.625) at z = 1, kept R
     // away): tangents of 2 * sqrt(2.4812^2 - R^2) = 4.956 m, two arcs of
     // R * 0.7645 rad and 0.25 m across the top: 5.397 m.
-    EXPECT_GT(path_length_m(p.path_W), 5.397 - 1e-3);
+    EXPECT_GT(pathLength_m(p.path_W), 5.397 - 1e-3);
   }
 }
 
@@ -147,7 +147,7 @@ TEST_F(PathPlannerTest, KeepsClearOfASurfaceInsideAFreeVoxel) {
   g.fill_box({0.0, 3.5, 0.0}, {6.0, 4.0, 2.0}, TestGrid::kOccupied);
   const double pane_y = 3.485;
   const PathPlanner planner = make(g);
-  ASSERT_GE(planner.check_radius_m(), config.mav_radius_m + 0.04 - 1e-12);
+  ASSERT_GE(planner.checkRadius_m(), config.mav_radius_m + 0.04 - 1e-12);
   const Eigen::Vector3d start(1, 1, 1);
   for (const Eigen::Vector3d& goal : {Eigen::Vector3d(3, 3.45, 1), Eigen::Vector3d(4, 3.3, 1.5)}) {
     const PlannedPath p = planner.plan(start, goal);
@@ -167,7 +167,7 @@ TEST_F(PathPlannerTest, ParallelCandidatesAllSafe) {
   for (int i = 0; i < 8; ++i) goals.emplace_back(0.5 + 0.7 * i, 0.5 + 0.4 * i, 0.5 + 0.15 * i);
   goals.emplace_back(3.0, 1.0, 1.0);  // inside the wall: projected or approximate
   goals.emplace_back(9.0, 9.0, 9.0);  // outside the bounds: clamped
-  const auto paths = planner.plan_all(start, goals);
+  const auto paths = planner.planAll(start, goals);
   ASSERT_EQ(paths.size(), goals.size());
   for (std::size_t i = 0; i < paths.size(); ++i) {
     SCOPED_TRACE(i);

@@ -108,9 +108,9 @@ TEST_F(SamplerTest, ObjectViewPoints) {
   o.centroid_W = {0, 0, 0.5};
   o.bbox_min_W = {-0.25, -0.25, 0.0};
   o.bbox_max_W = {0.25, 0.25, 1.0};
-  EXPECT_TRUE(sampler.object_view_point(o, 0.0).isApprox(Eigen::Vector3d(0.75, 0.0, 0.5)));
+  EXPECT_TRUE(sampler.objectViewPoint(o, 0.0).isApprox(Eigen::Vector3d(0.75, 0.0, 0.5)));
   const double d = 0.25 * std::sqrt(2.0) + 0.5;
-  EXPECT_TRUE(sampler.object_view_point(o, M_PI / 4).isApprox(Eigen::Vector3d(d / std::sqrt(2.0), d / std::sqrt(2.0), 0.5)));
+  EXPECT_TRUE(sampler.objectViewPoint(o, M_PI / 4).isApprox(Eigen::Vector3d(d / std::sqrt(2.0), d / std::sqrt(2.0), 0.5)));
   // Only x < 0 is free: the sampler must pick a view point there.
   CollisionQuery left_free = [](const Eigen::Vector3d& p, double r) { return p.x() + r < 0.0; };
   double z_lo = 1e9, z_hi = -1e9;

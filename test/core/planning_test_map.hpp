@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "semantic_exploration/core/bounds.hpp"
-#include "semantic_exploration/core/planning/gain.hpp"
+#include "semantic_exploration/core/planning/candidate_evaluation.hpp"
 #include "semantic_exploration/core/spherical_grid.hpp"
 
 namespace semexp_test {
@@ -72,8 +72,8 @@ class TestGrid {
         }
     return true;
   }
-  bool sphere_free(const Eigen::Vector3d& p, double r) const { return sphere_all(p, r, false); }
-  bool sphere_not_occupied(const Eigen::Vector3d& p, double r) const { return sphere_all(p, r, true); }
+  bool sphereFree(const Eigen::Vector3d& p, double r) const { return sphere_all(p, r, false); }
+  bool sphereNotOccupied(const Eigen::Vector3d& p, double r) const { return sphere_all(p, r, true); }
 
   /// Entropy gain image: per ray, the unknown voxels (entropy 1, known 0)
   /// passed until an occupied voxel or d_max, divided by (d_max - d_min) / res.

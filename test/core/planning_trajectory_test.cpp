@@ -7,7 +7,7 @@
 #include <random>
 #include <stdexcept>
 
-#include "semantic_exploration/core/planning/gain.hpp"
+#include "semantic_exploration/core/planning/candidate_evaluation.hpp"
 #include "semantic_exploration/core/planning/trajectory.hpp"
 
 using semexp::SampledTrajectory;
@@ -64,7 +64,7 @@ TEST(Trajectory, StraightSegmentIsATrapezoidOfHandComputedDuration) {
   EXPECT_NEAR(tr.at(2.75).acceleration_W.x(), 0.0, 1e-12);
   EXPECT_NEAR(tr.at(5.0).position_W.x(), 6.0 - 0.125, 1e-12);  // 0.5 s before the end: 0.5 a 0.5^2 left
   EXPECT_NEAR(tr.at(5.0).acceleration_W.x(), -1.0, 1e-12);
-  EXPECT_NEAR(semexp::trapezoid_duration_s(6.0, 1.5, 1.0), 5.5, 1e-12);
+  EXPECT_NEAR(semexp::trapezoidDuration_s(6.0, 1.5, 1.0), 5.5, 1e-12);
 }
 
 TEST(Trajectory, ShortSegmentIsATriangleOfHandComputedDuration) {
@@ -114,7 +114,7 @@ TEST(Trajectory, LimitsHoldAtEverySampleAndNoFasterThanThePlannersEstimate) {
     // Never faster than the utility's t = max(length / v_max, |dyaw| / omega_max) per segment.
     double t_min = 0;
     for (std::size_t i = 0; i + 1 < path.size(); ++i)
-      t_min += semexp::path_time_s({path[i], path[i + 1]}, yaws[i], yaws[i + 1], kV, kOmega);
+      t_min += semexp::pathTime_s({path[i], path[i + 1]}, yaws[i], yaws[i + 1], kV, kOmega);
     EXPECT_GE(tr.duration_s(), t_min - 1e-9) << "run " << run;
   }
 }

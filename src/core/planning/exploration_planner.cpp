@@ -11,7 +11,7 @@ namespace semexp {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
   char buf[256];
@@ -28,7 +28,7 @@ struct ViewGains {
 
 /// Gains at `ps` (one batched call to each provider), combined and windowed.
 /// On a provider failure or bad images: reports it in r, returns false.
-bool evaluate_views(const std::vector<Eigen::Vector3d>& ps, const ExplorationProviders& prov,
+bool evaluateViews(const std::vector<Eigen::Vector3d>& ps, const ExplorationProviders& prov,
                     const PlannerConfig& cfg, int window_columns, std::vector<ViewGains>& out, IterationResult& r) {
   std::vector<GainSet> gains;
   std::vector<std::vector<std::uint8_t>> masks;
@@ -49,9 +49,9 @@ bool evaluate_views(const std::vector<Eigen::Vector3d>& ps, const ExplorationPro
   out.assign(ps.size(), ViewGains());
   try {
     for (std::size_t k = 0; k < ps.size(); ++k) {
-      out[k].combined = combine_gains(weights, gains[k], masks.empty() ? std::vector<std::uint8_t>{} : masks[k],
+      out[k].combined = combineGains(weights, gains[k], masks.empty() ? std::vector<std::uint8_t>{} : masks[k],
                                       cfg.raycast_width, cfg.raycast_height);
-      out[k].window = best_yaw(out[k].combined, window_columns);
+      out[k].window = bestYaw(out[k].combined, window_columns);
       out[k].gains = std::move(gains[k]);
     }
   } catch (const std::exception& e) {
@@ -62,13 +62,13 @@ bool evaluate_views(const std::vector<Eigen::Vector3d>& ps, const ExplorationPro
   return true;
 }
 
-void set_gains(EvaluatedCandidate& c, const ViewGains& g) {
+void setGains(EvaluatedCandidate& c, const ViewGains& g) {
   const YawWindow& w = g.window;
   c.yaw_rad = w.yaw_rad;
   c.gain = w.gain;
-  c.gain_entropy = window_mean(g.gains.entropy, w.first_column, w.columns);
-  c.gain_bg = window_mean(g.gains.background, w.first_column, w.columns);
-  c.gain_obj = window_mean(g.gains.object, w.first_column, w.columns);
+  c.gain_entropy = windowMean(g.gains.entropy, w.first_column, w.columns);
+  c.gain_bg = windowMean(g.gains.background, w.first_column, w.columns);
+  c.gain_obj = windowMean(g.gains.object, w.first_column, w.columns);
 }
 
 }  // namespace
@@ -83,7 +83,7 @@ ExplorationPlanner::ExplorationPlanner(const PlannerConfig& planner, const Explo
       camera_(camera),
       map_resolution_m_(map_resolution_m),
       sampler_(planner, exploration, bounds),
-      window_columns_(semexp::window_columns(camera.hfov_rad(), planner.raycast_width)),
+      window_columns_(semexp::windowColumns(camera.hfov_rad(), planner.raycast_width)),
       termination_(termination, planner),
       retirement_(retirement, camera, bounds, planner.clearance_radius_m(), map_resolution_m) {
   camera_.validate();
@@ -106,7 +106,7 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   const auto t_start = Clock::now();
   IterationResult r;
   auto finish = [&]() -> IterationResult& {
-    r.total_s = seconds_since(t_start);
+    r.total_s = secondsSince(t_start);
     return r;
   };
 
@@ -145,8 +145,8 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   // Frontiers and objects done but background seen from too far: the paper
   // samples nothing else, so view points in known free space, chosen by
   // their background gain like any other candidate, close the gap.
-  if (samples.empty() && !r.termination.background_done) samples = sampler_.sample_free_space(prov.is_free);
-  r.sampling_s = seconds_since(t0);
+  if (samples.empty() && !r.termination.background_done) samples = sampler_.sampleFreeSpace(prov.is_free);
+  r.sampling_s = secondsSince(t0);
   if (samples.empty()) {
     fail(r, "nothing to sample (no active frontiers, no object left to observe, no free view point)");
     return finish();
@@ -159,39 +159,39 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   // frontier goal moves to free space next to it), known before planning.
   t0 = Clock::now();
   const PathPlanner paths(planner_, bounds_, map_resolution_m_, prov.is_free, prov.not_occupied);
-  const PlanningStart from = paths.planning_start(in.position_W);
+  const PlanningStart from = paths.planningStart(in.position_W);
   if (!from.ok) {
     for (EvaluatedCandidate& c : r.candidates) {
       c.position_W = c.sample.position_W;
       c.plan.status = PlannedPath::Status::kStartInvalid;
     }
-    r.path_planning_s = seconds_since(t0);
+    r.path_planning_s = secondsSince(t0);
     fail(r, "the current position is not in free space and no escape was found");
     return finish();
   }
   std::vector<Eigen::Vector3d> views;
   for (const CandidateSample& s : samples) views.push_back(s.position_W);
-  const std::vector<ResolvedGoal> goals = paths.resolve_goals(from, views);
+  const std::vector<ResolvedGoal> goals = paths.resolveGoals(from, views);
   for (std::size_t i = 0; i < n; ++i) {
     views[i] = goals[i].goal_W;
     r.candidates[i].position_W = r.candidates[i].view_W = views[i];
   }
-  r.path_planning_s = seconds_since(t0);
+  r.path_planning_s = secondsSince(t0);
 
   // 3. Gains at the view positions (one batched call), Eq. 2, sliding
   // window, and each candidate's utility bound.
   t0 = Clock::now();
   std::vector<ViewGains> view_gains;
-  const bool gains_ok = evaluate_views(views, prov, planner_, window_columns_, view_gains, r);
-  r.gains_s = seconds_since(t0);
+  const bool gains_ok = evaluateViews(views, prov, planner_, window_columns_, view_gains, r);
+  r.gains_s = secondsSince(t0);
   if (!gains_ok) return finish();
   for (std::size_t i = 0; i < n; ++i) {
     EvaluatedCandidate& c = r.candidates[i];
-    set_gains(c, view_gains[i]);
+    setGains(c, view_gains[i]);
     // No path is shorter than the straight line, and path_time_s of the
     // straight path {start, view} is exactly this time.
     const double t_min_s = std::max((views[i] - in.position_W).norm() / planner_.v_max_mps,
-                                    yaw_difference_rad(in.yaw_rad, c.yaw_rad) / planner_.omega_max_radps);
+                                    yawDifference_rad(in.yaw_rad, c.yaw_rad) / planner_.omega_max_radps);
     c.utility_bound = utility(c.gain, t_min_s, planner_.min_path_time_s);
   }
 
@@ -225,10 +225,10 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
     std::vector<std::uint32_t> seeds;
     for (std::size_t i : ids) {
       batch_goals.push_back(goals[i]);
-      seeds.push_back(path_seed(planner_.seed, iteration, i));
+      seeds.push_back(pathSeed(planner_.seed, iteration, i));
     }
-    std::vector<PlannedPath> planned = paths.plan_all(from, batch_goals, seeds);
-    r.path_planning_s += seconds_since(t0);
+    std::vector<PlannedPath> planned = paths.planAll(from, batch_goals, seeds);
+    r.path_planning_s += secondsSince(t0);
     std::vector<std::size_t> moved;
     std::vector<Eigen::Vector3d> ends;
     for (std::size_t j = 0; j < ids.size(); ++j) {
@@ -247,19 +247,19 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
     if (!moved.empty()) {
       t0 = Clock::now();
       std::vector<ViewGains> g;
-      const bool ok = evaluate_views(ends, prov, planner_, window_columns_, g, r);
-      r.gains_s += seconds_since(t0);
+      const bool ok = evaluateViews(ends, prov, planner_, window_columns_, g, r);
+      r.gains_s += secondsSince(t0);
       if (!ok) return finish();
       for (std::size_t j = 0; j < moved.size(); ++j) {
         end_gains[moved[j]] = std::move(g[j]);
         r.candidates[moved[j]].position_W = ends[j];
-        set_gains(r.candidates[moved[j]], end_gains[moved[j]]);
+        setGains(r.candidates[moved[j]], end_gains[moved[j]]);
       }
     }
     for (std::size_t i : ids) {
       EvaluatedCandidate& c = r.candidates[i];
       if (!c.reachable) continue;
-      c.path_time_s = path_time_s(c.plan.path_W, in.yaw_rad, c.yaw_rad, planner_.v_max_mps, planner_.omega_max_radps);
+      c.path_time_s = pathTime_s(c.plan.path_W, in.yaw_rad, c.yaw_rad, planner_.v_max_mps, planner_.omega_max_radps);
       // Capped at the bound: equal to the uncapped value whenever the path
       // reaches its view (up to rounding); an approximate path is never
       // worth more than reaching its view could have been.
@@ -301,8 +301,8 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
       const auto mid_masks = prov.history ? prov.history(mid) : std::vector<std::vector<std::uint8_t>>{};
       for (std::size_t k = 0; k < mid.size() && k < mid_gains.size(); ++k) {
         const GainImage g =
-            combine_gains(weights, mid_gains[k], k < mid_masks.size() ? mid_masks[k] : std::vector<std::uint8_t>{}, w, h);
-        const YawWindow yw = best_yaw(g, window_columns_);
+            combineGains(weights, mid_gains[k], k < mid_masks.size() ? mid_masks[k] : std::vector<std::uint8_t>{}, w, h);
+        const YawWindow yw = bestYaw(g, window_columns_);
         // A vertex with nothing to see keeps turning towards the final yaw.
         r.path_yaw_rad[k + 1] = yw.gain > 0 ? yw.yaw_rad : win.yaw_rad;
       }
@@ -311,7 +311,7 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
       r.message = std::string("intermediate yaw evaluation failed: ") + e.what() + "; ";
     }
   }
-  r.yaw_s = seconds_since(t0);
+  r.yaw_s = secondsSince(t0);
 
   // The camera looks along the whole path, turning from each vertex's yaw to
   // the next: poses every 0.5 m are evidence for frontier retirement.
@@ -331,7 +331,7 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
 
   failed_iterations_ = 0;
   r.message += fmt("winner %.0f: utility %.3f 1/s, gain %.3f", r.winner, win.utility, win.gain) +
-               fmt(", path %.2f m ", path_length_m(r.path_W)) + PlannedPath::name(win.plan.status) +
+               fmt(", path %.2f m ", pathLength_m(r.path_W)) + PlannedPath::name(win.plan.status) +
                fmt("; %.0f of %.0f candidates planned, %.0f reachable", r.candidates_planned,
                    static_cast<double>(r.candidates.size()), r.candidates_reachable);
   return finish();

@@ -87,7 +87,7 @@ MapReplica::State MapReplica::state(const Eigen::Vector3d& p) const {
   return map_blocks::stateOf(x, free_below_);
 }
 
-bool MapReplica::sphere_check(const Eigen::Vector3d& p, double r, bool allow_unknown) const {
+bool MapReplica::sphereCheck(const Eigen::Vector3d& p, double r, bool allow_unknown) const {
   if (blocks_.empty() || !p.allFinite()) return allow_unknown;
   const double res = resolution_m_;
   const Eigen::Vector3i lo = ((p.array() - r - origin_W_.array()) / res).floor().cast<int>();

@@ -28,15 +28,15 @@ namespace semexp {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-Eigen::Vector3d to_eigen(const ob::State* s) {
+Eigen::Vector3d toEigen(const ob::State* s) {
   const auto* v = s->as<ob::RealVectorStateSpace::StateType>();
   return {v->values[0], v->values[1], v->values[2]};
 }
 
 // The 26 unit directions of the 3x3x3 neighbourhood, for shell searches.
-const std::vector<Eigen::Vector3d>& shell_directions() {
+const std::vector<Eigen::Vector3d>& shellDirections() {
   static const std::vector<Eigen::Vector3d> dirs = [] {
     std::vector<Eigen::Vector3d> d;
     for (int x = -1; x <= 1; ++x)
@@ -95,7 +95,7 @@ bool PathPlanner::valid(const Eigen::Vector3d& p) const {
   return p.allFinite() && state_bounds_.contains(p) && is_free_(p, check_radius_m_);
 }
 
-bool PathPlanner::segment_valid(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
+bool PathPlanner::segmentValid(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
   const double len = (b - a).norm();
   const int n = std::max(1, static_cast<int>(std::ceil(len / resolution_m_)));
   for (int i = 0; i <= n; ++i)
@@ -103,15 +103,15 @@ bool PathPlanner::segment_valid(const Eigen::Vector3d& a, const Eigen::Vector3d&
   return true;
 }
 
-bool PathPlanner::path_valid(const std::vector<Eigen::Vector3d>& path) const {
+bool PathPlanner::pathValid(const std::vector<Eigen::Vector3d>& path) const {
   if (path.empty()) return false;
   if (path.size() == 1) return valid(path[0]);
   for (std::size_t i = 1; i < path.size(); ++i)
-    if (!segment_valid(path[i - 1], path[i])) return false;
+    if (!segmentValid(path[i - 1], path[i])) return false;
   return true;
 }
 
-bool PathPlanner::nearest_valid(const Eigen::Vector3d& p, double radius, Eigen::Vector3d& out) const {
+bool PathPlanner::nearestValid(const Eigen::Vector3d& p, double radius, Eigen::Vector3d& out) const {
   if (valid(p)) {
     out = p;
     return true;
@@ -120,7 +120,7 @@ bool PathPlanner::nearest_valid(const Eigen::Vector3d& p, double radius, Eigen::
   for (int k = 1; k <= shells; ++k) {
     const double r = std::min(radius, k * resolution_m_);
     double best = std::numeric_limits<double>::infinity();
-    for (const auto& d : shell_directions()) {
+    for (const auto& d : shellDirections()) {
       const Eigen::Vector3d q = p + r * d;
       // Within one shell prefer points that stay closest to the bounds-clamped target.
       if (valid(q)) {
@@ -136,12 +136,12 @@ bool PathPlanner::nearest_valid(const Eigen::Vector3d& p, double radius, Eigen::
   return false;
 }
 
-std::uint32_t path_seed(std::uint32_t seed, std::uint64_t iteration, std::uint64_t candidate) {
+std::uint32_t pathSeed(std::uint32_t seed, std::uint64_t iteration, std::uint64_t candidate) {
   return ompl_seeded::mix(ompl_seeded::mix(seed, iteration), candidate);
 }
 
 template <typename Job>
-void PathPlanner::parallel_for(std::size_t n, const Job& job) const {
+void PathPlanner::parallelFor(std::size_t n, const Job& job) const {
   std::atomic<std::size_t> next{0};
   auto worker = [&]() {
     for (std::size_t i = next++; i < n; i = next++) job(i);
@@ -153,7 +153,7 @@ void PathPlanner::parallel_for(std::size_t n, const Job& job) const {
   for (auto& t : pool) t.join();
 }
 
-PlanningStart PathPlanner::planning_start(const Eigen::Vector3d& start) const {
+PlanningStart PathPlanner::planningStart(const Eigen::Vector3d& start) const {
   PlanningStart out;
   out.start_W = out.from_W = start;
   if (valid(start)) {
@@ -165,7 +165,7 @@ PlanningStart PathPlanner::planning_start(const Eigen::Vector3d& start) const {
   // surface seen from a new angle may have grown into its sphere; the escape
   // moves it away from that surface.
   Eigen::Vector3d esc;
-  if (!not_occupied_ || !nearest_valid(start, escape_radius_m_, esc)) return out;
+  if (!not_occupied_ || !nearestValid(start, escape_radius_m_, esc)) return out;
   const double len = (esc - start).norm();
   const int n = std::max(1, static_cast<int>(std::ceil(len / resolution_m_)));
   for (int i = 0; i <= n; ++i) {
@@ -177,7 +177,7 @@ PlanningStart PathPlanner::planning_start(const Eigen::Vector3d& start) const {
   return out;
 }
 
-ResolvedGoal PathPlanner::resolve_goal(const PlanningStart& from, const Eigen::Vector3d& goal_in) const {
+ResolvedGoal PathPlanner::resolveGoal(const PlanningStart& from, const Eigen::Vector3d& goal_in) const {
   ResolvedGoal out;
   out.requested_W = goal_in;
   // Goals outside the state bounds are pulled in; invalid goals moved to the
@@ -186,7 +186,7 @@ ResolvedGoal PathPlanner::resolve_goal(const PlanningStart& from, const Eigen::V
   for (int i = 0; i < 3; ++i) goal[i] = std::clamp(goal[i], state_bounds_.min_m[i], state_bounds_.max_m[i]);
   out.goal_W = goal;
   Eigen::Vector3d projected;
-  if (nearest_valid(goal, 2.0 * config_.mav_radius_m + 2.0 * resolution_m_, projected)) {
+  if (nearestValid(goal, 2.0 * config_.mav_radius_m + 2.0 * resolution_m_, projected)) {
     out.goal_W = projected;
     out.valid = true;
     return out;
@@ -209,22 +209,22 @@ ResolvedGoal PathPlanner::resolve_goal(const PlanningStart& from, const Eigen::V
   return out;
 }
 
-std::vector<ResolvedGoal> PathPlanner::resolve_goals(const PlanningStart& from,
+std::vector<ResolvedGoal> PathPlanner::resolveGoals(const PlanningStart& from,
                                                      const std::vector<Eigen::Vector3d>& goals) const {
   std::vector<ResolvedGoal> out(goals.size());
-  parallel_for(goals.size(), [&](std::size_t i) { out[i] = resolve_goal(from, goals[i]); });
+  parallelFor(goals.size(), [&](std::size_t i) { out[i] = resolveGoal(from, goals[i]); });
   return out;
 }
 
 PlannedPath PathPlanner::plan(const Eigen::Vector3d& start, const Eigen::Vector3d& goal, std::uint32_t seed) const {
-  const PlanningStart from = planning_start(start);
+  const PlanningStart from = planningStart(start);
   if (!from.ok) {
     PlannedPath out;
     out.status = PlannedPath::Status::kStartInvalid;
     out.distance_to_goal_m = (goal - start).norm();
     return out;
   }
-  return plan(from, resolve_goal(from, goal), seed);
+  return plan(from, resolveGoal(from, goal), seed);
 }
 
 PlannedPath PathPlanner::plan(const PlanningStart& from, const ResolvedGoal& goal, std::uint32_t seed) const {
@@ -234,9 +234,9 @@ PlannedPath PathPlanner::plan(const PlanningStart& from, const ResolvedGoal& goa
     out.status = PlannedPath::Status::kStartInvalid;
     out.distance_to_goal_m = (goal.requested_W - from.start_W).norm();
   } else if (!from.escaped) {
-    out = plan_from_valid_start(from.from_W, goal, seed);
+    out = planFromValidStart(from.from_W, goal, seed);
   } else {
-    out = plan_from_valid_start(from.from_W, goal, seed);
+    out = planFromValidStart(from.from_W, goal, seed);
     out.escaped = true;
     if (out.ok())
       out.path_W.insert(out.path_W.begin(), from.start_W);
@@ -245,18 +245,18 @@ PlannedPath PathPlanner::plan(const PlanningStart& from, const ResolvedGoal& goa
     if (out.status == PlannedPath::Status::kFailed) out.status = PlannedPath::Status::kApproximate;
     out.distance_to_goal_m = (goal.requested_W - out.path_W.back()).norm();
   }
-  out.time_s = seconds_since(t0);
+  out.time_s = secondsSince(t0);
   return out;
 }
 
-PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, const ResolvedGoal& resolved,
+PlannedPath PathPlanner::planFromValidStart(const Eigen::Vector3d& start, const ResolvedGoal& resolved,
                                                std::uint32_t seed) const {
   PlannedPath out;
   const Eigen::Vector3d& goal_in = resolved.requested_W;
   const Eigen::Vector3d goal = resolved.goal_W;
   const bool moved_far = resolved.moved_far;
 
-  if (resolved.valid && segment_valid(start, goal)) {
+  if (resolved.valid && segmentValid(start, goal)) {
     out.status = moved_far ? PlannedPath::Status::kApproximate : PlannedPath::Status::kStraight;
     out.path_W = {start, goal};
     out.distance_to_goal_m = (goal_in - goal).norm();
@@ -271,7 +271,7 @@ PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, con
   }
   space->setBounds(b);
   auto si = std::make_shared<ob::SpaceInformation>(space);
-  si->setStateValidityChecker([this](const ob::State* s) { return valid(to_eigen(s)); });
+  si->setStateValidityChecker([this](const ob::State* s) { return valid(toEigen(s)); });
   si->setStateValidityCheckingResolution(std::min(1.0, resolution_m_ / space->getMaximumExtent()));
   si->setup();
 
@@ -311,7 +311,7 @@ PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, con
   }
   auto* geo = pdef->getSolutionPath()->as<og::PathGeometric>();
   std::vector<Eigen::Vector3d> raw;
-  for (const ob::State* st_i : geo->getStates()) raw.push_back(to_eigen(st_i));
+  for (const ob::State* st_i : geo->getStates()) raw.push_back(toEigen(st_i));
 
   og::PathGeometric simplified(*geo);
   if (config_.simplify_time_s > 0) {
@@ -322,10 +322,10 @@ PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, con
     if (by_iterations || !simplify_ptc()) simplifier.shortcutPath(simplified);
   }
   std::vector<Eigen::Vector3d> path;
-  for (const ob::State* st_i : simplified.getStates()) path.push_back(to_eigen(st_i));
+  for (const ob::State* st_i : simplified.getStates()) path.push_back(toEigen(st_i));
   // Defensive dense check independent of OMPL's motion validator.
-  if (!path_valid(path)) path = raw;
-  if (!path_valid(path) || path.empty()) {
+  if (!pathValid(path)) path = raw;
+  if (!pathValid(path) || path.empty()) {
     out.status = PlannedPath::Status::kFailed;
     out.distance_to_goal_m = (goal_in - start).norm();
     return out;
@@ -335,9 +335,9 @@ PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, con
   // An exact solution ends within the goal tolerance; end it at the goal
   // itself, so that the view is taken where the candidate was evaluated.
   if (exact && path.back() != goal && resolved.valid) {
-    if (path.size() >= 2 && segment_valid(path[path.size() - 2], goal))
+    if (path.size() >= 2 && segmentValid(path[path.size() - 2], goal))
       path.back() = goal;
-    else if (segment_valid(path.back(), goal))
+    else if (segmentValid(path.back(), goal))
       path.push_back(goal);
   }
   out.path_W = std::move(path);
@@ -346,11 +346,11 @@ PlannedPath PathPlanner::plan_from_valid_start(const Eigen::Vector3d& start, con
   return out;
 }
 
-std::vector<PlannedPath> PathPlanner::plan_all(const PlanningStart& from, const std::vector<ResolvedGoal>& goals,
+std::vector<PlannedPath> PathPlanner::planAll(const PlanningStart& from, const std::vector<ResolvedGoal>& goals,
                                                const std::vector<std::uint32_t>& seeds) const {
-  if (seeds.size() != goals.size()) throw std::invalid_argument("PathPlanner::plan_all: one seed per goal");
+  if (seeds.size() != goals.size()) throw std::invalid_argument("PathPlanner::planAll: one seed per goal");
   std::vector<PlannedPath> out(goals.size());
-  parallel_for(goals.size(), [&](std::size_t i) {
+  parallelFor(goals.size(), [&](std::size_t i) {
     try {
       out[i] = plan(from, goals[i], seeds[i]);
     } catch (const std::exception&) {
@@ -360,19 +360,19 @@ std::vector<PlannedPath> PathPlanner::plan_all(const PlanningStart& from, const 
   return out;
 }
 
-std::vector<PlannedPath> PathPlanner::plan_all(const Eigen::Vector3d& start, const std::vector<Eigen::Vector3d>& goals,
+std::vector<PlannedPath> PathPlanner::planAll(const Eigen::Vector3d& start, const std::vector<Eigen::Vector3d>& goals,
                                                std::uint32_t seed) const {
-  const PlanningStart from = planning_start(start);
+  const PlanningStart from = planningStart(start);
   std::vector<ResolvedGoal> resolved;
   if (from.ok) {
-    resolved = resolve_goals(from, goals);
+    resolved = resolveGoals(from, goals);
   } else {
     resolved.resize(goals.size());
     for (std::size_t i = 0; i < goals.size(); ++i) resolved[i].requested_W = resolved[i].goal_W = goals[i];
   }
   std::vector<std::uint32_t> seeds(goals.size());
-  for (std::size_t i = 0; i < goals.size(); ++i) seeds[i] = path_seed(seed, 0, i);
-  return plan_all(from, resolved, seeds);
+  for (std::size_t i = 0; i < goals.size(); ++i) seeds[i] = pathSeed(seed, 0, i);
+  return planAll(from, resolved, seeds);
 }
 
 }  // namespace semexp

@@ -23,7 +23,7 @@ CandidateSampler::CandidateSampler(const PlannerConfig& planner, const Explorati
   bounds_.validate();
 }
 
-Eigen::Vector3d CandidateSampler::clamp_to_bounds(const Eigen::Vector3d& p) const {
+Eigen::Vector3d CandidateSampler::clampToBounds(const Eigen::Vector3d& p) const {
   Eigen::Vector3d out;
   for (int i = 0; i < 3; ++i) {
     double lo = bounds_.min_m[i] + planner_.mav_radius_m, hi = bounds_.max_m[i] - planner_.mav_radius_m;
@@ -33,11 +33,11 @@ Eigen::Vector3d CandidateSampler::clamp_to_bounds(const Eigen::Vector3d& p) cons
   return out;
 }
 
-Eigen::Vector3d CandidateSampler::object_view_point(const ObjectSummary& o, double yaw) const {
-  return object_view_point(o, yaw, o.centroid_W.z());
+Eigen::Vector3d CandidateSampler::objectViewPoint(const ObjectSummary& o, double yaw) const {
+  return objectViewPoint(o, yaw, o.centroid_W.z());
 }
 
-Eigen::Vector3d CandidateSampler::object_view_point(const ObjectSummary& o, double yaw, double z_W) const {
+Eigen::Vector3d CandidateSampler::objectViewPoint(const ObjectSummary& o, double yaw, double z_W) const {
   const Eigen::Vector3d dir(std::cos(yaw), std::sin(yaw), 0.0);
   // Distance from the centroid to where the horizontal ray leaves the box.
   double t_exit = std::numeric_limits<double>::infinity();
@@ -50,7 +50,7 @@ Eigen::Vector3d CandidateSampler::object_view_point(const ObjectSummary& o, doub
   const double standoff = planner_.object_standoff_factor * exploration_.d_obj_m;
   Eigen::Vector3d p = o.centroid_W + (t_exit + standoff) * dir;
   p.z() = z_W;
-  return clamp_to_bounds(p);
+  return clampToBounds(p);
 }
 
 std::vector<CandidateSample> CandidateSampler::sample(const std::vector<Eigen::Vector3d>& frontiers_W,
@@ -63,7 +63,7 @@ std::vector<CandidateSample> CandidateSampler::sample(const std::vector<Eigen::V
   }
   if (planner_.p_frontier < 1.0)
     for (std::size_t i = 0; i < objects.size(); ++i)
-      if (needs_observation(objects[i])) ob.push_back(i);
+      if (needsObservation(objects[i])) ob.push_back(i);
 
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   auto take = [this](std::vector<std::size_t>& pool) {
@@ -82,17 +82,17 @@ std::vector<CandidateSample> CandidateSampler::sample(const std::vector<Eigen::V
     CandidateSample s;
     if (frontier) {
       s.source = CandidateSource::kFrontier;
-      s.position_W = clamp_to_bounds(frontiers_W[take(fr)]);
+      s.position_W = clampToBounds(frontiers_W[take(fr)]);
     } else {
       const ObjectSummary& o = objects[take(ob)];
       s.source = CandidateSource::kObject;
       s.object_id = o.id;
       const double yaw0 = unit(rng_) * 2.0 * M_PI;
       const double z = o.centroid_W.z() + unit(rng_) * std::max(0.0, o.bbox_max_W.z() - o.centroid_W.z());
-      s.position_W = object_view_point(o, yaw0, z);
+      s.position_W = objectViewPoint(o, yaw0, z);
       if (is_free) {
         for (int k = 0; k < 8; ++k) {
-          const Eigen::Vector3d p = object_view_point(o, yaw0 + k * M_PI / 4.0, z);
+          const Eigen::Vector3d p = objectViewPoint(o, yaw0 + k * M_PI / 4.0, z);
           if (is_free(p, planner_.clearance_radius_m())) {
             s.position_W = p;
             break;
@@ -105,7 +105,7 @@ std::vector<CandidateSample> CandidateSampler::sample(const std::vector<Eigen::V
   return out;
 }
 
-std::vector<CandidateSample> CandidateSampler::sample_free_space(const CollisionQuery& is_free) {
+std::vector<CandidateSample> CandidateSampler::sampleFreeSpace(const CollisionQuery& is_free) {
   std::vector<CandidateSample> out;
   if (!is_free) return out;
   std::uniform_real_distribution<double> unit(0.0, 1.0);

@@ -15,7 +15,7 @@ namespace ompl_seeded {
 
 namespace {
 
-Eigen::Vector3d to_eigen(const ob::State* s) {
+Eigen::Vector3d toEigen(const ob::State* s) {
   const auto* v = s->as<ob::RealVectorStateSpace::StateType>();
   return {v->values[0], v->values[1], v->values[2]};
 }
@@ -42,8 +42,8 @@ EllipsoidSampler::EllipsoidSampler(const ob::ProblemDefinitionPtr& pdef, unsigne
   const auto* goal = dynamic_cast<const ob::GoalState*>(pdef->getGoal().get());
   if (space->getDimension() != 3 || pdef->getStartStateCount() != 1 || goal == nullptr)
     throw std::invalid_argument("EllipsoidSampler: needs a 3-D space, one start and a goal state");
-  start_ = to_eigen(pdef->getStartState(0));
-  goal_ = to_eigen(goal->getState());
+  start_ = toEigen(pdef->getStartState(0));
+  goal_ = toEigen(goal->getState());
   const ob::RealVectorBounds& b = space->getBounds();
   for (int i = 0; i < 3; ++i) {
     lo_[i] = b.low[static_cast<std::size_t>(i)];
@@ -60,7 +60,7 @@ EllipsoidSampler::EllipsoidSampler(const ob::ProblemDefinitionPtr& pdef, unsigne
   axes_.col(2) = e1.cross(e2);
 }
 
-double EllipsoidSampler::spheroid_volume(double cost) const {
+double EllipsoidSampler::spheroidVolume(double cost) const {
   // Semi-axes c / 2 along the foci and sqrt(c^2 - d^2) / 2 across.
   if (!(cost > focal_distance_m_)) return 0.0;
   const double a = 0.5 * cost, b2 = 0.25 * (cost * cost - focal_distance_m_ * focal_distance_m_);
@@ -70,11 +70,11 @@ double EllipsoidSampler::spheroid_volume(double cost) const {
 double EllipsoidSampler::getInformedMeasure(const ob::Cost& cost) const {
   const double box = (hi_ - lo_).prod();
   if (!opt_->isFinite(cost)) return box;
-  return std::min(box, spheroid_volume(cost.value()));
+  return std::min(box, spheroidVolume(cost.value()));
 }
 
 ob::Cost EllipsoidSampler::heuristicSolnCost(const ob::State* state) const {
-  const Eigen::Vector3d p = to_eigen(state);
+  const Eigen::Vector3d p = toEigen(state);
   return ob::Cost((p - start_).norm() + (p - goal_).norm());
 }
 
@@ -94,7 +94,7 @@ bool EllipsoidSampler::sampleUniform(ob::State* state, const ob::Cost& max_cost)
   }
   const double c = max_cost.value();
   if (!(c > focal_distance_m_)) return false;  // no state is better than the straight line
-  const bool from_spheroid = spheroid_volume(c) < (hi_ - lo_).prod();
+  const bool from_spheroid = spheroidVolume(c) < (hi_ - lo_).prod();
   const double a = 0.5 * c, b = 0.5 * std::sqrt(c * c - focal_distance_m_ * focal_distance_m_);
   const Eigen::Vector3d centre = 0.5 * (start_ + goal_);
   for (unsigned int k = 0; k < numIters_; ++k) {

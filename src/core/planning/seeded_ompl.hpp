@@ -82,7 +82,7 @@ class EllipsoidSampler : public ompl::base::InformedSampler {
   ompl::base::Cost heuristicSolnCost(const ompl::base::State* state) const override;
 
  private:
-  double spheroid_volume(double cost) const;
+  double spheroidVolume(double cost) const;
   void write(const Eigen::Vector3d& p, ompl::base::State* state) const;
 
   ompl::RNG rng_;

@@ -11,11 +11,11 @@ constexpr double kMinLength_m = 1e-9;    // shorter segments move yaw only
 constexpr double kMinYaw_rad = 1e-12;    // smaller yaw changes are none
 constexpr double kTwoPi = 2.0 * M_PI;
 
-std::string at_index(const char* what, std::size_t i) { return std::string(what) + " " + std::to_string(i); }
+std::string atIndex(const char* what, std::size_t i) { return std::string(what) + " " + std::to_string(i); }
 
 }  // namespace
 
-double trapezoid_duration_s(double distance, double rate_max, double accel_max) {
+double trapezoidDuration_s(double distance, double rate_max, double accel_max) {
   if (distance <= 0) return 0.0;
   // Cruise is reached iff the ramps up and down (rate_max^2 / accel_max together) fit in the distance.
   if (rate_max * rate_max / accel_max >= distance) return 2.0 * std::sqrt(distance / accel_max);
@@ -30,7 +30,7 @@ Trajectory::Trajectory(const std::vector<Eigen::Vector3d>& path_W, const std::ve
                                 std::to_string(yaw_rad.size()) + " yaws");
   for (std::size_t i = 0; i < path_W.size(); ++i)
     if (!path_W[i].allFinite() || !std::isfinite(yaw_rad[i]))
-      throw std::invalid_argument("trajectory: " + at_index("vertex", i) + " is not finite");
+      throw std::invalid_argument("trajectory: " + atIndex("vertex", i) + " is not finite");
   if (!(v_max_mps > 0 && omega_max_radps > 0 && config.a_max_mps2 > 0 && config.alpha_max_radps2 > 0) ||
       !std::isfinite(v_max_mps + omega_max_radps + config.a_max_mps2 + config.alpha_max_radps2))
     throw std::invalid_argument("trajectory: every limit must be finite and > 0");
@@ -56,7 +56,7 @@ Trajectory::Trajectory(const std::vector<Eigen::Vector3d>& path_W, const std::ve
       accel_max = std::min(accel_max, config.alpha_max_radps2 / turn);
     }
     s.accel = accel_max;
-    s.duration = trapezoid_duration_s(1.0, rate_max, accel_max);
+    s.duration = trapezoidDuration_s(1.0, rate_max, accel_max);
     s.rate = std::min(rate_max, std::sqrt(accel_max));  // the triangle's peak when cruise is not reached
     s.t_ramp = s.rate / s.accel;
     yaw += s.dyaw;
@@ -124,9 +124,9 @@ SampledTrajectory::SampledTrajectory(std::vector<Sample> samples) : samples_(std
   for (std::size_t i = 0; i < samples_.size(); ++i) {
     const Sample& s = samples_[i];
     if (!std::isfinite(s.t_s) || !s.position_W.allFinite() || !std::isfinite(s.yaw_rad))
-      throw std::invalid_argument(at_index("point", i) + " is not finite");
+      throw std::invalid_argument(atIndex("point", i) + " is not finite");
     if (i > 0 && !(s.t_s > samples_[i - 1].t_s))
-      throw std::invalid_argument(at_index("point", i) + ": time_from_start does not increase");
+      throw std::invalid_argument(atIndex("point", i) + ": time_from_start does not increase");
   }
 }
 

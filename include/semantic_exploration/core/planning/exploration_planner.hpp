@@ -20,7 +20,7 @@
 #include "semantic_exploration/core/camera.hpp"
 #include "semantic_exploration/core/exploration_config.hpp"
 #include "semantic_exploration/core/planner_config.hpp"
-#include "semantic_exploration/core/planning/gain.hpp"
+#include "semantic_exploration/core/planning/candidate_evaluation.hpp"
 #include "semantic_exploration/core/planning/interfaces.hpp"
 #include "semantic_exploration/core/planning/frontier_retirement.hpp"
 #include "semantic_exploration/core/planning/path_planner.hpp"
@@ -105,9 +105,9 @@ class ExplorationPlanner {
   IterationResult plan(const ExplorationInputs& in, const ExplorationProviders& providers);
 
   /// Consecutive iterations without a reachable candidate of positive utility.
-  int failed_iterations() const { return failed_iterations_; }
+  int failedIterations() const { return failed_iterations_; }
   const PlannerConfig& config() const { return planner_; }
-  int window_columns() const { return window_columns_; }
+  int windowColumns() const { return window_columns_; }
 
  private:
   bool fail(IterationResult& r, const std::string& why);

@@ -9,7 +9,7 @@
 #include <functional>
 #include <vector>
 
-#include "semantic_exploration/core/planning/gain.hpp"
+#include "semantic_exploration/core/planning/candidate_evaluation.hpp"
 
 namespace semexp {
 

@@ -27,7 +27,7 @@ class MapReplica {
     kApplied,   ///< the update was applied
     kGap,       ///< a sequence number was skipped (or the first update is incremental): resync with a full map
     kStale,     ///< an old or repeated sequence number: ignored
-    kBadInput,  ///< inconsistent sizes or geometry: ignored (see last_error())
+    kBadInput,  ///< inconsistent sizes or geometry: ignored (see lastError())
   };
 
   /// One MapBlocks message, without ROS types.
@@ -57,16 +57,16 @@ class MapReplica {
 
   std::uint64_t sequence() const { return sequence_; }
   bool empty() const { return blocks_.empty(); }
-  std::size_t block_count() const { return blocks_.size(); }
+  std::size_t blockCount() const { return blocks_.size(); }
   double resolution_m() const { return resolution_m_; }
-  const std::string& last_error() const { return last_error_; }
+  const std::string& lastError() const { return last_error_; }
 
   State state(const Eigen::Vector3d& p_W) const;
   /// Every voxel meeting the sphere is free (unknown is not free).
-  bool sphere_free(const Eigen::Vector3d& p_W, double radius_m) const { return sphere_check(p_W, radius_m, false); }
+  bool sphereFree(const Eigen::Vector3d& p_W, double radius_m) const { return sphereCheck(p_W, radius_m, false); }
   /// No voxel meeting the sphere is occupied (unknown allowed).
-  bool sphere_not_occupied(const Eigen::Vector3d& p_W, double radius_m) const {
-    return sphere_check(p_W, radius_m, true);
+  bool sphereNotOccupied(const Eigen::Vector3d& p_W, double radius_m) const {
+    return sphereCheck(p_W, radius_m, true);
   }
 
  private:
@@ -78,7 +78,7 @@ class MapReplica {
     std::int8_t at(std::size_t i) const { return values.empty() ? uniform : values[i]; }
   };
   static std::uint64_t key(const Eigen::Vector3i& b);
-  bool sphere_check(const Eigen::Vector3d& p, double r, bool allow_unknown) const;
+  bool sphereCheck(const Eigen::Vector3d& p, double r, bool allow_unknown) const;
 
   int free_below_;
   std::uint64_t sequence_ = 0;

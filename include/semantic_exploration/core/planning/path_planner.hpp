@@ -58,7 +58,7 @@ struct ResolvedGoal {
 /// Seed of candidate `candidate`'s path solve in planning iteration
 /// `iteration` under the planner seed `seed`: the same triple always gives
 /// the same path, whichever thread plans it and in whatever order.
-std::uint32_t path_seed(std::uint32_t seed, std::uint64_t iteration, std::uint64_t candidate);
+std::uint32_t pathSeed(std::uint32_t seed, std::uint64_t iteration, std::uint64_t candidate);
 
 /// Plans collision-free paths for a sphere of radius R (config.mav_radius_m).
 ///
@@ -98,7 +98,7 @@ std::uint32_t path_seed(std::uint32_t seed, std::uint64_t iteration, std::uint64
 /// the MAV is already at the start; a surface seen from a new angle may have
 /// grown into its sphere, and the escape moves away from it.)
 ///
-/// plan_all() plans several goals in parallel (config.planning_threads, 0 =
+/// planAll() plans several goals in parallel (config.planning_threads, 0 =
 /// all hardware threads), each thread with its own OMPL instances. The
 /// queries must be thread-safe.
 class PathPlanner {
@@ -107,42 +107,42 @@ class PathPlanner {
               CollisionQuery not_occupied = {}, double escape_radius_m = 1.0);
 
   /// Escape from an invalid start, if needed and possible.
-  PlanningStart planning_start(const Eigen::Vector3d& start_W) const;
+  PlanningStart planningStart(const Eigen::Vector3d& start_W) const;
   /// Goal projection (step 2 above); needs from.ok.
-  ResolvedGoal resolve_goal(const PlanningStart& from, const Eigen::Vector3d& goal_W) const;
-  /// resolve_goal for several goals in parallel.
-  std::vector<ResolvedGoal> resolve_goals(const PlanningStart& from, const std::vector<Eigen::Vector3d>& goals_W) const;
+  ResolvedGoal resolveGoal(const PlanningStart& from, const Eigen::Vector3d& goal_W) const;
+  /// resolveGoal for several goals in parallel.
+  std::vector<ResolvedGoal> resolveGoals(const PlanningStart& from, const std::vector<Eigen::Vector3d>& goals_W) const;
 
   /// One path from `from` to a resolved goal, OMPL seeded with `seed`.
   PlannedPath plan(const PlanningStart& from, const ResolvedGoal& goal, std::uint32_t seed) const;
   /// Several in parallel; seeds[i] for goals[i].
-  std::vector<PlannedPath> plan_all(const PlanningStart& from, const std::vector<ResolvedGoal>& goals,
+  std::vector<PlannedPath> planAll(const PlanningStart& from, const std::vector<ResolvedGoal>& goals,
                                     const std::vector<std::uint32_t>& seeds) const;
 
-  /// planning_start + resolve_goal + plan in one.
+  /// planningStart + resolveGoal + plan in one.
   PlannedPath plan(const Eigen::Vector3d& start_W, const Eigen::Vector3d& goal_W, std::uint32_t seed = 0) const;
-  /// The same for several goals in parallel, goal i seeded with path_seed(seed, 0, i).
-  std::vector<PlannedPath> plan_all(const Eigen::Vector3d& start_W, const std::vector<Eigen::Vector3d>& goals_W,
+  /// The same for several goals in parallel, goal i seeded with pathSeed(seed, 0, i).
+  std::vector<PlannedPath> planAll(const Eigen::Vector3d& start_W, const std::vector<Eigen::Vector3d>& goals_W,
                                     std::uint32_t seed = 0) const;
 
   /// State validity as used by the planner (bounds + inflated sphere).
   bool valid(const Eigen::Vector3d& p_W) const;
   /// Segment validity checked at points at most one resolution apart.
-  bool segment_valid(const Eigen::Vector3d& a_W, const Eigen::Vector3d& b_W) const;
-  /// Whole-path validity (segment_valid on every segment).
-  bool path_valid(const std::vector<Eigen::Vector3d>& path_W) const;
+  bool segmentValid(const Eigen::Vector3d& a_W, const Eigen::Vector3d& b_W) const;
+  /// Whole-path validity (segmentValid on every segment).
+  bool pathValid(const std::vector<Eigen::Vector3d>& path_W) const;
   /// Nearest valid point within radius_m of p_W (shells of 26 directions,
   /// step = resolution); false if none.
-  bool nearest_valid(const Eigen::Vector3d& p_W, double radius_m, Eigen::Vector3d& out_W) const;
+  bool nearestValid(const Eigen::Vector3d& p_W, double radius_m, Eigen::Vector3d& out_W) const;
 
-  double check_radius_m() const { return check_radius_m_; }
+  double checkRadius_m() const { return check_radius_m_; }
   int threads() const;
 
  private:
-  PlannedPath plan_from_valid_start(const Eigen::Vector3d& start_W, const ResolvedGoal& goal, std::uint32_t seed) const;
+  PlannedPath planFromValidStart(const Eigen::Vector3d& start_W, const ResolvedGoal& goal, std::uint32_t seed) const;
   /// Runs job(i) for i in [0, n) on threads() threads.
   template <typename Job>
-  void parallel_for(std::size_t n, const Job& job) const;
+  void parallelFor(std::size_t n, const Job& job) const;
 
   PlannerConfig config_;
   Bounds bounds_;

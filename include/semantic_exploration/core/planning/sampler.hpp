@@ -53,22 +53,22 @@ class CandidateSampler {
   /// Up to n view points drawn uniformly in the bounds shrunk by R whose
   /// sphere of the clearance radius is free (at most 20 n draws), for the
   /// background once no frontier or object is left to sample.
-  std::vector<CandidateSample> sample_free_space(const CollisionQuery& is_free);
+  std::vector<CandidateSample> sampleFreeSpace(const CollisionQuery& is_free);
 
   /// True if the object still needs a closer observation.
-  bool needs_observation(const ObjectSummary& object) const {
+  bool needsObservation(const ObjectSummary& object) const {
     return object.observed_fraction < planner_.object_observed_fraction;
   }
 
   /// The view point next to `object` along horizontal direction yaw_rad, at the centroid's height.
-  Eigen::Vector3d object_view_point(const ObjectSummary& object, double yaw_rad) const;
+  Eigen::Vector3d objectViewPoint(const ObjectSummary& object, double yaw_rad) const;
   /// The same at camera height z_W, m. Object candidates draw z_W between the
   /// centroid and the top of the box: a level camera (49 deg vertical field of
   /// view) at the centroid's height sees no top surface (a seat) from within d_obj.
-  Eigen::Vector3d object_view_point(const ObjectSummary& object, double yaw_rad, double z_W) const;
+  Eigen::Vector3d objectViewPoint(const ObjectSummary& object, double yaw_rad, double z_W) const;
 
  private:
-  Eigen::Vector3d clamp_to_bounds(const Eigen::Vector3d& p_W) const;
+  Eigen::Vector3d clampToBounds(const Eigen::Vector3d& p_W) const;
 
   PlannerConfig planner_;
   ExplorationConfig exploration_;

@@ -88,7 +88,7 @@ class Trajectory {
 /// limit `rate_max` and acceleration limit `accel_max` (any consistent unit),
 /// s: distance / rate_max + rate_max / accel_max, or 2 sqrt(distance /
 /// accel_max) when cruise is not reached.
-double trapezoid_duration_s(double distance, double rate_max, double accel_max);
+double trapezoidDuration_s(double distance, double rate_max, double accel_max);
 
 /// A trajectory given as timed samples (e.g. received in a message), evaluated
 /// by linear interpolation of position and of yaw (the short way between

@@ -1,5 +1,5 @@
 #pragma once
-/// @file gain.hpp
+/// @file candidate_evaluation.hpp
 /// Candidate evaluation (paper Section IV-D.4, DESIGN Section 5 steps 4-5):
 /// combined gain image (Eq. 2), sliding-window yaw and utility.
 ///
@@ -49,7 +49,7 @@ struct GainWeights {
 /// count as zeros; an empty mask as all ones; mask values are 0 or non-zero.
 /// Throws std::invalid_argument if the non-empty inputs disagree in size or
 /// no input gives the size (width, height) when they are all empty.
-GainImage combine_gains(const GainWeights& weights, const GainSet& gains, const std::vector<std::uint8_t>& mask,
+GainImage combineGains(const GainWeights& weights, const GainSet& gains, const std::vector<std::uint8_t>& mask,
                         int width, int height);
 
 /// Per-ray depth limits (m) for the object raycast from the background map's
@@ -61,10 +61,10 @@ GainImage combine_gains(const GainWeights& weights, const GainSet& gains, const 
 /// therefore the hit depth plus 2 r (the diagonal plus slack for the object
 /// TSDF's interpolated zero crossing); non-finite depths stay as they are.
 /// Throws std::invalid_argument if background_resolution_m is not > 0.
-std::vector<float> object_occlusion_depths_m(const std::vector<float>& background_hit_depth_m,
+std::vector<float> objectOcclusionDepths_m(const std::vector<float>& background_hit_depth_m,
                                              double background_resolution_m);
 
-/// object_occlusion_depths_m for the rays of one position, also letting a ray
+/// objectOcclusionDepths_m for the rays of one position, also letting a ray
 /// through an object's own voxels in the background map: where the limit falls
 /// inside an object's bounding box (grown by 2 background voxels), it moves on
 /// to where the ray leaves that box, plus the same margin. The object map's
@@ -74,11 +74,11 @@ std::vector<float> object_occlusion_depths_m(const std::vector<float>& backgroun
 /// from close by. Occluders outside every object box still hide objects.
 /// `background_hit_depth_m`: grid.width * grid.height values, row-major.
 /// Throws std::invalid_argument on a size mismatch or resolution <= 0.
-std::vector<float> object_ray_limits_m(const Eigen::Vector3d& position_W, const SphericalGrid& grid,
+std::vector<float> objectRayLimits_m(const Eigen::Vector3d& position_W, const SphericalGrid& grid,
                                        const std::vector<float>& background_hit_depth_m,
                                        double background_resolution_m, const std::vector<ObjectSummary>& objects);
 
-/// object_ray_limits_m for a batch of positions, concatenated in position
+/// objectRayLimits_m for a batch of positions, concatenated in position
 /// order (the layout of ComputeGains.max_depth_m): the request that chains
 /// the object raycast to the background's. `hit_depths_m` holds one image per
 /// position. Returns an empty vector (no occlusion limits) if any of them is
@@ -98,28 +98,28 @@ struct YawWindow {
 
 /// Window width in columns for a horizontal field of view: round(hfov / 2 pi
 /// * width), clamped to [1, width].
-int window_columns(double hfov_rad, int width);
+int windowColumns(double hfov_rad, int width);
 
 /// Slides a window `columns` wide (all rows) around the image, wrapping
 /// across the +-pi seam, and returns the one with the highest mean (the
 /// lowest first column among equal means). Throws std::invalid_argument on
 /// an empty image.
-YawWindow best_yaw(const GainImage& image, int columns);
+YawWindow bestYaw(const GainImage& image, int columns);
 
 /// Mean of `image` over the window (first_column, columns) with wrap-around;
 /// 0 for an empty image. Used to report the component gains at the chosen yaw.
-double window_mean(const GainImage& image, int first_column, int columns);
+double windowMean(const GainImage& image, int first_column, int columns);
 
 /// Length of a polyline, m.
-double path_length_m(const std::vector<Eigen::Vector3d>& path_W);
+double pathLength_m(const std::vector<Eigen::Vector3d>& path_W);
 
 /// Smallest absolute angle between two yaws, rad in [0, pi].
-double yaw_difference_rad(double a_rad, double b_rad);
+double yawDifference_rad(double a_rad, double b_rad);
 
 /// Time to fly `path_W` at v_max_mps while turning from yaw_start_rad to
 /// yaw_end_rad at omega_max_radps. Translation and rotation happen at the
 /// same time, so t = max(length / v_max, |dyaw| / omega_max).
-double path_time_s(const std::vector<Eigen::Vector3d>& path_W, double yaw_start_rad, double yaw_end_rad,
+double pathTime_s(const std::vector<Eigen::Vector3d>& path_W, double yaw_start_rad, double yaw_end_rad,
                    double v_max_mps, double omega_max_radps);
 
 /// u = g / max(t, t_min): the floor keeps a candidate at the current pose

@@ -1,4 +1,4 @@
-#include "semantic_exploration/core/planning/gain.hpp"
+#include "semantic_exploration/core/planning/candidate_evaluation.hpp"
 
 #include "semantic_exploration/core/planning/interfaces.hpp"
 
@@ -12,31 +12,31 @@ namespace semexp {
 
 namespace {
 
-void check_size(const GainImage& img, const char* what, int& w, int& h) {
+void checkSize(const GainImage& img, const char* what, int& w, int& h) {
   if (img.empty()) return;
   if (img.values.size() != static_cast<std::size_t>(img.width) * img.height)
-    throw std::invalid_argument(std::string("combine_gains: ") + what + " has inconsistent size");
+    throw std::invalid_argument(std::string("combineGains: ") + what + " has inconsistent size");
   if (img.width != w || img.height != h)
-    throw std::invalid_argument(std::string("combine_gains: ") + what + " is " + std::to_string(img.width) + "x" +
+    throw std::invalid_argument(std::string("combineGains: ") + what + " is " + std::to_string(img.width) + "x" +
                                 std::to_string(img.height) + ", expected " + std::to_string(w) + "x" +
                                 std::to_string(h));
 }
 
-double wrap_pi(double a) {
+double wrapPi(double a) {
   a = std::remainder(a, 2.0 * M_PI);  // [-pi, pi]
   return a <= -M_PI ? a + 2.0 * M_PI : a;
 }
 
 }  // namespace
 
-GainImage combine_gains(const GainWeights& wgt, const GainSet& g, const std::vector<std::uint8_t>& mask, int width,
+GainImage combineGains(const GainWeights& wgt, const GainSet& g, const std::vector<std::uint8_t>& mask, int width,
                         int height) {
-  if (width <= 0 || height <= 0) throw std::invalid_argument("combine_gains: width and height must be > 0");
-  check_size(g.entropy, "entropy gain", width, height);
-  check_size(g.background, "background gain", width, height);
-  check_size(g.object, "object gain", width, height);
+  if (width <= 0 || height <= 0) throw std::invalid_argument("combineGains: width and height must be > 0");
+  checkSize(g.entropy, "entropy gain", width, height);
+  checkSize(g.background, "background gain", width, height);
+  checkSize(g.object, "object gain", width, height);
   const std::size_t n = static_cast<std::size_t>(width) * height;
-  if (!mask.empty() && mask.size() != n) throw std::invalid_argument("combine_gains: mask size mismatch");
+  if (!mask.empty() && mask.size() != n) throw std::invalid_argument("combineGains: mask size mismatch");
   GainImage out(width, height);
   for (std::size_t i = 0; i < n; ++i) {
     if (!mask.empty() && mask[i] == 0) continue;
@@ -49,10 +49,10 @@ GainImage combine_gains(const GainWeights& wgt, const GainSet& g, const std::vec
   return out;
 }
 
-std::vector<float> object_occlusion_depths_m(const std::vector<float>& background_hit_depth_m,
+std::vector<float> objectOcclusionDepths_m(const std::vector<float>& background_hit_depth_m,
                                              double background_resolution_m) {
   if (!(std::isfinite(background_resolution_m) && background_resolution_m > 0))
-    throw std::invalid_argument("object_occlusion_depths_m: background_resolution_m must be > 0");
+    throw std::invalid_argument("objectOcclusionDepths_m: background_resolution_m must be > 0");
   const float margin_m = static_cast<float>(2.0 * background_resolution_m);
   std::vector<float> out(background_hit_depth_m);
   for (float& d : out)
@@ -60,13 +60,13 @@ std::vector<float> object_occlusion_depths_m(const std::vector<float>& backgroun
   return out;
 }
 
-std::vector<float> object_ray_limits_m(const Eigen::Vector3d& position_W, const SphericalGrid& grid,
+std::vector<float> objectRayLimits_m(const Eigen::Vector3d& position_W, const SphericalGrid& grid,
                                        const std::vector<float>& background_hit_depth_m,
                                        double background_resolution_m, const std::vector<ObjectSummary>& objects) {
   const std::size_t n = static_cast<std::size_t>(grid.width) * grid.height;
   if (background_hit_depth_m.size() != n)
-    throw std::invalid_argument("object_ray_limits_m: need width * height hit depths");
-  std::vector<float> out = object_occlusion_depths_m(background_hit_depth_m, background_resolution_m);
+    throw std::invalid_argument("objectRayLimits_m: need width * height hit depths");
+  std::vector<float> out = objectOcclusionDepths_m(background_hit_depth_m, background_resolution_m);
   const double margin_m = 2.0 * background_resolution_m;
   for (std::size_t i = 0; i < n; ++i) {
     if (!std::isfinite(out[i])) continue;
@@ -102,18 +102,18 @@ std::vector<float> objectRayLimitsBatch(const std::vector<Eigen::Vector3d>& posi
   out.reserve(positions_W.size() * static_cast<std::size_t>(grid.width) * grid.height);
   for (std::size_t i = 0; i < positions_W.size(); ++i) {
     const std::vector<float> limits =
-        object_ray_limits_m(positions_W[i], grid, hit_depths_m[i].values, background_resolution_m, objects);
+        objectRayLimits_m(positions_W[i], grid, hit_depths_m[i].values, background_resolution_m, objects);
     out.insert(out.end(), limits.begin(), limits.end());
   }
   return out;
 }
 
-int window_columns(double hfov_rad, int width) {
+int windowColumns(double hfov_rad, int width) {
   const int k = static_cast<int>(std::lround(hfov_rad / (2.0 * M_PI) * width));
   return std::clamp(k, 1, std::max(1, width));
 }
 
-double window_mean(const GainImage& img, int first, int columns) {
+double windowMean(const GainImage& img, int first, int columns) {
   if (img.empty() || columns <= 0) return 0.0;
   double sum = 0.0;
   for (int c = 0; c < columns; ++c) {
@@ -123,8 +123,8 @@ double window_mean(const GainImage& img, int first, int columns) {
   return sum / (static_cast<double>(columns) * img.height);
 }
 
-YawWindow best_yaw(const GainImage& img, int columns) {
-  if (img.empty() || img.width <= 0 || img.height <= 0) throw std::invalid_argument("best_yaw: empty image");
+YawWindow bestYaw(const GainImage& img, int columns) {
+  if (img.empty() || img.width <= 0 || img.height <= 0) throw std::invalid_argument("bestYaw: empty image");
   columns = std::clamp(columns, 1, img.width);
   // Column sums once, then a circular running sum: O(width * height).
   std::vector<double> col(static_cast<std::size_t>(img.width), 0.0);
@@ -145,21 +145,21 @@ YawWindow best_yaw(const GainImage& img, int columns) {
   w.first_column = best_first;
   w.columns = columns;
   w.gain = best / (static_cast<double>(columns) * img.height);
-  w.yaw_rad = wrap_pi(-M_PI + 2.0 * M_PI * (best_first + 0.5 * columns) / img.width);
+  w.yaw_rad = wrapPi(-M_PI + 2.0 * M_PI * (best_first + 0.5 * columns) / img.width);
   return w;
 }
 
-double path_length_m(const std::vector<Eigen::Vector3d>& path) {
+double pathLength_m(const std::vector<Eigen::Vector3d>& path) {
   double l = 0.0;
   for (std::size_t i = 1; i < path.size(); ++i) l += (path[i] - path[i - 1]).norm();
   return l;
 }
 
-double yaw_difference_rad(double a, double b) { return std::abs(wrap_pi(a - b)); }
+double yawDifference_rad(double a, double b) { return std::abs(wrapPi(a - b)); }
 
-double path_time_s(const std::vector<Eigen::Vector3d>& path, double yaw_start, double yaw_end, double v_max,
+double pathTime_s(const std::vector<Eigen::Vector3d>& path, double yaw_start, double yaw_end, double v_max,
                    double omega_max) {
-  return std::max(path_length_m(path) / v_max, yaw_difference_rad(yaw_start, yaw_end) / omega_max);
+  return std::max(pathLength_m(path) / v_max, yawDifference_rad(yaw_start, yaw_end) / omega_max);
 }
 
 double utility(double gain, double time_s, double min_time_s) { return gain / std::max(time_s, min_time_s); }
