@@ -95,22 +95,23 @@ std::vector<std::vector<std::uint8_t>> toHistoryMasks(const std::vector<sensor_m
   return out;
 }
 
-std::string toMapUpdate(const semantic_exploration::MapBlocks& msg, semexp::MapReplica::Update& u) {
+std::string fromMapBlocksMsg(const semantic_exploration::MapBlocks& msg, semexp::MapBlocksData& d) {
   if (msg.encoding != semantic_exploration::MapBlocks::ENCODING_LOG_ODDS_I8)
     return "MapBlocks encoding " + std::to_string(msg.encoding) + " unsupported";
-  u.sequence = msg.sequence;
-  u.full = msg.full;
-  u.resolution_m = msg.resolution_m;
-  u.block_size = msg.block_size;
-  u.origin_W = {msg.origin.x, msg.origin.y, msg.origin.z};
-  u.coords = msg.coords.data();
-  u.coord_count = msg.coords.size();
-  u.payload = msg.payload.data();
-  u.payload_size = msg.payload.size();
-  u.uniform_coords = msg.uniform_coords.data();
-  u.uniform_coord_count = msg.uniform_coords.size();
-  u.uniform_values = msg.uniform_values.data();
-  u.uniform_value_count = msg.uniform_values.size();
+  d.sequence = msg.sequence;
+  d.full = msg.full;
+  d.resolution_m = msg.resolution_m;
+  d.block_size = msg.block_size;
+  d.origin_m = fromPoint(msg.origin);
+  d.encoding = msg.encoding;
+  d.coords = msg.coords;
+  // uint8 bytes back to the int8 codes (same bits).
+  d.payload.resize(msg.payload.size());
+  if (!msg.payload.empty()) std::memcpy(d.payload.data(), msg.payload.data(), msg.payload.size());
+  d.uniform_coords = msg.uniform_coords;
+  d.uniform_values.resize(msg.uniform_values.size());
+  if (!msg.uniform_values.empty())
+    std::memcpy(d.uniform_values.data(), msg.uniform_values.data(), msg.uniform_values.size());
   return "";
 }
 

@@ -75,8 +75,8 @@ void PlannerNode::publishStatus(uint8_t state, const std::string& message) {
 
 bool PlannerNode::applyBlocks(const semantic_exploration::MapBlocks& msg, bool& gap) {
   gap = false;
-  semexp::MapReplica::Update u;
-  const std::string bad = toMapUpdate(msg, u);
+  semexp::MapBlocksData u;
+  const std::string bad = fromMapBlocksMsg(msg, u);
   if (!bad.empty()) {
     drops_.drop("bad_map_encoding", bad);
     return false;

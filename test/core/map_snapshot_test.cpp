@@ -13,24 +13,6 @@
 namespace semexp {
 namespace {
 
-MapReplica::Update toUpdate(const MapBlocksData& m) {
-  MapReplica::Update u;
-  u.sequence = m.sequence;
-  u.full = m.full;
-  u.resolution_m = m.resolution_m;
-  u.block_size = m.block_size;
-  u.origin_W = m.origin_m;
-  u.coords = m.coords.data();
-  u.coord_count = m.coords.size();
-  u.payload = reinterpret_cast<const std::uint8_t*>(m.payload.data());
-  u.payload_size = m.payload.size();
-  u.uniform_coords = m.uniform_coords.data();
-  u.uniform_coord_count = m.uniform_coords.size();
-  u.uniform_values = reinterpret_cast<const std::uint8_t*>(m.uniform_values.data());
-  u.uniform_value_count = m.uniform_values.size();
-  return u;
-}
-
 TEST(MapSnapshot, ALargeFreeMapResyncsInAFewBytesPerBlock) {
   // 50 x 50 x 10 m at 4 cm: 3.9e8 voxels in 763,000 blocks, 400 MB in full (100 x 100 x 10 m, four
   // times that, passed roscpp's 1 GB message limit).
@@ -59,7 +41,7 @@ TEST(MapSnapshot, ALargeFreeMapResyncsInAFewBytesPerBlock) {
   EXPECT_LT(snap.byteSize() * 39, blocks * 512);  // in full: 400 MB of payload alone
   // The replica keeps them as one value each too, and reads them back.
   MapReplica replica;
-  ASSERT_EQ(replica.apply(toUpdate(snap)), MapReplica::Result::kApplied);
+  ASSERT_EQ(replica.apply(snap), MapReplica::Result::kApplied);
   EXPECT_EQ(replica.blockCount(), blocks);
   EXPECT_EQ(replica.state({25.02, 25.02, 5.02}), MapReplica::State::kFree);
   EXPECT_TRUE(replica.sphereFree({25.0, 25.0, 5.0}, 2.0));
@@ -115,8 +97,8 @@ TEST(MapSnapshot, CompactAndFullSnapshotsDecodeToTheSameMap) {
   EXPECT_EQ(again.payload, full.payload);
   // Decoded by replicas: the same state at every voxel centre, the same sphere answers.
   MapReplica from_full, from_compact;
-  ASSERT_EQ(from_full.apply(toUpdate(full)), MapReplica::Result::kApplied);
-  ASSERT_EQ(from_compact.apply(toUpdate(compact)), MapReplica::Result::kApplied);
+  ASSERT_EQ(from_full.apply(full), MapReplica::Result::kApplied);
+  ASSERT_EQ(from_compact.apply(compact), MapReplica::Result::kApplied);
   int differ = 0, free = 0, occupied = 0;
   for (double z = 0.02; z < 2.4; z += 0.04)
     for (double y = 0.02; y < 4.0; y += 0.04)
@@ -146,7 +128,7 @@ TEST(MapSnapshot, MismatchedUniformListsAreRefused) {
   m.uniform_coords = {0, 0, 0, 1, 0, 0};
   m.uniform_values = {-20};  // two blocks, one value
   MapReplica replica;
-  EXPECT_EQ(replica.apply(toUpdate(m)), MapReplica::Result::kBadInput);
+  EXPECT_EQ(replica.apply(m), MapReplica::Result::kBadInput);
   OccupancyMap map{BackgroundMapConfig(), Bounds()};
   m.origin_m = map.extentMin();
   EXPECT_FALSE(map.applyBlocks(m));

@@ -17,25 +17,23 @@ namespace {
 // log-odds -0.4 -> -4, occupied ones 2.0 -> 20.
 struct ReplicaTest : ::testing::Test {
   std::vector<std::int32_t> coords;
-  std::vector<std::uint8_t> payload;
-  MapReplica::Update update(std::uint64_t seq, bool full) const {
-    MapReplica::Update u;
+  std::vector<std::int8_t> payload;
+  MapBlocksData update(std::uint64_t seq, bool full) const {
+    MapBlocksData u;
     u.sequence = seq;
     u.full = full;
     u.resolution_m = 0.1;
     u.block_size = 8;
-    u.coords = coords.data();
-    u.coord_count = coords.size();
-    u.payload = payload.data();
-    u.payload_size = payload.size();
+    u.coords = coords;
+    u.payload = payload;
     return u;
   }
   void add_block(int bx, int by, int bz, std::int8_t fill) {
     coords.insert(coords.end(), {bx, by, bz});
-    payload.insert(payload.end(), 512, static_cast<std::uint8_t>(fill));
+    payload.insert(payload.end(), 512, fill);
   }
   void set_voxel(std::size_t block, int x, int y, int z, std::int8_t v) {
-    payload[block * 512 + static_cast<std::size_t>((z * 8 + y) * 8 + x)] = static_cast<std::uint8_t>(v);
+    payload[block * 512 + static_cast<std::size_t>((z * 8 + y) * 8 + x)] = v;
   }
 };
 
@@ -88,20 +86,6 @@ TEST_F(ReplicaTest, SequenceHandling) {
   EXPECT_EQ(m.apply(update(10, false)), MapReplica::Result::kBadInput);
 }
 
-MapReplica::Update to_update(const MapBlocksData& m) {
-  MapReplica::Update u;
-  u.sequence = m.sequence;
-  u.full = m.full;
-  u.resolution_m = m.resolution_m;
-  u.block_size = m.block_size;
-  u.origin_W = m.origin_m;
-  u.coords = m.coords.data();
-  u.coord_count = m.coords.size();
-  u.payload = reinterpret_cast<const std::uint8_t*>(m.payload.data());
-  u.payload_size = m.payload.size();
-  return u;
-}
-
 // The contract with the background map: a replica fed by OccupancyMap's
 // incremental updates (and, after a gap, its snapshot) agrees with the map on
 // voxel states and sphere queries. Frames are rendered from a box room.
@@ -141,13 +125,13 @@ TEST(ReplicaOfOccupancyMap, AgreesWithTheMap) {
   };
   for (int k = 0; k < 6; ++k) {
     const MapBlocksData up = frame({1.2 + 0.3 * k, 2.0, 1.2}, 0.9 * k);
-    ASSERT_EQ(replica.apply(to_update(up)), MapReplica::Result::kApplied) << "update " << k;
+    ASSERT_EQ(replica.apply(up), MapReplica::Result::kApplied) << "update " << k;
     if (k == 0) continue;  // `late` misses the first update: gap, then the snapshot
     if (late.sequence() == 0) {
-      EXPECT_EQ(late.apply(to_update(up)), MapReplica::Result::kGap);
-      ASSERT_EQ(late.apply(to_update(map.snapshot())), MapReplica::Result::kApplied);
+      EXPECT_EQ(late.apply(up), MapReplica::Result::kGap);
+      ASSERT_EQ(late.apply(map.snapshot()), MapReplica::Result::kApplied);
     } else {
-      ASSERT_EQ(late.apply(to_update(up)), MapReplica::Result::kApplied);
+      ASSERT_EQ(late.apply(up), MapReplica::Result::kApplied);
     }
   }
   std::mt19937 rng(5);

@@ -126,28 +126,29 @@ TEST(ToObjectSummaries, CountsObjectsWithNonFiniteGeometry) {
   EXPECT_DOUBLE_EQ(objs[0].observed_fraction, 0.5);
 }
 
-TEST(ToMapUpdate, PointsIntoTheMessageAndRefusesUnknownEncodings) {
+TEST(FromMapBlocksMsg, CopiesTheBlocksAndRefusesUnknownEncodings) {
   semantic_exploration::MapBlocks m;
   m.sequence = 7;
   m.resolution_m = 0.04f;
   m.block_size = 2;
   m.coords = {1, 2, 3};
   m.payload.assign(8, 0);
-  semexp::MapReplica::Update u;
-  EXPECT_EQ(toMapUpdate(m, u), "");
-  EXPECT_EQ(u.sequence, 7u);
-  EXPECT_EQ(u.coords, m.coords.data());
-  EXPECT_EQ(u.coord_count, 3u);
-  EXPECT_EQ(u.payload_size, 8u);
+  semexp::MapBlocksData d;
+  EXPECT_EQ(fromMapBlocksMsg(m, d), "");
+  EXPECT_EQ(d.sequence, 7u);
+  EXPECT_EQ(d.coords, m.coords);
+  EXPECT_EQ(d.blockCount(), 1u);
+  EXPECT_EQ(d.payload.size(), 8u);
   m.uniform_coords = {4, 5, 6};
   m.uniform_values = {200};
-  EXPECT_EQ(toMapUpdate(m, u), "");
-  EXPECT_EQ(u.uniform_coords, m.uniform_coords.data());
-  EXPECT_EQ(u.uniform_coord_count, 3u);
-  EXPECT_EQ(u.uniform_value_count, 1u);
-  EXPECT_EQ(u.uniform_values[0], 200);
+  EXPECT_EQ(fromMapBlocksMsg(m, d), "");
+  EXPECT_EQ(d.uniform_coords, m.uniform_coords);
+  ASSERT_EQ(d.uniform_values.size(), 1u);
+  EXPECT_EQ(d.uniform_values[0], -56);  // the bits of 200 (0xc8) as int8
   m.encoding = 9;
-  EXPECT_NE(toMapUpdate(m, u).find("encoding 9"), std::string::npos);
+  d.sequence = 0;
+  EXPECT_NE(fromMapBlocksMsg(m, d).find("encoding 9"), std::string::npos);
+  EXPECT_EQ(d.sequence, 0u);  // untouched
 }
 
 TEST(ToHistoryMasks, ResizedMasksAreDroppedAndCounted) {
@@ -170,7 +171,7 @@ TEST(ToHistoryMasks, ResizedMasksAreDroppedAndCounted) {
 
 // ------------------------------------------------ what the map nodes send
 
-TEST(MapNodeConversions, MapBlocksRoundTripThroughTheReplicaUpdate) {
+TEST(MapNodeConversions, MapBlocksRoundTripThroughTheMessage) {
   semexp::MapBlocksData d;
   d.sequence = 7;
   d.full = true;
@@ -199,19 +200,24 @@ TEST(MapNodeConversions, MapBlocksRoundTripThroughTheReplicaUpdate) {
   ASSERT_EQ(m.uniform_values.size(), 1u);
   EXPECT_EQ(m.uniform_values[0], 0xfc);
 
-  semexp::MapReplica::Update u;
-  ASSERT_EQ(toMapUpdate(m, u), "");
+  semexp::MapBlocksData u;
+  ASSERT_EQ(fromMapBlocksMsg(m, u), "");
   EXPECT_EQ(u.sequence, 7u);
   EXPECT_TRUE(u.full);
   EXPECT_EQ(u.block_size, 2);
-  EXPECT_TRUE(u.origin_W.isApprox(d.origin_m));
-  ASSERT_EQ(u.coord_count, 6u);
+  EXPECT_TRUE(u.origin_m.isApprox(d.origin_m));
+  EXPECT_FLOAT_EQ(static_cast<float>(u.resolution_m), 0.1f);
+  EXPECT_EQ(u.encoding, d.encoding);
+  ASSERT_EQ(u.coords.size(), 6u);
+  EXPECT_EQ(u.coords, d.coords);
   EXPECT_EQ(u.coords[4], -1);
-  ASSERT_EQ(u.payload_size, 16u);
-  EXPECT_EQ(static_cast<std::int8_t>(u.payload[0]), -128);
-  EXPECT_EQ(static_cast<std::int8_t>(u.payload[7]), -35);
-  ASSERT_EQ(u.uniform_value_count, 1u);
-  EXPECT_EQ(static_cast<std::int8_t>(u.uniform_values[0]), -4);
+  ASSERT_EQ(u.payload.size(), 16u);
+  EXPECT_EQ(u.payload, d.payload);  // every code back, byte for byte
+  EXPECT_EQ(u.payload[0], -128);
+  EXPECT_EQ(u.payload[7], -35);
+  EXPECT_EQ(u.uniform_coords, d.uniform_coords);
+  ASSERT_EQ(u.uniform_values.size(), 1u);
+  EXPECT_EQ(u.uniform_values[0], -4);
 }
 
 TEST(MapNodeConversions, ObjectInfoCarriesTheSummaryThePlannerReads) {

@@ -21,6 +21,7 @@ from nav_msgs.msg import Path
 from sensor_msgs.msg import CameraInfo, Image, PointCloud2, PointField
 from std_srvs.srv import Trigger
 
+from semantic_exploration import map_blocks
 from semantic_exploration.msg import CandidateViewArray, ExplorationStatus, MapBlocks, MapStats
 from semantic_exploration.srv import ComputeGains, ComputeGainsResponse, GetHistoryMasks, GetMap, GetMapResponse
 
@@ -78,22 +79,7 @@ def blocks_msg(g, seq, full):
     m = MapBlocks()
     m.header.frame_id = "world"
     m.header.stamp = rospy.Time.now()
-    m.sequence = seq
-    m.full = full
-    m.resolution_m = RES
-    m.block_size = BS
-    m.origin = Point(0.0, 0.0, 0.0)
-    m.encoding = MapBlocks.ENCODING_LOG_ODDS_I8
-    coords, payload = [], []
-    for bx in range(g.shape[0] // BS):
-        for by in range(g.shape[1] // BS):
-            for bz in range(g.shape[2] // BS):
-                b = g[bx * BS:(bx + 1) * BS, by * BS:(by + 1) * BS, bz * BS:(bz + 1) * BS]
-                coords += [bx, by, bz]
-                payload.append(b.transpose(2, 1, 0).astype(np.int8).tobytes())  # x fastest
-    m.coords = coords
-    m.payload = b"".join(payload)
-    return m
+    return map_blocks.encode(m, g, (0.0, 0.0, 0.0), RES, BS, seq, full)  # the codec's layout and encoding
 
 
 def cloud(points):

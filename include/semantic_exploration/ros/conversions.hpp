@@ -60,9 +60,10 @@ std::vector<semexp::GainSet> toBackgroundGains(const semantic_exploration::Compu
 std::vector<std::vector<std::uint8_t>> toHistoryMasks(const std::vector<sensor_msgs::Image>& masks, int w, int h,
                                                       std::size_t& bad);
 
-/// A MapBlocks message as a replica update; the update points into `msg`,
-/// which must outlive it. Returns "" or why the message cannot be read.
-std::string toMapUpdate(const semantic_exploration::MapBlocks& msg, semexp::MapReplica::Update& update);
+/// A MapBlocks message as the codec's data (the inverse of toMapBlocksMsg;
+/// the payload's uint8 carry the int8 codes' bits). Returns "" or why the
+/// message cannot be read (an unknown encoding), `blocks` untouched then.
+std::string fromMapBlocksMsg(const semantic_exploration::MapBlocks& msg, semexp::MapBlocksData& blocks);
 
 /// The objects of the object map as the planner sees them; objects with a
 /// non-finite box or centroid, or an observed fraction outside [0, 1] (a NaN
@@ -130,7 +131,7 @@ std::string fromPose(const geometry_msgs::Pose& pose, Eigen::Isometry3d& T);
 Eigen::Isometry3d fromTransform(const geometry_msgs::Transform& t);
 
 /// The MapBlocks message of a map update or snapshot (background_map's
-/// ~map_update and ~get_map); toMapUpdate() reads it back.
+/// ~map_update and ~get_map); fromMapBlocksMsg() reads it back.
 semantic_exploration::MapBlocks toMapBlocksMsg(const semexp::MapBlocksData& blocks, const ros::Time& stamp,
                                                const std::string& frame);
 

@@ -16,28 +16,28 @@ std::uint64_t MapReplica::key(const Eigen::Vector3i& b) {
          static_cast<std::uint64_t>(b.z() + kOffset);
 }
 
-MapReplica::Result MapReplica::apply(const Update& u) {
+MapReplica::Result MapReplica::apply(const MapBlocksData& u) {
   if (!(std::isfinite(u.resolution_m) && u.resolution_m > 0) || u.block_size <= 0 || u.block_size > 64 ||
-      !u.origin_W.allFinite()) {
+      !u.origin_m.allFinite()) {
     last_error_ = "bad geometry (resolution, block size or origin)";
     return Result::kBadInput;
   }
   const std::size_t voxels = static_cast<std::size_t>(u.block_size) * u.block_size * u.block_size;
-  if (u.coord_count % 3 != 0 || u.payload_size != (u.coord_count / 3) * voxels) {
-    last_error_ = "coords/payload sizes disagree: " + std::to_string(u.coord_count) + " coords, " +
-                  std::to_string(u.payload_size) + " payload bytes";
+  if (u.coords.size() % 3 != 0 || u.payload.size() != u.blockCount() * voxels) {
+    last_error_ = "coords/payload sizes disagree: " + std::to_string(u.coords.size()) + " coords, " +
+                  std::to_string(u.payload.size()) + " payload bytes";
     return Result::kBadInput;
   }
-  if (u.uniform_coord_count != 3 * u.uniform_value_count) {
-    last_error_ = "uniform coords/values sizes disagree: " + std::to_string(u.uniform_coord_count) + " coords, " +
-                  std::to_string(u.uniform_value_count) + " values";
+  if (u.uniform_coords.size() != 3 * u.uniform_values.size()) {
+    last_error_ = "uniform coords/values sizes disagree: " + std::to_string(u.uniform_coords.size()) + " coords, " +
+                  std::to_string(u.uniform_values.size()) + " values";
     return Result::kBadInput;
   }
   if (!u.full) {
     if (sequence_ != 0 && u.sequence <= sequence_) return Result::kStale;
     if (u.sequence != sequence_ + 1) return Result::kGap;
     if (u.block_size != block_size_ || std::abs(u.resolution_m - resolution_m_) > 1e-9 ||
-        (u.origin_W - origin_W_).norm() > 1e-9) {
+        (u.origin_m - origin_W_).norm() > 1e-9) {
       if (!blocks_.empty()) {
         last_error_ = "geometry changed in an incremental update";
         return Result::kGap;
@@ -48,11 +48,11 @@ MapReplica::Result MapReplica::apply(const Update& u) {
   }
   resolution_m_ = u.resolution_m;
   block_size_ = u.block_size;
-  origin_W_ = u.origin_W;
-  for (std::size_t b = 0; b < u.coord_count / 3; ++b) {
+  origin_W_ = u.origin_m;
+  for (std::size_t b = 0; b < u.blockCount(); ++b) {
     const Eigen::Vector3i c(u.coords[3 * b], u.coords[3 * b + 1], u.coords[3 * b + 2]);
     Block& blk = blocks_[key(c)];
-    const auto* src = reinterpret_cast<const std::int8_t*>(u.payload + b * voxels);
+    const std::int8_t* src = u.payload.data() + b * voxels;
     blk.values.assign(src, src + voxels);
     blk.unknown = blk.occupied = 0;
     for (const std::int8_t v : blk.values) {
@@ -62,12 +62,12 @@ MapReplica::Result MapReplica::apply(const Update& u) {
         ++blk.occupied;
     }
   }
-  for (std::size_t b = 0; b < u.uniform_value_count; ++b) {
+  for (std::size_t b = 0; b < u.uniform_values.size(); ++b) {
     const Eigen::Vector3i c(u.uniform_coords[3 * b], u.uniform_coords[3 * b + 1], u.uniform_coords[3 * b + 2]);
     Block& blk = blocks_[key(c)];
     blk.values.clear();
     blk.values.shrink_to_fit();
-    blk.uniform = static_cast<std::int8_t>(u.uniform_values[b]);
+    blk.uniform = u.uniform_values[b];
     const int n = static_cast<int>(voxels);
     blk.unknown = blk.uniform == kUnknownValue ? n : 0;
     blk.occupied = blk.uniform != kUnknownValue && blk.uniform >= free_below_ ? n : 0;

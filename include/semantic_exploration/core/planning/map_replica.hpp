@@ -6,8 +6,8 @@
 ///
 /// Payload encoding: core/map_blocks.hpp. A voxel is free when its value is
 /// < free_below (default 0, i.e. log-odds < 0), else occupied. Missing blocks are unknown. A block whose voxels all hold one
-/// value may come as that value alone (Update::uniform_*, a compact GetMap
-/// snapshot) and is kept as one value.
+/// value may come as that value alone (MapBlocksData::uniform_*, a compact
+/// GetMap snapshot) and is kept as one value.
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -30,30 +30,13 @@ class MapReplica {
     kBadInput,  ///< inconsistent sizes or geometry: ignored (see lastError())
   };
 
-  /// One MapBlocks message, without ROS types.
-  struct Update {
-    std::uint64_t sequence = 0;
-    bool full = false;
-    double resolution_m = 0.0;
-    int block_size = 8;
-    Eigen::Vector3d origin_W = Eigen::Vector3d::Zero();  ///< minimum corner of voxel (0, 0, 0), m
-    const std::int32_t* coords = nullptr;                ///< 3 per block
-    std::size_t coord_count = 0;                         ///< number of int32 values in coords
-    const std::uint8_t* payload = nullptr;               ///< block_size^3 per block
-    std::size_t payload_size = 0;
-    /// Uniform blocks (MapBlocks uniform_coords / uniform_values): 3 coordinates and one value each,
-    /// applied after the blocks above.
-    const std::int32_t* uniform_coords = nullptr;
-    std::size_t uniform_coord_count = 0;  ///< number of int32 values in uniform_coords
-    const std::uint8_t* uniform_values = nullptr;
-    std::size_t uniform_value_count = 0;
-  };
-
   explicit MapReplica(int free_below = 0) : free_below_(free_below) {}
 
-  /// Applies an update. A full update always applies (it replaces
-  /// everything); an incremental one only if its sequence follows the last.
-  Result apply(const Update& u);
+  /// Applies one MapBlocks update (the codec's data type: the map's
+  /// takeUpdate() or snapshot(), or a message through the ROS converter). A
+  /// full update always applies (it replaces everything); an incremental one
+  /// only if its sequence follows the last. Uniform blocks apply after the others.
+  Result apply(const MapBlocksData& u);
 
   std::uint64_t sequence() const { return sequence_; }
   bool empty() const { return blocks_.empty(); }
