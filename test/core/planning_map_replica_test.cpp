@@ -90,37 +90,15 @@ TEST_F(ReplicaTest, SequenceHandling) {
 // incremental updates (and, after a gap, its snapshot) agrees with the map on
 // voxel states and sphere queries. Frames are rendered from a box room.
 TEST(ReplicaOfOccupancyMap, AgreesWithTheMap) {
-  Bounds b;
-  b.min_m = {0.0, 0.0, 0.0};
-  b.max_m = {5.0, 4.0, 2.4};
-  semexp_test::TestGrid room(b, 0.04, semexp_test::TestGrid::kOccupied);
-  room.fill_box({0.2, 0.2, 0.1}, {4.8, 3.8, 2.3}, semexp_test::TestGrid::kFree);
-  room.fill_box({2.0, 1.0, 0.1}, {2.6, 1.6, 0.9}, semexp_test::TestGrid::kOccupied);  // a table
-  PinholeCamera cam;
-  cam.width = 160;
-  cam.height = 120;
-  cam.fx = cam.fy = 131.25;
-  cam.cx = 79.5;
-  cam.cy = 59.5;
+  const Bounds b = semexp_test::tableRoomBounds();
+  const semexp_test::TestGrid room = semexp_test::tableRoom();
+  const PinholeCamera cam = semexp_test::halfSizeCamera();
   BackgroundMapConfig cfg;
   OccupancyMap map(cfg, b);
   MapReplica replica, late;
   auto frame = [&](const Eigen::Vector3d& p, double yaw) {
-    Eigen::Matrix3d R;
-    R.col(0) = Eigen::Vector3d(std::sin(yaw), -std::cos(yaw), 0.0);
-    R.col(1) = -Eigen::Vector3d::UnitZ();
-    R.col(2) = Eigen::Vector3d(std::cos(yaw), std::sin(yaw), 0.0);
-    cv::Mat depth(cam.height, cam.width, CV_32FC1);
-    for (int v = 0; v < cam.height; ++v)
-      for (int u = 0; u < cam.width; ++u) {
-        const Eigen::Vector3d r = cam.ray_C(static_cast<float>(u), static_cast<float>(v)).cast<double>();
-        const double t = room.first_hit(p, R * r.normalized(), cam.d_max_m * r.norm());
-        depth.at<float>(v, u) = std::isfinite(t) ? static_cast<float>(t / r.norm()) : 0.f;
-      }
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = R;
-    T.translation() = p;
-    map.integrate(depth, cv::Mat(), cam, T);
+    const Eigen::Isometry3d T = semexp_test::levelCameraPose(p, yaw);
+    map.integrate(semexp_test::renderDepth(room, cam, T), cv::Mat(), cam, T);
     return map.takeUpdate();
   };
   for (int k = 0; k < 6; ++k) {
