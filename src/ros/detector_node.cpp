@@ -3,6 +3,7 @@
 #include <sensor_msgs/image_encodings.h>
 
 #include "semantic_exploration/Detections.h"
+#include "semantic_exploration/core/camera.hpp"
 
 namespace semexp_ros {
 
@@ -26,6 +27,12 @@ DetectorNode::DetectorNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
 void DetectorNode::infoCallback(const sensor_msgs::CameraInfoConstPtr& msg) {
   if (msg->width == 0 || msg->height == 0) {
     drops_.drop("bad_camera_info", "camera_info of size 0");
+    return;
+  }
+  // The instance image is allocated at this size for every frame: 100000 x 100000 px would be 20 GB.
+  if (const std::string big = semexp::PinholeCamera::checkSize(msg->width, msg->height); !big.empty()) {
+    drops_.drop("bad_camera_info", "camera_info size " + big + "; keeping " + std::to_string(out_size_.width) +
+                                       " x " + std::to_string(out_size_.height));
     return;
   }
   out_size_ = cv::Size(static_cast<int>(msg->width), static_cast<int>(msg->height));

@@ -8,7 +8,8 @@
 /// (semantic_exploration/Detections: a 16UC1 instance image of the
 /// camera_info's size, `camera/width` x `camera/height` until one arrives,
 /// plus one entry per instance; header = the colour image's). Frames that
-/// cannot be used (unknown encoding, failed inference) are dropped and counted
+/// cannot be used (unknown encoding, failed inference) and camera_info of size 0
+/// or beyond PinholeCamera's caps are dropped and counted
 /// on /dropped_input. A missing, unreadable or wrongly shaped model stops the
 /// node at start-up naming `detector/model_path` (or the parameter at fault).
 
