@@ -20,7 +20,7 @@ using occupancy::Summary;
 
 namespace {
 constexpr char kMagic[8] = {'S', 'E', 'M', 'E', 'X', 'P', 'O', 'M'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;  // 2: free_margin_quadratic_per_m (1 is read as 0)
 
 inline std::int8_t encodeL(std::int16_t l) { return map_blocks::encodeMilli(l); }
 inline std::int16_t decodeL(std::int8_t q) { return map_blocks::decodeMilli(q); }
@@ -173,6 +173,7 @@ void OccupancyMap::saveTo(std::ostream& f) const {
   put(f, cfg_.surface_band_m);
   put(f, cfg_.surface_front_m);
   put(f, cfg_.surface_front_quadratic_per_m);
+  put(f, cfg_.free_margin_quadratic_per_m);
   put(f, static_cast<std::uint8_t>(cfg_.integrate_colour));
   put(f, static_cast<std::uint8_t>(cfg_.integrate_min_distance));
   put(f, cfg_.publish_period_s);
@@ -211,7 +212,8 @@ OccupancyMap OccupancyMap::load(const std::string& path) {
   char magic[8];
   getVec(f, magic, 8);
   if (std::memcmp(magic, kMagic, 8) != 0) throw std::runtime_error(path + " is not a semantic_exploration map");
-  if (get<std::uint32_t>(f) != kVersion) throw std::runtime_error(path + ": unsupported map version");
+  const auto version = get<std::uint32_t>(f);
+  if (version != 1 && version != kVersion) throw std::runtime_error(path + ": unsupported map version");
   BackgroundMapConfig cfg;
   cfg.resolution_m = get<double>(f);
   cfg.block_size = get<std::int32_t>(f);
@@ -222,6 +224,7 @@ OccupancyMap OccupancyMap::load(const std::string& path) {
   cfg.surface_band_m = get<double>(f);
   cfg.surface_front_m = get<double>(f);
   cfg.surface_front_quadratic_per_m = get<double>(f);
+  if (version >= 2) cfg.free_margin_quadratic_per_m = get<double>(f);
   cfg.integrate_colour = get<std::uint8_t>(f) != 0;
   cfg.integrate_min_distance = get<std::uint8_t>(f) != 0;
   cfg.publish_period_s = get<double>(f);

@@ -219,6 +219,7 @@ semexp::BackgroundMapConfig loadBackgroundMap(const ParamReader& p) {
   p.get(n + "integrate_min_distance", c.integrate_min_distance);
   p.get(n + "surface_front_m", c.surface_front_m);
   p.get(n + "surface_front_quadratic_per_m", c.surface_front_quadratic_per_m);
+  p.get(n + "free_margin_quadratic_per_m", c.free_margin_quadratic_per_m);
   p.get(n + "publish_period_s", c.publish_period_s);
   p.get(n + "integration_threads", c.integration_threads);
   c.validate(n);

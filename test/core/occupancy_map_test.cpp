@@ -523,6 +523,42 @@ TEST(OccupancyMap, NoiseMarginKeepsVoxelsInFrontOfTheSurfaceFromBeingCarved) {
   EXPECT_EQ(b.state({1.0, 0.02, 0.02}), VoxelState::kFree);
 }
 
+// A frame whose depth lies 6 cm behind the wall at 2.013 m (noise), on the
+// 4 cm grid of smallBounds: without a free margin it carves the voxel
+// holding the wall's face, [2.00, 2.04), free; with a margin of
+// 0.02 * 2.073^2 = 8.6 cm free carving stops at 1.987 m and the voxels from
+// there to the measured surface keep their state.
+TEST(OccupancyMap, FreeMarginKeepsNoisyDepthFromCarvingThroughAWall) {
+  PinholeCamera cam;
+  const BoxRoom scene = wallScene();
+  const Eigen::Isometry3d T = lookPose({0.0, 0.0, 0.0}, 0.0, 0.0);
+  std::vector<float> depth = scene.render(cam, T);
+  for (float& d : depth)
+    if (d > 0.f) d += 0.06f;
+  const Eigen::Vector3d face(2.02, 0.02, 0.02);      // voxel [2.00, 2.04): the wall's face, 2.013
+  const Eigen::Vector3d measured(2.06, 0.02, 0.02);  // voxel [2.04, 2.08): the measured depth, 2.073
+  const Eigen::Vector3d before(1.98, 0.02, 0.02);    // voxel [1.96, 2.00): before the free limit 1.987
+  BackgroundMapConfig plain;
+  OccupancyMap a(plain, smallBounds());
+  a.integrate(depth.data(), nullptr, cam, T);
+  EXPECT_EQ(a.state(face), VoxelState::kFree);  // carved through the wall's surface
+  EXPECT_EQ(a.state(measured), VoxelState::kOccupied);
+  BackgroundMapConfig margin;
+  margin.free_margin_quadratic_per_m = 0.02;
+  OccupancyMap b(margin, smallBounds());
+  b.integrate(depth.data(), nullptr, cam, T);
+  EXPECT_EQ(b.state(face), VoxelState::kUnknown);
+  EXPECT_EQ(b.state(measured), VoxelState::kOccupied);
+  EXPECT_EQ(b.state(before), VoxelState::kFree);
+  // A margin not wider than the surface's front changes nothing: that band is surface.
+  BackgroundMapConfig both = margin;
+  both.surface_front_quadratic_per_m = 0.02;
+  OccupancyMap c(both, smallBounds());
+  c.integrate(depth.data(), nullptr, cam, T);
+  EXPECT_EQ(c.state(face), VoxelState::kOccupied);
+  EXPECT_EQ(c.state(before), VoxelState::kFree);
+}
+
 TEST(OccupancyMap, FreeSphereAtTheStartMarksOnlyUnknownVoxels) {
   BackgroundMapConfig cfg;
   PinholeCamera cam;

@@ -21,6 +21,12 @@ struct BackgroundMapConfig {
   bool integrate_min_distance = true;  ///< keep the minimum distance each leaf was observed from (needed by Eq. 1)
   double surface_front_m = 0.0;    ///< voxels whose centre lies less than this in front of the measured depth count as surface (occupied), not free, m
   double surface_front_quadratic_per_m = 0.0;  ///< noise-aware margin: the surface starts max(surface_front_m, this * d^2) in front of depth d, 1/m (e.g. 2 x the sensor's s of sigma = s d^2)
+  /// Free-space carving stops max(surface_front_m, this * d^2) in front of
+  /// depth d, 1/m; voxels between there and the surface are left as they are
+  /// (neither free nor occupied). With the sensor's sigma = s d^2, 3 s keeps a
+  /// depth measured up to three sigma behind a thin wall from carving free
+  /// space through it. Not above surface_front_quadratic_per_m: no gap.
+  double free_margin_quadratic_per_m = 0.0;
   double publish_period_s = 1.0;   ///< minimum period between ~occupied point clouds, s
   int integration_threads = 2;     ///< threads that integrate a frame, the caller's included (same map for any count)
 
@@ -36,6 +42,8 @@ struct BackgroundMapConfig {
     require(std::isfinite(surface_front_m) && surface_front_m >= 0, ns + "surface_front_m", "must be >= 0 m");
     require(std::isfinite(surface_front_quadratic_per_m) && surface_front_quadratic_per_m >= 0,
             ns + "surface_front_quadratic_per_m", "must be >= 0 1/m");
+    require(std::isfinite(free_margin_quadratic_per_m) && free_margin_quadratic_per_m >= 0,
+            ns + "free_margin_quadratic_per_m", "must be >= 0 1/m");
     require(log_odds_min > -30 && log_odds_max < 30 && log_odds_free > -30 && log_odds_occupied < 30,
             ns + "log_odds_min", "log-odds parameters must lie in (-30, 30)");
     require(publish_period_s >= 0, ns + "publish_period_s", "must be >= 0 s");

@@ -74,6 +74,9 @@ IntegrationStats Integrator::integrate(BlockStore& store, const float* depth_m, 
   fr.cy = static_cast<float>(camera.cy);
   fr.rgb = cfg_.integrate_colour ? rgb : nullptr;
   fr.band = static_cast<float>(cfg_.surface_band_m);
+  fr.gap = cfg_.free_margin_quadratic_per_m > cfg_.surface_front_quadratic_per_m;
+  fr.front_m = static_cast<float>(cfg_.surface_front_m);
+  fr.front_quad_per_m = static_cast<float>(cfg_.surface_front_quadratic_per_m);
   const Eigen::Isometry3d T_CW = T_WC.inverse();
   fr.R_CW = T_CW.linear();
   fr.t_CW = T_CW.translation();
@@ -82,7 +85,8 @@ IntegrationStats Integrator::integrate(BlockStore& store, const float* depth_m, 
   IntegrationStats stats;
   stats.invalid_pixels = pyr_.build(depth_m, fr.W, fr.H, static_cast<float>(camera.d_min_m),
                                     static_cast<float>(camera.d_max_m), static_cast<float>(cfg_.surface_front_m),
-                                    static_cast<float>(cfg_.surface_front_quadratic_per_m));
+                                    static_cast<float>(std::max(cfg_.surface_front_quadratic_per_m,
+                                                                cfg_.free_margin_quadratic_per_m)));
   if (cell_stamp_.size() != store.cellCount()) {
     cell_stamp_.assign(store.cellCount(), 0);
     hit_stamp_.assign(store.cellCount(), 0);

@@ -134,7 +134,8 @@ void Integrator::updateCellVoxels(BlockStore& store, const Frame& fr, TaskOut& o
         std::int16_t nv;
         if (!hit && p.z() < fl) {
           nv = static_cast<std::int16_t>(std::max(lmin, base + lf));
-        } else if (hit || p.z() <= d + band) {
+        } else if (hit || (p.z() <= d + band &&
+                           (!fr.gap || p.z() >= d - std::max(fr.front_m, fr.front_quad_per_m * d * d)))) {
           nv = static_cast<std::int16_t>(std::min(lmax, base + lo));
           if (!Dm) attachSurface();
           if (C && fr.rgb && d > 0.f) {

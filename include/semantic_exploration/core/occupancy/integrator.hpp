@@ -71,6 +71,11 @@ class Integrator {
     int W, H;
     const std::uint8_t* rgb;
     float band;  ///< surface band behind the depth, m
+    /// With a free margin wider than the surface's front: the surface starts
+    /// max(front_m, front_quad_per_m d^2) in front of depth d, and voxels
+    /// between the free limit and there are not updated.
+    bool gap = false;
+    float front_m = 0.f, front_quad_per_m = 0.f;
   };
   struct Task {
     int k, ix, iy, iz;
