@@ -70,6 +70,7 @@ TEST(ClosedLoop, ExploresTwoRoomsUntilTermination) {
   DepthHistory history(DepthHistoryConfig(), bounds, camera);
   PlannerConfig config;
   config.planning_threads = 2;
+  config.ompl_termination = "iterations";  // reproducible: OMPL stops on iterations, not on wall time
   config.max_failed_iterations = 3;
   ExplorationConfig exploration;
   ExplorationPlanner planner(config, exploration, bounds, camera, kRes);
