@@ -60,9 +60,8 @@ def main(results):
     for name, rc in sorted(exit_codes(os.path.join(results, "gtest", "exit_codes")).items()):
         add(glob.glob(os.path.join(results, "gtest", name + ".xml")), "gtest " + name, rc)
     for name, rc in sorted(exit_codes(os.path.join(results, "pytest", "exit_codes")).items()):
-        # one pytest process per group of files (scripts/run_tests.sh), each with <name>.xml
-        xml = os.path.join(results, "pytest", name + ".xml")
-        add([xml] if os.path.exists(xml) else [], name, rc)
+        add([os.path.join(results, "pytest", "pytest.xml")] if os.path.exists(
+            os.path.join(results, "pytest", "pytest.xml")) else [], "pytest", rc)
     for name, rc in sorted(exit_codes(os.path.join(results, "rostest", "exit_codes")).items()):
         # rostest writes one XML per test node (rosunit-*.xml) plus its own
         # rostest-*.xml, which only repeats them.
