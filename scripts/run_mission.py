@@ -178,10 +178,9 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
     mon is a RunLog (live or read from a bag), wall_s may be None (a bag),
     detector as detector_of() gives it (None: not known)."""
     _import_package()
-    from semantic_exploration.eval.experiments import describe_detector
+    from semantic_exploration.eval import cpu_budget, experiments
     objects = mon.objects.objects if mon.objects else []
-    classes = set(args.classes)
-    gt_objs = [o for o in gt["objects"] if o["class"] in classes]
+    gt_objs = [o for o in gt["objects"] if o["class"] in set(args.classes)]
     stats = mon.stats
     summary = {
         "mode": args.mode, "scene": gt.get("scene"), "seed": args.seed,
@@ -196,6 +195,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
         "saved": saved, "detector": detector, "planner_timing": getattr(args, "timing", None),
         "snapshots": getattr(args, "snapshot_summary", None),
         "background_snapshots": getattr(args, "background_snapshot_summary", None),
+        "cpu_budget": mon.cpu.summary(getattr(args, "camera_rate_hz", None)),  # None: the rate of the frames
     }
     free = os.path.join(gt["gt_dir"], "free_space.json")
     if os.path.exists(free):
@@ -208,11 +208,9 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     lines = [
-        "# Exploration report", "",
-        "| | |", "|---|---|",
-        "| mode | %s |" % args.mode,
+        "# Exploration report", "", "| | |", "|---|---|", "| mode | %s |" % args.mode,
         "| scene | %s |" % summary["scene"],
-        "| detector | %s |" % describe_detector(detector),
+        "| detector | %s |" % experiments.describe_detector(detector),
         "| planner timing | %s |" % (getattr(args, "timing", None) or "unknown"),
         "| termination | %s |" % reason,
         "| sim time | %.1f s |" % sim_s,
@@ -271,7 +269,8 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
             "%s%d background-map snapshots (every %g s)" % (", " if sn else "", sb["count"], sb["period_s"])
             if sb else "", sum(x["wall_s"] for x in (sn, sb) if x), 100 * share,
             "; scoring them afterwards %.1f s" % ts["scoring_wall_s"] if ts else "")]
-    lines += ["", "## Dropped input", ""] + mon.drop_report_lines()
+    lines += (["", "## Onboard CPU budget", ""] + cpu_budget.report_lines(summary["cpu_budget"]) +
+              ["", "## Dropped input", ""] + mon.drop_report_lines())
     lines += ["", "## Files", ""]
     for name, s in saved.items():
         lines.append("- %s: %s" % (name, s["message"]))
@@ -384,6 +383,7 @@ def main(argv=None):
             mon = Monitor()
         detector = detector_of(getattr(args, "user_sim_overrides", args.sim_overrides),
                                rospy.get_param("/mav_sim/detector/min_mask_pixels", None))
+        args.camera_rate_hz = rospy.get_param("/mav_sim/camera/rate_hz", None)
         gt_objs = [o for o in gt["objects"] if o["class"] in args.classes]
         n_gt = len(gt_objs)
         occupied = None
@@ -491,7 +491,7 @@ def main(argv=None):
           "%.0f s wall" % (summary["termination_reason"], "?" if found is None else found,
                            summary["ground_truth_objects"], summary["map_objects"], summary["explored_volume_m3"],
                            summary["collisions"], summary["wall_time_s"]))
-    print("[mission] " + mon.drop_report_lines()[0])
+    print("[mission] %s\n[mission] %s" % (mon.drop_report_lines()[0], summary["cpu_budget"]["target_line"]))
     return 0
 
 

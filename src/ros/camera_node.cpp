@@ -87,7 +87,8 @@ void CameraNode::reportFrame(const std_msgs::Header& header, bool integrated, co
   done.node = name_;
   done.integrated = integrated;
   done.time_ms = static_cast<float>(timer.wall_ms());
-  done.cpu_ms = static_cast<float>(timer.cpu_ms());
+  done.cpu_ms = static_cast<float>(timer.cpu_ms() + charged_cpu_ms_);
+  charged_cpu_ms_ = 0.0;
   cpu_budget_.add(done.cpu_ms);
   integrated_pub_.publish(done);
 }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <utility>
 
 namespace semexp_ros {
 
@@ -22,11 +23,17 @@ double threadCpuSeconds() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-FrameTimer::FrameTimer() : wall0_s_(wallSeconds()), cpu0_s_(threadCpuSeconds()) {}
+FrameTimer::FrameTimer(std::function<double()> helper_cpu_s)
+    : helper_cpu_s_(std::move(helper_cpu_s)), wall0_s_(wallSeconds()), cpu0_s_(threadCpuSeconds()) {
+  if (helper_cpu_s_) helper0_s_ = helper_cpu_s_();
+}
 
 double FrameTimer::wall_ms() const { return (wallSeconds() - wall0_s_) * 1e3; }
 
-double FrameTimer::cpu_ms() const { return (threadCpuSeconds() - cpu0_s_) * 1e3; }
+double FrameTimer::cpu_ms() const {
+  const double helpers_s = helper_cpu_s_ ? std::max(0.0, helper_cpu_s_() - helper0_s_) : 0.0;
+  return (threadCpuSeconds() - cpu0_s_ + helpers_s) * 1e3;
+}
 
 CpuBudget::CpuBudget(std::size_t window) : window_(std::max<std::size_t>(1, window)) {}
 

@@ -14,7 +14,7 @@ namespace semexp_ros {
 namespace enc = sensor_msgs::image_encodings;
 
 InstanceMatchingNode::InstanceMatchingNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
-    : CameraNode(nh, pnh, BeforeCameraInfo::kUseParameters, false), nh_(nh) {
+    : CameraNode(nh, pnh, BeforeCameraInfo::kUseParameters, true), nh_(nh) {
   const auto& p = params();
   config_ = loadMatching(p);
   classes_ = loadClasses(p);
@@ -57,10 +57,12 @@ void InstanceMatchingNode::publishEmpty(const std_msgs::Header& header, int widt
 void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsConstPtr& msg,
                                          const sensor_msgs::ImageConstPtr& depth_msg) {
   // The empty answer of a failed frame has the depth frame's size once it decoded (the camera's before).
+  const FrameTimer timer;  // reported for the CPU budget; object_map charges the render to its own frame
   int empty_w = camera_.width, empty_h = camera_.height;
   const auto fail = [&](const Refusal& why) {
     drops_.drop(why.reason, why.detail);
     publishEmpty(msg->header, empty_w, empty_h);
+    reportFrame(msg->header, false, timer);
   };
   // Frames missing from the detector's stream, or whose depth never came (they never pair).
   countFrameGaps(frame_gaps_, drops_, msg->header.stamp, "detection");
@@ -164,6 +166,7 @@ void InstanceMatchingNode::frameCallback(const semantic_exploration::DetectionsC
     matched.detections.push_back(m);
   }
   matched_pub_.publish(matched);
+  reportFrame(msg->header, true, timer);
 }
 
 }  // namespace semexp_ros

@@ -209,6 +209,16 @@ void ObjectMapNode::publishObjects(const ros::Time& stamp) {
 
 bool ObjectMapNode::renderInstances(semantic_exploration::RenderInstances::Request& req,
                                     semantic_exploration::RenderInstances::Response& res) {
+  // instance_matching asks for the render of the frame this node integrates next: the render is part of that
+  // frame's cost, not of instance_matching's (whose thread only waits for the answer).
+  const FrameTimer timer;
+  const bool answered = answerRender(req, res);
+  chargeCpu(timer.cpu_ms());
+  return answered;
+}
+
+bool ObjectMapNode::answerRender(semantic_exploration::RenderInstances::Request& req,
+                                 semantic_exploration::RenderInstances::Response& res) {
   // Refused before anything is sized from it: the render and its answer take w x h per-pixel buffers.
   if (const std::string big = semexp::PinholeCamera::checkSize(req.camera_info.width, req.camera_info.height);
       !big.empty()) {

@@ -1,15 +1,19 @@
 // Integrator: one frame onto a wall with known answers, and the same map
-// from 1, 2 and 3 threads.
+// from 1, 2 and 3 threads; the worker pool's CPU clock.
 #include <gtest/gtest.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "occupancy_test_scene.hpp"
@@ -150,4 +154,48 @@ TEST(Integrator, UsesTheConfiguredThreads) {
   EXPECT_EQ(Integrator(cfg).threads(), 3);
   cfg.integration_threads = 0;
   EXPECT_THROW(cfg.validate(), semexp::ConfigError);
+}
+
+namespace {
+
+double threadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// Runs two tasks on a 2-thread pool, one per thread (each waits until both
+// have started); the task on `busy_caller ? the caller : the worker` spins
+// until its thread has used 40 ms of CPU. Returns the pool's workerCpuSeconds() change.
+double workerCpuOfTwoTasks(semexp::occupancy::WorkerPool& pool, bool busy_caller) {
+  const double before = pool.workerCpuSeconds();
+  const auto caller = std::this_thread::get_id();
+  std::mutex m;
+  std::condition_variable cv;
+  int started = 0;
+  pool.run(2, [&](std::size_t) {
+    {
+      std::unique_lock<std::mutex> lock(m);
+      ++started;
+      cv.notify_all();
+      cv.wait(lock, [&] { return started == 2; });
+    }
+    if ((std::this_thread::get_id() == caller) != busy_caller) return;
+    const double t0 = threadCpuSeconds();
+    volatile double x = 0;
+    while (threadCpuSeconds() - t0 < 0.040) x = x + 1.0;
+  });
+  return pool.workerCpuSeconds() - before;
+}
+
+}  // namespace
+
+// The caller's thread CPU clock misses what the pool's worker does for it:
+// workerCpuSeconds() is that part, and only that part.
+TEST(WorkerPool, WorkerCpuSecondsCountsThePoolThreadsOnly) {
+  semexp::occupancy::WorkerPool single(1);
+  EXPECT_EQ(single.workerCpuSeconds(), 0.0);
+  semexp::occupancy::WorkerPool pool(2);
+  EXPECT_GE(workerCpuOfTwoTasks(pool, false), 0.040);  // the worker spun 40 ms
+  EXPECT_LT(workerCpuOfTwoTasks(pool, true), 0.020);   // the caller spun; the worker only waited
 }

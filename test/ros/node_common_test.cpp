@@ -303,6 +303,17 @@ TEST(FrameTimer, ThreadCpuTimeCountsWorkNotSleep) {
   EXPECT_GE(busy.wall_ms(), busy.cpu_ms() - 1.0);
 }
 
+// background_map's frame runs partly on its integration pool's threads: their CPU clock's change counts.
+TEST(FrameTimer, CountsTheHelperThreadsCpu) {
+  double helper_s = 2.0;
+  const semexp_ros::FrameTimer t([&] { return helper_s; });
+  helper_s = 2.25;  // the helpers used 250 ms since the frame began
+  EXPECT_GE(t.cpu_ms(), 250.0);
+  EXPECT_LT(t.cpu_ms(), 275.0);  // plus (almost) nothing of this thread
+  helper_s = 1.0;                // a clock that went back (a new pool) adds nothing
+  EXPECT_LT(t.cpu_ms(), 25.0);
+}
+
 // Found by the soak (issue 15): a padded row step that is no multiple of the
 // pixel size is valid in sensor_msgs/Image, but made cv::Mat throw out of the
 // depth callback; and width x bytes per pixel wrapped around in uint32.

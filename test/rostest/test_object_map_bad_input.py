@@ -60,7 +60,7 @@ class BadInput(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node("object_map_bad_input_test")
         cls.lock = threading.Lock()
-        cls.matched, cls.done, cls.objects = {}, {}, None
+        cls.matched, cls.done, cls.matching_done, cls.objects = {}, {}, {}, None
         cls.tf = tf2_ros.TransformBroadcaster()
         cls.pub_depth = rospy.Publisher("/camera/depth/image_raw", Image, queue_size=10)
         cls.pub_rgb = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=10)
@@ -71,9 +71,11 @@ class BadInput(unittest.TestCase):
                 cls.matched[m.header.stamp.to_nsec()] = m
 
         def on_done(m):
-            if m.node == "object_map":
-                with cls.lock:
+            with cls.lock:
+                if m.node == "object_map":
                     cls.done[m.header.stamp.to_nsec()] = m
+                elif m.node == "instance_matching":  # its reports feed the run's CPU budget
+                    cls.matching_done[m.header.stamp.to_nsec()] = m
 
         def on_objects(m):
             with cls.lock:
@@ -136,6 +138,16 @@ class BadInput(unittest.TestCase):
         with self.lock:
             return self.matched.get(key), self.done.get(key)
 
+    def matching_report(self, stamp):
+        """instance_matching's frame_integrated for stamp (None if none came within 5 s)."""
+        end = time.monotonic() + 5
+        while time.monotonic() < end:
+            with self.lock:
+                if stamp.to_nsec() in self.matching_done:
+                    return self.matching_done[stamp.to_nsec()]
+            time.sleep(0.02)
+        return None
+
     def chair_mask(self):
         m = np.zeros((H, W), np.uint16)
         m[80:160, 120:200] = 1
@@ -147,6 +159,9 @@ class BadInput(unittest.TestCase):
         self.assertIsNotNone(matched)
         self.assertEqual(len(matched.detections), 0)
         self.assertIsNotNone(done)
+        mine = self.matching_report(matched.header.stamp)  # instance_matching reports the frame too, as not matched
+        self.assertIsNotNone(mine, "instance_matching reported no frame_integrated")
+        self.assertFalse(mine.integrated)
 
         # 2. Unknown class id: that detection is left out and its pixels cleared.
         matched, done = self.send(self.chair_mask(), [(1, 999)])
@@ -164,6 +179,8 @@ class BadInput(unittest.TestCase):
         img = np.frombuffer(matched.instance_image.data, np.uint16)
         self.assertFalse((img == 7).any())
         self.assertTrue(done.integrated)
+        mine = self.matching_report(matched.header.stamp)
+        self.assertTrue(mine is not None and mine.integrated, "instance_matching's report of a matched frame")
 
         # 4. Stale tf (a stamp long before any transform): dropped, reported as not integrated.
         matched, done = self.send(self.chair_mask(), [(1, CHAIR)], stamp=rospy.Time.now() - rospy.Duration(100.0))

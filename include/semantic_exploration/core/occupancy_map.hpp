@@ -150,6 +150,10 @@ class OccupancyMap {
   double exploredVolume() const { return freeVolume() + occupiedVolume(); }
   std::size_t memoryBytes() const;
   std::size_t blockCount() const { return store_.blockCount(); }
+  /// CPU time the integration pool's extra threads (all but the calling
+  /// thread) have used since the map was made, s; 0 with one thread. A
+  /// caller's own thread CPU clock plus the change of this is a frame's CPU.
+  double workerCpuSeconds() const { return integrator_.workerCpuSeconds(); }
   std::size_t frontierCount() const;
   /// Centre and edge length (m) of every frontier leaf: voxels, or whole
   /// uniform cells where those are the finest allocated level.

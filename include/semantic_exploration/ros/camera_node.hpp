@@ -76,8 +76,13 @@ class CameraNode {
   Refusal cameraPose(const std_msgs::Header& header, Eigen::Isometry3d& T_WC, bool check_bounds = true) const;
   /// Counts the refusal and, for a node that reports frames, reports the frame as not integrated.
   void refuse(const std_msgs::Header& header, const Refusal& why, const FrameTimer& timer);
-  /// Publishes frame_integrated for the frame of `header` with its wall and thread CPU time.
+  /// Publishes frame_integrated for the frame of `header` with its wall and
+  /// CPU time (the timer's plus what chargeCpu() added since the last report).
   void reportFrame(const std_msgs::Header& header, bool integrated, const FrameTimer& timer);
+  /// CPU time (ms) of work for a frame done outside its frame callback
+  /// (object_map's render for instance_matching, which object_map integrates
+  /// next): it counts in the next reported frame.
+  void chargeCpu(double cpu_ms) { charged_cpu_ms_ += cpu_ms; }
   /// True, with `res` filled as refused and an error logged, if a SaveMap
   /// request's directory may not be saved into (checkSaveDirectory()).
   bool saveRefused(const std::string& directory, semantic_exploration::SaveMap::Response& res) const;
@@ -111,6 +116,7 @@ class CameraNode {
   bool reports_frames_;
   CameraInfoInput camera_input_;
   CpuBudget cpu_budget_;
+  double charged_cpu_ms_ = 0.0;  ///< chargeCpu() since the last report
   ros::Subscriber info_sub_;
   ros::Publisher integrated_pub_;
 };

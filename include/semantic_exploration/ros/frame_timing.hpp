@@ -2,12 +2,14 @@
 /// @file frame_timing.hpp
 /// Per-frame cost of a mapping node: the wall time and the CPU time of the
 /// thread that handled the frame (CLOCK_THREAD_CPUTIME_ID: the node's own
-/// work, not time spent waiting for a pose or sharing the cores), and the
+/// work, not time spent waiting for a pose or sharing the cores) plus that of
+/// the helper threads it handed work to (a worker pool's own clock), and the
 /// median and 95th percentile of the latter over recent frames, so that a
 /// run's report can show each node's CPU budget. No ROS in here.
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace semexp_ros {
@@ -15,15 +17,21 @@ namespace semexp_ros {
 /// Started when a frame's callback begins.
 class FrameTimer {
  public:
-  FrameTimer();
+  /// `helper_cpu_s`, if given, is a monotone clock of the CPU time (s) of the
+  /// threads the frame's work is handed to besides the calling one (e.g.
+  /// OccupancyMap::workerCpuSeconds): its change counts in cpu_ms().
+  explicit FrameTimer(std::function<double()> helper_cpu_s = {});
   /// Wall time since construction, ms.
   double wall_ms() const;
-  /// CPU time of the calling thread since construction, ms (call it from the thread that constructed it).
+  /// CPU time since construction, ms: the calling thread's (call it from the
+  /// thread that constructed it) plus the helpers' (never negative).
   double cpu_ms() const;
 
  private:
+  std::function<double()> helper_cpu_s_;
   double wall0_s_;
   double cpu0_s_;
+  double helper0_s_ = 0.0;
 };
 
 /// Thread CPU time of the calling thread, s.

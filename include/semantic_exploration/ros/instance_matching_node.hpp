@@ -11,7 +11,8 @@
 /// of classes without object maps are left out; bad input (sizes, encodings,
 /// unknown class ids, a class_name that is not class_id's, masks of unlisted instance ids, missing tf, a camera
 /// outside `bounds`, render service down) is dropped with a counter and a throttled log line, and the
-/// frame goes on without detections (so object_map still handles it).
+/// frame goes on without detections (so object_map still handles it). Each frame is reported on
+/// `frame_integrated` (its CPU time for the run's CPU budget; lockstep does not wait for this node).
 
 #include <message_filters/subscriber.h>
 #include <message_filters/sync_policies/approximate_time.h>

@@ -44,8 +44,11 @@ class ObjectMapNode : public CameraNode {
   void frameCallback(const semantic_exploration::MatchedDetectionsConstPtr& matched,
                      const sensor_msgs::ImageConstPtr& depth, const sensor_msgs::ImageConstPtr& rgb);
   void publishObjects(const ros::Time& stamp);
+  /// Serves ~render_instances (answerRender); its CPU time counts in the next reported frame.
   bool renderInstances(semantic_exploration::RenderInstances::Request& req,
                        semantic_exploration::RenderInstances::Response& res);
+  bool answerRender(semantic_exploration::RenderInstances::Request& req,
+                    semantic_exploration::RenderInstances::Response& res);
   bool computeGains(semantic_exploration::ComputeGains::Request& req, semantic_exploration::ComputeGains::Response& res);
   bool save(semantic_exploration::SaveMap::Request& req, semantic_exploration::SaveMap::Response& res);
 

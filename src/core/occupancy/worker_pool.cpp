@@ -1,6 +1,9 @@
 // Fixed thread pool of the occupancy map's integrator.
 #include "semantic_exploration/core/occupancy/worker_pool.hpp"
 
+#include <pthread.h>
+#include <time.h>
+
 namespace semexp {
 namespace occupancy {
 
@@ -35,6 +38,20 @@ void WorkerPool::run(std::size_t n, const std::function<void(std::size_t)>& f) {
   std::unique_lock<std::mutex> lock(mutex_);
   done_.wait(lock, [this] { return finished_ == n_; });
   job_ = nullptr;
+}
+
+double WorkerPool::workerCpuSeconds() const {
+  double s = 0.0;
+  for (const std::thread& t : workers_) {
+    // Each worker's own CPU clock: it runs until the pool is destroyed, so its handle stays valid.
+    clockid_t clock;
+    timespec ts{};
+    if (pthread_getcpuclockid(const_cast<std::thread&>(t).native_handle(), &clock) != 0 ||
+        clock_gettime(clock, &ts) != 0)
+      continue;
+    s += static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+  }
+  return s;
 }
 
 // Takes task indices one at a time until none is left.

@@ -83,10 +83,10 @@ class StampedLog:
         import rospy
         from geometry_msgs.msg import PoseStamped
         from std_msgs.msg import UInt32
-        from semantic_exploration.msg import DropCounts, ExplorationStatus, MapStats, ObjectArray
+        from semantic_exploration.msg import DropCounts, ExplorationStatus, FrameIntegrated, MapStats, ObjectArray
         types = {"/planner/status": ExplorationStatus, "/background_map/stats": MapStats,
                  "/object_map/objects": ObjectArray, "/mav/collisions": UInt32, "/mav/pose": PoseStamped,
-                 "/dropped_input": DropCounts, "/mav_sim/faults": DropCounts}
+                 "/dropped_input": DropCounts, "/mav_sim/faults": DropCounts, "/frame_integrated": FrameIntegrated}
         if self._clock_ns is None:
             self._clock_ns = lambda: rospy.get_rostime().to_nsec()
         for topic in TOPICS:

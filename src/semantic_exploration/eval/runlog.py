@@ -7,6 +7,8 @@ Messages are read by field name only; the module imports no ROS package unless
 import math
 from typing import Dict, List, Optional
 
+from .cpu_budget import CpuBudget
+
 #: topic -> handler name; record.launch records these for evaluation.
 TOPICS = {
     "/planner/status": "_on_status",
@@ -16,6 +18,7 @@ TOPICS = {
     "/mav/pose": "_on_pose",
     "/dropped_input": "_on_drops",
     "/mav_sim/faults": "_on_faults",
+    "/frame_integrated": "_on_frame",
 }
 
 #: (node, reason) -> how the report names one such drop; the headline line of the report.
@@ -55,6 +58,7 @@ class RunLog:
         self.drops: Dict[str, Dict[str, int]] = {}   # node (short name) -> reason -> count
         self.faults: Dict[str, int] = {}             # injected by mav_sim
         self.last_pose = None                        # (x, y, z) of the last mav/pose
+        self.cpu = CpuBudget()                       # the mapping nodes' CPU time per frame
         # Ground-truth ids matched by the object map's meshes (eval.metrics' matching, the final
         # report's) at the last snapshot, and its sim time; None before the first or without snapshots.
         self.found_ids: Optional[List[int]] = None
@@ -73,12 +77,13 @@ class RunLog:
         import rospy
         from geometry_msgs.msg import PoseStamped
         from std_msgs.msg import UInt32
-        from semantic_exploration.msg import DropCounts, ExplorationStatus, MapStats, ObjectArray
+        from semantic_exploration.msg import DropCounts, ExplorationStatus, FrameIntegrated, MapStats, ObjectArray
         types = {"/planner/status": ExplorationStatus, "/background_map/stats": MapStats,
                  "/object_map/objects": ObjectArray, "/mav/collisions": UInt32, "/mav/pose": PoseStamped,
-                 "/dropped_input": DropCounts, "/mav_sim/faults": DropCounts}
-        for topic in TOPICS:
-            rospy.Subscriber(topic, types[topic], lambda msg, t=topic: self.handle(t, msg), queue_size=50)
+                 "/dropped_input": DropCounts, "/mav_sim/faults": DropCounts, "/frame_integrated": FrameIntegrated}
+        for topic in TOPICS:  # four nodes report every frame: room for a second of them
+            rospy.Subscriber(topic, types[topic], lambda msg, t=topic: self.handle(t, msg),
+                             queue_size=200 if topic == "/frame_integrated" else 50)
         return self
 
     def handle(self, topic: str, msg) -> None:
@@ -111,6 +116,9 @@ class RunLog:
 
     def _on_faults(self, msg):
         self.faults = dict(zip(msg.reasons, (int(c) for c in msg.counts)))
+
+    def _on_frame(self, msg):
+        self.cpu.add(msg.node, msg.header.stamp.to_sec(), msg.cpu_ms)
 
     # ------------------------------------------------------------ output
     def object_observed_share(self):

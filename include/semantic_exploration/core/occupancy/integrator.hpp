@@ -59,6 +59,8 @@ class Integrator {
   void summarise(BlockStore& store, const std::vector<int>& cells, std::vector<Summary>& out);
 
   int threads() const { return pool_->threads(); }
+  /// CPU time of the pool's extra threads since this integrator was made, s (WorkerPool::workerCpuSeconds).
+  double workerCpuSeconds() const { return pool_->workerCpuSeconds(); }
   std::size_t memoryBytes() const;
 
  private:

@@ -27,6 +27,10 @@ class WorkerPool {
   /// which i is not fixed: f must write only to what task i owns. Not
   /// re-entrant; f must not throw.
   void run(std::size_t n, const std::function<void(std::size_t)>& f);
+  /// CPU time the pool's own threads (not the callers of run()) have used
+  /// since construction, s: what a caller's thread CPU clock misses of the
+  /// work it hands out. 0 with one thread.
+  double workerCpuSeconds() const;
 
  private:
   void workerLoop();
