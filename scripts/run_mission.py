@@ -178,7 +178,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
     mon is a RunLog (live or read from a bag), wall_s may be None (a bag),
     detector as detector_of() gives it (None: not known)."""
     _import_package()
-    from semantic_exploration.eval.experiments import describe_detector
+    from semantic_exploration.eval import experiments, final
     objects = mon.objects.objects if mon.objects else []
     classes = set(args.classes)
     gt_objs = [o for o in gt["objects"] if o["class"] in classes]
@@ -212,7 +212,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
         "| | |", "|---|---|",
         "| mode | %s |" % args.mode,
         "| scene | %s |" % summary["scene"],
-        "| detector | %s |" % describe_detector(detector),
+        "| detector | %s |" % experiments.describe_detector(detector),
         "| planner timing | %s |" % (getattr(args, "timing", None) or "unknown"),
         "| termination | %s |" % reason,
         "| sim time | %.1f s |" % sim_s,
@@ -226,7 +226,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
         "| ground-truth objects found (%s) | %s / %d |" % (
             ", ".join(args.classes), "-" if summary["ground_truth_found"] is None else summary["ground_truth_found"],
             len(gt_objs)),
-        "| map objects | %d |" % len(objects),
+        *final.map_object_rows(len(objects), summary["evaluation"]),
         "| path length | %.1f m |" % mon.path_length_m,
         "| collisions | %d |" % mon.collisions,
         "", "## Objects found", "",
