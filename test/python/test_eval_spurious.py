@@ -59,7 +59,8 @@ def test_report_summary_and_experiment_report_name_them(gt, objects_dir, tmp_pat
         "| spurious map objects (on no ground-truth object) | - |",
         "| duplicated ground-truth objects (more than one map object on them) | - |"]
     # The experiment report sums them over a mode's runs.
-    (out / "timeseries.csv").write_text("sim_s,explored_volume_m3,ground_truth_found,path_length_m\n0,0,0,0\n10,5,1,3\n")
+    (out / "timeseries.csv").write_text("sim_s,explored_volume_m3,ground_truth_found,path_length_m\n"
+                                        "0,0,0,0\n10,5,1,3\n")
     run = experiments.read_run(str(out))
     res = experiments.write_outputs(str(tmp_path / "campaign"), {"semantic": [run, run]}, grid_step_s=10)
     assert res["rows"][0]["spurious"] == 2 and res["rows"][0]["duplicated"] == 2

@@ -212,8 +212,9 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
              "Median over runs; curves show the median and the 10th-90th percentile band.", "",
              "Spurious: final map objects on no ground-truth object; duplicated: ground-truth objects more than "
              "one final map object lies on (both summed over the runs).", "",
-             "| mode | runs | objects found (final, median) | spurious | duplicated | explored volume (final, median) | "
-             "time to find all (median) | collisions | termination | ended explored |",
+             "| mode | runs | objects found (final, median) | spurious | duplicated | "
+             "explored volume (final, median) | time to find all (median) | collisions | termination | "
+             "ended explored |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append("| %s | %d | %.0f%% | %s | %s | %.1f m3 | %s | %d | %s | %.0f%% |" % (
