@@ -128,6 +128,7 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
         objects_.at(id)->tsdf.dropForegroundBeyond(normal_W, offset_m);
         result.created.push_back(split);
         split_from[split] = id;
+        result.split.emplace_back(split, id);
         id = split;
         it = masks.end();
       }
