@@ -230,7 +230,8 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
         const float* d = depth_m.ptr<float>(v);
         const std::uint8_t* m = kv.second.ptr<std::uint8_t>(v);
         for (int u = 0; u < depth_m.cols; ++u)
-          new_pixels += m[u] && m[u] != TsdfMap::kMaskUnknown && d[u] > 0.f && d[u] >= camera.d_min_m && d[u] <= camera.d_max_m;
+          new_pixels += m[u] && m[u] != TsdfMap::kMaskUnknown && d[u] > 0.f && d[u] >= camera.d_min_m &&
+                        d[u] <= camera.d_max_m;
       }
     if (!is_new || new_pixels >= config_.min_new_object_pixels)
       obj.tsdf.integrate(camera, T_WC, depth_m, rgb, kv.second, true);

@@ -17,7 +17,8 @@ int markDepthEdges(cv::Mat& mask, const cv::Mat& depth_m, const PinholeCamera& c
   const cv::Rect box = cv::boundingRect(mask);
   if (box.empty()) return 0;
   const int grow = params.window_px + 2;
-  const cv::Rect roi = (box + cv::Point(-grow, -grow) + cv::Size(2 * grow, 2 * grow)) & cv::Rect(0, 0, mask.cols, mask.rows);
+  const cv::Rect roi =
+      (box + cv::Point(-grow, -grow) + cv::Size(2 * grow, 2 * grow)) & cv::Rect(0, 0, mask.cols, mask.rows);
   const cv::Mat m = mask(roi), d = depth_m(roi);
   // Depth of the mask's valid pixels, a far constant elsewhere (finite: the median sorts it).
   constexpr float kFar = 1e6f;
@@ -85,7 +86,8 @@ MaskSeparation separateMasks(const cv::Mat& mask_a, const cv::Mat& mask_b, const
       mask_a.size() != depth_m.size() || mask_b.size() != depth_m.size())
     throw std::invalid_argument("separateMasks: masks (8UC1) and depth (32FC1) must be of one size");
   MaskSeparation out;
-  const std::vector<Eigen::Vector3f> a = maskPoints_C(mask_a, depth_m, camera), b = maskPoints_C(mask_b, depth_m, camera);
+  const std::vector<Eigen::Vector3f> a = maskPoints_C(mask_a, depth_m, camera);
+  const std::vector<Eigen::Vector3f> b = maskPoints_C(mask_b, depth_m, camera);
   constexpr size_t kMinPoints = 20;
   if (a.size() < kMinPoints || b.size() < kMinPoints) return out;
   Eigen::Vector3f ca = Eigen::Vector3f::Zero(), cb = Eigen::Vector3f::Zero();

@@ -306,7 +306,8 @@ std::size_t TsdfMapT<V>::dropForegroundBeyond(const Eigen::Vector3f& normal_W, f
       for (int y = 0; y < B; ++y)
         for (int x = 0; x < B; ++x, ++i) {
           V& vx = kv.second[i];
-          if (vx.foreground() <= 0.f || normal_W.dot(voxelCentre(base + Eigen::Vector3i(x, y, z))) <= offset_m) continue;
+          if (vx.foreground() <= 0.f) continue;
+          if (normal_W.dot(voxelCentre(base + Eigen::Vector3i(x, y, z))) <= offset_m) continue;
           vx.setForeground(0.f);
           ++changed;
         }

@@ -50,7 +50,9 @@ struct ObjectMapConfig {
   /// own. Parts of one object that a detector split into two masks touch. m; 0 = off.
   double split_gap_m = 0.05;
 
-  DepthEdgeParams depthEdgeParams() const { return {mask_depth_edge_m, mask_depth_edge_rel, mask_depth_edge_window_px}; }
+  DepthEdgeParams depthEdgeParams() const {
+    return {mask_depth_edge_m, mask_depth_edge_rel, mask_depth_edge_window_px};
+  }
 
   void validate(const std::string& ns = "object_map/") const {
     require(std::isfinite(truncation_voxels) && truncation_voxels >= 1, ns + "truncation_voxels", "must be >= 1");
