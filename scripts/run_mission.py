@@ -178,7 +178,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
     mon is a RunLog (live or read from a bag), wall_s may be None (a bag),
     detector as detector_of() gives it (None: not known)."""
     _import_package()
-    from semantic_exploration.eval import cpu_budget, experiments
+    from semantic_exploration.eval import cpu_budget, experiments, final
     objects = mon.objects.objects if mon.objects else []
     gt_objs = [o for o in gt["objects"] if o["class"] in set(args.classes)]
     stats = mon.stats
@@ -224,7 +224,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
         "| ground-truth objects found (%s) | %s / %d |" % (
             ", ".join(args.classes), "-" if summary["ground_truth_found"] is None else summary["ground_truth_found"],
             len(gt_objs)),
-        "| map objects | %d |" % len(objects),
+        *final.map_object_rows(len(objects), summary["evaluation"]),
         "| path length | %.1f m |" % mon.path_length_m,
         "| collisions | %d |" % mon.collisions,
         "", "## Objects found", "",

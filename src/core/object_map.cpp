@@ -1,14 +1,10 @@
 #include "semantic_exploration/core/object_map.hpp"
 
-#include "semantic_exploration/core/atomic_file.hpp"
+#include "semantic_exploration/core/object_masks.hpp"
 
 #include <algorithm>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <limits>
 #include <opencv2/imgproc.hpp>
-#include <regex>
 #include <stdexcept>
 
 namespace semexp {
@@ -88,6 +84,16 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
 
   // Union of the masks of the detections of each object.
   std::map<std::uint32_t, cv::Mat> masks;
+  std::map<std::uint32_t, std::uint32_t> split_from;  // object split off -> the object the map had
+  const auto apart = [&](const cv::Mat& a, const cv::Mat& b, Eigen::Vector3f& normal_W, float& offset_m) {
+    cv::Mat ea = a.clone(), eb = b.clone();  // rims bled onto surfaces behind would join the two
+    markDepthEdges(ea, depth_m, camera, config_.depthEdgeParams(), TsdfMap::kMaskUnknown);
+    markDepthEdges(eb, depth_m, camera, config_.depthEdgeParams(), TsdfMap::kMaskUnknown);
+    const MaskSeparation s = separateMasks(eb, ea, depth_m, camera);  // normal towards the new detection
+    normal_W = T_WC.linear().cast<float>() * s.normal_C;
+    offset_m = static_cast<float>(s.plane_m + normal_W.cast<double>().dot(T_WC.translation()));
+    return s.gap_m >= config_.split_gap_m;  // false for NaN (too few points to tell)
+  };
   for (const ObjectDetection& d : detections) {
     if (classes_.name(d.class_id).empty()) {
       ++result.dropped_unknown_class;
@@ -111,6 +117,22 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
     }
     cv::Mat mask = instance_image == d.instance_id;
     auto it = masks.find(id);
+    Eigen::Vector3f normal_W;
+    float offset_m = 0.f;
+    if (it != masks.end() && config_.split_gap_m > 0 && apart(mask, it->second, normal_W, offset_m)) {
+      // Two detections of one known object in a frame whose surfaces lie apart: two objects the map took
+      // for one (a mask bled over both). This one starts an object of its own; the part of the map's object
+      // on its side of the gap is its, not the other's.
+      const std::uint32_t split = createObject(d.class_id);
+      if (split != 0) {
+        objects_.at(id)->tsdf.dropForegroundBeyond(normal_W, offset_m);
+        result.created.push_back(split);
+        split_from[split] = id;
+        result.split.emplace_back(split, id);
+        id = split;
+        it = masks.end();
+      }
+    }
     if (it == masks.end())
       masks.emplace(id, mask);
     else
@@ -193,7 +215,12 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
     cv::Mat other = (rendered != 0) & (rendered != static_cast<int>(kv.first));
     for (const auto& m : merged_into)
       if (m.second == kv.first) other.setTo(0, rendered == static_cast<int>(m.first));
+    // A split-off object is rendered as the one it was part of until that one forgets it.
+    if (const auto sp = split_from.find(kv.first); sp != split_from.end())
+      other.setTo(0, rendered == static_cast<int>(sp->second));
     cv::dilate(other, other, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
+    // Edges first: the pixels of the other object are the near side of the edges its bled rim lies behind.
+    markDepthEdges(kv.second, depth_m, camera, config_.depthEdgeParams(), TsdfMap::kMaskUnknown);
     kv.second.setTo(0, other);
     MappedObject& obj = *objects_.at(kv.first);
     const bool is_new = std::find(result.created.begin(), result.created.end(), kv.first) != result.created.end();
@@ -203,7 +230,8 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
         const float* d = depth_m.ptr<float>(v);
         const std::uint8_t* m = kv.second.ptr<std::uint8_t>(v);
         for (int u = 0; u < depth_m.cols; ++u)
-          new_pixels += m[u] && d[u] > 0.f && d[u] >= camera.d_min_m && d[u] <= camera.d_max_m;
+          new_pixels += m[u] && m[u] != TsdfMap::kMaskUnknown && d[u] > 0.f && d[u] >= camera.d_min_m &&
+                        d[u] <= camera.d_max_m;
       }
     if (!is_new || new_pixels >= config_.min_new_object_pixels)
       obj.tsdf.integrate(camera, T_WC, depth_m, rgb, kv.second, true);
@@ -399,85 +427,6 @@ void ObjectMap::computeGains(const std::vector<Eigen::Vector3d>& positions_W, co
           static_cast<float>(objectDistanceGain(best.min_distance_m, best.distance_m, d_obj_m, d_max_m));
     }
   }
-}
-
-namespace {
-
-std::string jsonEscape(const std::string& s) {
-  std::string out;
-  for (const char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) continue;
-    out += c;
-  }
-  return out;
-}
-
-std::string vec(const Eigen::Vector3d& v) {
-  char buf[96];
-  std::snprintf(buf, sizeof(buf), "[%.4f, %.4f, %.4f]", v.x(), v.y(), v.z());
-  return buf;
-}
-
-}  // namespace
-
-std::vector<std::string> ObjectMap::save(const std::string& directory, double d_obj_m, std::string* error) const {
-  std::vector<std::string> files;
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  fs::create_directories(directory, ec);
-  if (ec) {
-    if (error) *error = "cannot create " + directory + ": " + ec.message();
-    return files;
-  }
-  const fs::path dir = fs::absolute(directory);
-  std::string json = "{\"objects\": [";
-  bool first = true;
-  for (const auto& kv : objects_) {
-    const MappedObject& o = *kv.second;
-    const std::string name = "object_" + std::to_string(o.id) + "_" + o.class_name + ".ply";
-    const std::string path = (dir / name).string();
-    std::string why;
-    if (!writePly(o.tsdf.extractMesh(), path, &why)) {
-      if (error) *error = why;
-      return files;
-    }
-    files.push_back(path);
-    const TsdfSummary s = o.tsdf.summarize(d_obj_m);
-    char buf[320];
-    std::snprintf(buf, sizeof(buf),
-                  "\"resolution_m\": %.4f, \"voxel_count\": %zu, \"observed_fraction\": %.4f, "
-                  "\"detection_count\": %u, \"undetected_count\": %u, \"weight_sum\": %.1f, ",
-                  o.resolution_m, s.voxel_count, s.observed_fraction, o.detection_count, o.undetected_count,
-                  s.weight_sum);
-    json += std::string(first ? "" : ",") + "\n  {\"id\": " + std::to_string(o.id) +
-            ", \"class_id\": " + std::to_string(o.class_id) + ", \"class_name\": \"" + jsonEscape(o.class_name) +
-            "\", " + buf + "\"bbox_min\": " + vec(s.bbox_min_W) + ", \"bbox_max\": " + vec(s.bbox_max_W) +
-            ", \"centroid\": " + vec(s.centroid_W) + ", \"mesh\": \"" + jsonEscape(name) + "\"}";
-    first = false;
-  }
-  char tail[64];
-  std::snprintf(tail, sizeof(tail), "\n], \"d_obj_m\": %.3f}\n", d_obj_m);
-  json += tail;
-  const std::string index = (dir / "objects.json").string();
-  try {
-    writeFileAtomically(index, [&json](std::ostream& f) { f << json; });
-  } catch (const std::exception& e) {
-    if (error) *error = e.what();
-    return files;
-  }
-  files.push_back(index);
-  // Meshes of objects merged away since an earlier save into this directory would read as objects still
-  // there: once the new index is in place, they go.
-  const std::regex mesh_name("object_[0-9]+_.*\\.ply");
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    const std::string name = entry.path().filename().string();
-    if (!std::regex_match(name, mesh_name) || !entry.is_regular_file(ec)) continue;
-    if (std::find(files.begin(), files.end(), entry.path().string()) != files.end()) continue;
-    std::error_code rm;
-    if (!fs::remove(entry.path(), rm) && error) *error = "cannot remove the stale " + entry.path().string();
-  }
-  return files;
 }
 
 }  // namespace semexp

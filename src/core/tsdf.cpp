@@ -105,7 +105,7 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
     const float* drow = depth_m.ptr<float>(v);
     const std::uint8_t* mrow = mask.ptr<std::uint8_t>(v);
     for (int u = 0; u < depth_m.cols; ++u) {
-      if (!mrow[u] || !validDepth(drow[u], camera)) continue;
+      if (!mrow[u] || mrow[u] == kMaskUnknown || !validDepth(drow[u], camera)) continue;
       const Eigen::Vector3f ray = camera.ray_C(static_cast<float>(u), static_cast<float>(v));
       const float n = ray.norm();
       const Eigen::Vector3f dir_W = T_WCf.linear() * (ray / n);
@@ -142,14 +142,15 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
           const int v = static_cast<int>(std::lround(camera.fy * p_C.y() / p_C.z() + camera.cy));
           if (u < 0 || v < 0 || u >= depth_m.cols || v >= depth_m.rows) continue;
           const float d = depth_m.at<float>(v, u);
-          if (!validDepth(d, camera)) continue;
+          const std::uint8_t in_mask = mask.at<std::uint8_t>(v, u);
+          if (!validDepth(d, camera) || in_mask == kMaskUnknown) continue;
           const float dist = p_C.norm();
           // Distance along the pixel's ray between the measured surface and the voxel.
           const float sdf = (d - p_C.z()) * dist / p_C.z();
           if (sdf < -behind) continue;
           V& vx = block[i];
           const float w = vx.weight();
-          if (mask.at<std::uint8_t>(v, u)) {
+          if (in_mask) {
             // Behind the surface the measurement says less (the voxel may be
             // free space hidden by an edge): weight drops linearly from 1 one
             // voxel behind to 0 at -behind_surface_m.
@@ -293,6 +294,25 @@ bool TsdfMapT<V>::castRay(const Eigen::Vector3f& o, const Eigen::Vector3f& dir, 
     t += std::max(step_min, 0.5f * sdf);
   }
   return false;
+}
+
+template <class V>
+std::size_t TsdfMapT<V>::dropForegroundBeyond(const Eigen::Vector3f& normal_W, float offset_m) {
+  const int B = params_.block_size;
+  std::size_t changed = 0;
+  for (auto& kv : blocks_) {
+    const Eigen::Vector3i base = kv.first * B;
+    for (int z = 0, i = 0; z < B; ++z)
+      for (int y = 0; y < B; ++y)
+        for (int x = 0; x < B; ++x, ++i) {
+          V& vx = kv.second[i];
+          if (vx.foreground() <= 0.f) continue;
+          if (normal_W.dot(voxelCentre(base + Eigen::Vector3i(x, y, z))) <= offset_m) continue;
+          vx.setForeground(0.f);
+          ++changed;
+        }
+  }
+  return changed;
 }
 
 template <class V>

@@ -121,6 +121,8 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
   for (const auto id : r.created)
     ROS_INFO("object_map: new object %u (%s)", id, map_->object(id)->class_name.c_str());
   for (const auto& m : r.merged) ROS_INFO("object_map: object %u is part of object %u: merged", m.first, m.second);
+  for (const auto& s : r.split)
+    ROS_INFO("object_map: object %u split off object %u (two detections of it lay apart)", s.first, s.second);
   last_stamp_ = matched->header.stamp;
   // Said again at the first frame: the start-up line goes out before any
   // /rosout subscriber has connected to a respawned node, so it can be lost.

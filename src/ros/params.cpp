@@ -238,6 +238,10 @@ semexp::ObjectMapConfig loadObjectMap(const ParamReader& p) {
   p.get(n + "render_depth_tolerance_rel", c.render_depth_tolerance_rel);
   p.get(n + "merge_fraction", c.merge_fraction);
   p.get(n + "min_new_object_pixels", c.min_new_object_pixels);
+  p.get(n + "mask_depth_edge_m", c.mask_depth_edge_m);
+  p.get(n + "mask_depth_edge_rel", c.mask_depth_edge_rel);
+  p.get(n + "mask_depth_edge_window_px", c.mask_depth_edge_window_px);
+  p.get(n + "split_gap_m", c.split_gap_m);
   c.validate(n);
   return c;
 }

@@ -267,8 +267,10 @@ TEST(ObjectMap, NewDetectionWithFewPixelsBesideKnownObjectsMakesNoObject) {
   const auto detection = [&](int blob_px) {
     cv::Mat mask = cv::Mat::zeros(labels.size(), CV_16UC1);
     mask.setTo(1, ids == 1);
-    // A blob_px x blob_px patch of wall 4 px right of A's render (beyond the 2 px that renders are grown by).
-    mask(cv::Rect(a_box.x + a_box.width + 4, a_box.y + a_box.height / 2, blob_px, blob_px)).setTo(1);
+    // A blob_px x blob_px patch of wall 12 px right of A's render: beyond the 2 px that renders are grown by,
+    // and beyond the 8 px within which mask pixels far behind A's are taken for a mask bled past A
+    // (ObjectMapConfig::mask_depth_edge_window_px).
+    mask(cv::Rect(a_box.x + a_box.width + 12, a_box.y + a_box.height / 2, blob_px, blob_px)).setTo(1);
     return mask;
   };
   // Taken for a new object (as matching does when the IoU with A's render is low): 8 x 8 = 64 px of wall

@@ -54,6 +54,9 @@ struct FrameIntegration {
   std::vector<std::uint32_t> undetected;  ///< visible objects updated without foreground probability
   /// (merged, into): objects found to be the same as a detected one (see ObjectMapConfig::merge_fraction), now gone
   std::vector<std::pair<std::uint32_t, std::uint32_t>> merged;
+  /// (new, from): objects split off a known one, whose detection lay split_gap_m apart from another detection of
+  /// it in this frame (see ObjectMapConfig::split_gap_m); also listed in `created`
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> split;
   std::uint32_t dropped_unknown_class = 0;   ///< detections with a class id outside the class table
   std::uint32_t dropped_not_of_interest = 0; ///< detections of classes without object maps
   std::uint32_t dropped_unknown_object = 0;  ///< detections matched to an object id the map does not have
@@ -93,6 +96,10 @@ class ObjectMap {
   ///    object_id == 0) through its mask minus the pixels rendered as another
   ///    object, foreground probability included; detections of one object are
   ///    merged, so detection_count grows by one per frame.
+  ///    Two detections of one object whose surfaces lie split_gap_m apart
+  ///    split it: the second starts a new object (see ObjectMapConfig).
+  ///    Mask pixels behind a depth edge of their mask neither fill nor carve
+  ///    the object (ObjectMapConfig::mask_depth_edge_m).
   ///    A visible undetected object of the same class whose render lies
   ///    mostly inside such a mask (merge_fraction) is the same object seen
   ///    in pieces before: it is merged into the detected one.

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "semantic_exploration/core/config_error.hpp"
+#include "semantic_exploration/core/object_masks.hpp"
 
 namespace semexp {
 
@@ -34,6 +35,24 @@ struct ObjectMapConfig {
   /// px; fewer (a rim round a known object) would make a spurious object of a
   /// few voxels that later views never render, update or merge.
   int min_new_object_pixels = 100;
+  /// Depth-edge-aware masks: a detection's mask pixel whose depth lies more
+  /// than mask_depth_edge_m + mask_depth_edge_rel * d behind the nearest depth
+  /// d of the mask within mask_depth_edge_window_px pixels is where the mask
+  /// bled past the object onto a surface behind it; it neither fills nor
+  /// carves the object (see markDepthEdges). 0 px = off.
+  double mask_depth_edge_m = 0.3;      ///< m
+  double mask_depth_edge_rel = 0.05;   ///< fraction of the nearer depth
+  int mask_depth_edge_window_px = 8;   ///< px, at least the width a mask bleeds by
+
+  /// Two detections matched to one object in one frame whose 3D points lie
+  /// at least this far apart (maskGap_m) are two objects the map had taken
+  /// for one (a bled mask covered both): the second starts an object of its
+  /// own. Parts of one object that a detector split into two masks touch. m; 0 = off.
+  double split_gap_m = 0.05;
+
+  DepthEdgeParams depthEdgeParams() const {
+    return {mask_depth_edge_m, mask_depth_edge_rel, mask_depth_edge_window_px};
+  }
 
   void validate(const std::string& ns = "object_map/") const {
     require(std::isfinite(truncation_voxels) && truncation_voxels >= 1, ns + "truncation_voxels", "must be >= 1");
@@ -52,6 +71,11 @@ struct ObjectMapConfig {
     require(std::isfinite(render_depth_tolerance_rel) && render_depth_tolerance_rel >= 0 && render_depth_tolerance_rel < 1,
             ns + "render_depth_tolerance_rel", "must be in [0, 1)");
     require(min_new_object_pixels >= 1, ns + "min_new_object_pixels", "must be >= 1 px");
+    require(std::isfinite(mask_depth_edge_m) && mask_depth_edge_m > 0, ns + "mask_depth_edge_m", "must be > 0 m");
+    require(std::isfinite(mask_depth_edge_rel) && mask_depth_edge_rel >= 0, ns + "mask_depth_edge_rel", "must be >= 0");
+    require(std::isfinite(split_gap_m) && split_gap_m >= 0, ns + "split_gap_m", "must be >= 0 m");
+    require(mask_depth_edge_window_px >= 0 && mask_depth_edge_window_px <= 64, ns + "mask_depth_edge_window_px",
+            "must be in [0, 64] px");
   }
 };
 

@@ -138,11 +138,16 @@ class TsdfMapT {
 
   const TsdfParams& params() const { return params_; }
 
+  /// Mask value of a pixel that neither fills nor carves the object (see integrate).
+  static constexpr std::uint8_t kMaskUnknown = 128;
+
   /// Integrates one depth image through a binary mask.
   /// @param depth_m   CV_32FC1 depth along the optical axis, m; 0, NaN, inf and
   ///                  values outside [d_min_m, d_max_m] are invalid
   /// @param rgb       CV_8UC3 rgb colour of the same size, or empty (no colour)
-  /// @param mask      CV_8UC1, non-zero where the pixel belongs to this object
+  /// @param mask      CV_8UC1, non-zero where the pixel belongs to this object;
+  ///                  kMaskUnknown where it is not known (the pixel neither
+  ///                  updates voxels nor lowers their foreground probability)
   /// @param update_foreground  true for a detection (foreground probability
   ///                  rises inside the mask and falls where the measured
   ///                  surface outside the mask passes through known voxels);
@@ -173,6 +178,11 @@ class TsdfMapT {
   /// distances take the minimum. Used to merge two maps of one object.
   /// @throws std::invalid_argument if the grids differ
   void mergeFrom(const TsdfMapT& other);
+
+  /// Sets the foreground probability of every voxel whose centre p_W lies
+  /// beyond the plane (normal_W . p_W > offset_m) to 0: that part of the map
+  /// belongs to another object. Returns the voxels changed.
+  std::size_t dropForegroundBeyond(const Eigen::Vector3f& normal_W, float offset_m);
 
   /// Marching-cubes mesh of the zero crossing where foreground probability > 0.5, with colour.
   Mesh extractMesh() const;

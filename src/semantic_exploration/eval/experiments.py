@@ -194,7 +194,12 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
         t100 = [time_to_reach(r["t"], r["series"]["found_percent"], 100.0) for r in runs]
         reasons = sorted(set(r["summary"].get("termination_reason", "?") for r in runs))
         explored = sum(r["summary"].get("termination_reason") == "explored" for r in runs)
+        evs = [r["summary"].get("evaluation") or {} for r in runs]
+        scored = [e for e in evs if "spurious" in e]  # runs whose final maps were matched to the ground truth
         rows.append({"mode": mode, "runs": len(runs), "found_percent_median": float(np.median(final_found)),
+                     # map objects on no ground-truth object, ground-truth objects under several map objects
+                     "spurious": sum(len(e["spurious"]) for e in scored) if scored else None,
+                     "duplicated": sum(len(e.get("duplicates", [])) for e in scored) if scored else None,
                      "explored_share": explored / len(runs),
                      "explored_m3_median": float(np.median(final_vol)),
                      "time_to_all_found_s_median": float(np.median(t100)),
@@ -205,12 +210,16 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
                                                                    else "")]
     lines = ["# Experiment report", ""] + ["- %s" % l for l in setup] + [""] + [
              "Median over runs; curves show the median and the 10th-90th percentile band.", "",
-             "| mode | runs | objects found (final, median) | explored volume (final, median) | "
-             "time to find all (median) | collisions | termination | ended explored |",
-             "|---|---|---|---|---|---|---|---|"]
+             "Spurious: final map objects on no ground-truth object; duplicated: ground-truth objects more than "
+             "one final map object lies on (both summed over the runs).", "",
+             "| mode | runs | objects found (final, median) | spurious | duplicated | "
+             "explored volume (final, median) | time to find all (median) | collisions | termination | "
+             "ended explored |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append("| %s | %d | %.0f%% | %.1f m3 | %s | %d | %s | %.0f%% |" % (
-            r["mode"], r["runs"], r["found_percent_median"], r["explored_m3_median"],
+        lines.append("| %s | %d | %.0f%% | %s | %s | %.1f m3 | %s | %d | %s | %.0f%% |" % (
+            r["mode"], r["runs"], r["found_percent_median"], "-" if r["spurious"] is None else r["spurious"],
+            "-" if r["duplicated"] is None else r["duplicated"], r["explored_m3_median"],
             "%.0f s" % r["time_to_all_found_s_median"] if np.isfinite(r["time_to_all_found_s_median"]) else "never",
             r["collisions"], r["termination"], 100 * r["explored_share"]))
     claims = paper_claims(agg, grid, rows)

@@ -21,6 +21,9 @@ def evaluate(out, gt, classes, saved):
             ev = index.evaluate_objects(metrics.load_reconstruction(rec_dir))
             res["found"] = len(ev.found_gt_ids)
             res["ground_truth"] = ev.n_ground_truth
+            # Map objects on no ground-truth object, and ground-truth objects more than one map object lies on.
+            res["spurious"] = ev.spurious_map_ids
+            res["duplicates"] = [{"gt_id": g, "map_ids": ids} for g, ids in ev.duplicates.items()]
             res["objects"] = [{"map_id": m.map_id, "class": m.map_class, "gt_id": m.gt_id,
                                "on_surface_fraction": m.on_surface_fraction,
                                "rmse_m": m.score.rmse_m if m.score else None,
@@ -39,3 +42,17 @@ def evaluate(out, gt, classes, saved):
     except Exception as e:  # a failed evaluation must not lose the rest of the report
         res["error"] = "%s: %s" % (type(e).__name__, e)
     return res
+
+
+def map_object_rows(n_objects, ev):
+    """The report's rows on map objects: their number, the spurious ones (on no ground-truth object) and the
+    ground-truth objects more than one map object lies on, from evaluate()'s result ev ('-' without one)."""
+    spurious, dups = ev.get("spurious"), ev.get("duplicates")
+    return ["| map objects | %d |" % n_objects,
+            "| spurious map objects (on no ground-truth object) | %s |" % (
+                "-" if spurious is None else "%d%s" % (len(spurious), " (map ids %s)" % ", ".join(
+                    str(i) for i in spurious) if spurious else "")),
+            "| duplicated ground-truth objects (more than one map object on them) | %s |" % (
+                "-" if dups is None else "%d%s" % (len(dups), " (%s)" % "; ".join(
+                    "ground truth %d: map ids %s" % (d["gt_id"], ", ".join(str(i) for i in d["map_ids"]))
+                    for d in dups) if dups else ""))]

@@ -188,6 +188,20 @@ class ObjectEvaluation:
     def found_fraction(self) -> float:
         return len(self.found_gt_ids) / self.n_ground_truth if self.n_ground_truth else float("nan")
 
+    @property
+    def spurious_map_ids(self) -> List[int]:
+        """Map objects matched to no ground-truth object (they lie on none of their class), ascending."""
+        return sorted(m.map_id for m in self.matches if m.gt_id is None)
+
+    @property
+    def duplicates(self) -> Dict[int, List[int]]:
+        """Ground-truth objects matched by more than one map object: ground-truth id -> the map ids, ascending."""
+        by_gt: Dict[int, List[int]] = {}
+        for m in self.matches:
+            if m.gt_id is not None:
+                by_gt.setdefault(m.gt_id, []).append(m.map_id)
+        return {g: sorted(ids) for g, ids in sorted(by_gt.items()) if len(ids) > 1}
+
 
 def load_ground_truth(gt_dir: str) -> Dict:
     with open(os.path.join(gt_dir, "objects.json")) as f:

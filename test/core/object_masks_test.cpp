@@ -1,0 +1,127 @@
+// The pieces that keep bled masks out of object maps: depth edges within a
+// mask, the gap between two masks' surfaces, mask pixels of unknown
+// membership in the TSDF update, and dropping the part of a map beyond a plane.
+
+#include <gtest/gtest.h>
+
+#include "semantic_exploration/core/object_masks.hpp"
+#include "semantic_exploration/core/tsdf.hpp"
+#include "tsdf_test_scenes.hpp"
+
+using namespace semexp;
+using namespace semexp_test;
+
+namespace {
+
+constexpr std::uint8_t kUnknown = TsdfMap::kMaskUnknown;
+
+TEST(ObjectMasks, PixelsBehindADepthEdgeWithinTheWindowAreMarked) {
+  PinholeCamera cam;
+  // Columns < 120 at 1.5 m, the rest at 2.5 m; the mask spans columns 100 .. 139 over the full height.
+  cv::Mat depth(cam.height, cam.width, CV_32FC1, cv::Scalar(2.5f));
+  depth.colRange(0, 120).setTo(1.5f);
+  cv::Mat mask = cv::Mat::zeros(cam.height, cam.width, CV_8UC1);
+  mask.colRange(100, 140).setTo(255);
+  DepthEdgeParams p;  // 0.3 m + 5% of 1.5 m, 8 px
+  const int marked = markDepthEdges(mask, depth, cam, p, kUnknown);
+  // The far pixels up to 8 columns from the edge (120 .. 127), every row; nothing else.
+  EXPECT_EQ(marked, 8 * cam.height);
+  EXPECT_EQ(cv::countNonZero(mask.colRange(120, 128) == kUnknown), 8 * cam.height);
+  EXPECT_EQ(cv::countNonZero(mask == kUnknown), 8 * cam.height);
+  EXPECT_EQ(cv::countNonZero(mask == 255), 32 * cam.height);
+  // Farther than the threshold only: a step of 0.3 m is no edge.
+  depth.colRange(120, cam.width).setTo(1.8f);
+  mask.colRange(100, 140).setTo(255);
+  EXPECT_EQ(markDepthEdges(mask, depth, cam, p, kUnknown), 0);
+  // Off with a window of 0.
+  p.window_px = 0;
+  depth.colRange(120, cam.width).setTo(2.5f);
+  EXPECT_EQ(markDepthEdges(mask, depth, cam, p, kUnknown), 0);
+  EXPECT_THROW(markDepthEdges(mask, cv::Mat::zeros(10, 10, CV_32FC1), cam, p, kUnknown), std::invalid_argument);
+}
+
+TEST(ObjectMasks, DepthNoiseAloneMakesNoEdge) {
+  PinholeCamera cam;
+  // One plane at 2 m with 8 cm of noise (about 5x the simulator's at 2 m): single pixels lie up to 0.4 m
+  // behind their neighbours, the 5 x 5 medians do not.
+  cv::Mat noise(cam.height, cam.width, CV_32FC1);
+  cv::RNG rng(7);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 0.08);
+  const cv::Mat depth = noise + 2.0f;
+  cv::Mat mask = cv::Mat::zeros(cam.height, cam.width, CV_8UC1);
+  mask(cv::Rect(60, 40, 200, 160)).setTo(255);
+  DepthEdgeParams p;
+  p.edge_m = 0.3;
+  p.edge_rel = 0.0;
+  EXPECT_EQ(markDepthEdges(mask, depth, cam, p, kUnknown), 0);
+}
+
+TEST(ObjectMasks, GapBetweenTwoMasksSurfaces) {
+  PinholeCamera cam;
+  const cv::Mat depth(cam.height, cam.width, CV_32FC1, cv::Scalar(2.0f));
+  cv::Mat a = cv::Mat::zeros(cam.height, cam.width, CV_8UC1), b = a.clone();
+  a(cv::Rect(100, 80, 40, 80)).setTo(255);  // columns 100 .. 139
+  b(cv::Rect(150, 80, 40, 80)).setTo(255);  // columns 150 .. 189
+  // x = (u - cx) z / fx: the last 2% of a's points lie in column 139, the first 2% of b's in column 150.
+  const double px_m = 2.0 / cam.fx;
+  MaskSeparation s = separateMasks(a, b, depth, cam);
+  EXPECT_NEAR(s.gap_m, 11 * px_m, 1e-4);
+  EXPECT_NEAR(s.normal_C.x(), 1.0, 1e-6);
+  EXPECT_NEAR(s.plane_m, (144.5 - cam.cx) * px_m, 1e-4);
+  // Touching masks (columns 100 .. 139 and 140 .. 179): one pixel apart.
+  b.setTo(0);
+  b(cv::Rect(140, 80, 40, 80)).setTo(255);
+  EXPECT_NEAR(separateMasks(a, b, depth, cam).gap_m, px_m, 1e-4);
+  // Marked (unknown) pixels do not count; too few points: NaN.
+  b.setTo(kUnknown, b);
+  EXPECT_TRUE(std::isnan(separateMasks(a, b, depth, cam).gap_m));
+}
+
+TsdfParams params() {
+  TsdfParams p;
+  p.resolution_m = 0.02;
+  p.truncation_m = 0.08;
+  return p;
+}
+
+const Sphere kSphere(Eigen::Vector3d(0.0, 0.0, 1.0), 0.25);
+
+TEST(ObjectMasks, UnknownMaskPixelsNeitherFillNorCarve) {
+  PinholeCamera cam;
+  const auto T_WC = lookAt(Eigen::Vector3d(-1.0, 0.0, 1.0), kSphere.centre);
+  cv::Mat depth, labels;
+  renderShapes(cam, T_WC, {&kSphere}, depth, labels);
+  TsdfMap map(params());
+  const cv::Mat unknown(cam.height, cam.width, CV_8UC1, cv::Scalar(kUnknown));
+  EXPECT_EQ(map.integrate(cam, T_WC, depth, cv::Mat(), unknown, true), 0u);
+  EXPECT_EQ(map.blockCount(), 0u);
+  // Seen as the object once, then through masks of unknown pixels: the foreground stays; outside the mask
+  // (0) it falls.
+  map.integrate(cam, T_WC, depth, cv::Mat(), labels == 1, true);
+  const size_t surface = map.summarize(1.0).voxel_count;
+  ASSERT_GT(surface, 500u);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(map.integrate(cam, T_WC, depth, cv::Mat(), unknown, true), 0u);
+  EXPECT_EQ(map.summarize(1.0).voxel_count, surface);
+  map.integrate(cam, T_WC, depth, cv::Mat(), cv::Mat::zeros(cam.height, cam.width, CV_8UC1), true);
+  EXPECT_EQ(map.summarize(1.0).voxel_count, 0u);
+}
+
+TEST(ObjectMasks, ForegroundBeyondAPlaneIsDropped) {
+  PinholeCamera cam;
+  TsdfMap map(params());
+  for (const auto& T_WC : ring(kSphere.centre, 1.0, 0.3, 8)) {
+    cv::Mat depth, labels;
+    renderShapes(cam, T_WC, {&kSphere}, depth, labels);
+    map.integrate(cam, T_WC, depth, cv::Mat(), labels == 1, true);
+  }
+  // Drop the half with y > 0.1 m.
+  EXPECT_GT(map.dropForegroundBeyond(Eigen::Vector3f::UnitY(), 0.1f), 100u);
+  const Mesh mesh = map.extractMesh();
+  ASSERT_GT(mesh.vertices_W.size(), 500u);
+  float y_max = -1.f;
+  for (const auto& v : mesh.vertices_W) y_max = std::max(y_max, v.y());
+  EXPECT_LT(y_max, 0.1f + 0.02f);  // within a voxel of the plane
+  EXPECT_GT(y_max, 0.1f - 0.04f);
+}
+
+}  // namespace

@@ -1,0 +1,83 @@
+#pragma once
+// Scenes for the object-map tests on constructed frames: a chair made of
+// boxes, and one frame run as the nodes run it (render the map from the
+// pose, match the detections to the render, integrate).
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <limits>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "semantic_exploration/core/instance_matching.hpp"
+#include "semantic_exploration/core/object_map.hpp"
+#include "tsdf_test_scenes.hpp"
+
+namespace semexp_test {
+
+/// Union of boxes: a chair, a table. The signed distance is exact outside and
+/// on the surface (what mesh accuracy measures).
+struct BoxUnion : Shape {
+  std::vector<Box> parts;
+  double sdf(const Eigen::Vector3d& p) const override {
+    double d = std::numeric_limits<double>::infinity();
+    for (const Box& b : parts) d = std::min(d, b.sdf(p));
+    return d;
+  }
+  bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& s) const override {
+    bool hit = false;
+    s = std::numeric_limits<double>::infinity();
+    for (const Box& b : parts) {
+      double t;
+      if (b.intersect(o, d, t) && t < s) {
+        s = t;
+        hit = true;
+      }
+    }
+    return hit;
+  }
+};
+
+/// A chair 0.44 m wide standing on z = 0 at (x, y), facing -x: a seat 0.45 m
+/// high, a back up to 0.95 m on its +x side and four 4 cm legs.
+inline BoxUnion chair(double x, double y) {
+  BoxUnion c;
+  const double h = 0.22;  // half width and depth of the seat
+  c.parts.emplace_back(Eigen::Vector3d(x - h, y - h, 0.42), Eigen::Vector3d(x + h, y + h, 0.47));
+  c.parts.emplace_back(Eigen::Vector3d(x + h - 0.04, y - h, 0.47), Eigen::Vector3d(x + h, y + h, 0.95));
+  for (const double sx : {-1.0, 1.0})
+    for (const double sy : {-1.0, 1.0}) {
+      const Eigen::Vector3d corner(x + sx * (h - 0.02), y + sy * (h - 0.02), 0.0);
+      c.parts.push_back(Box::around(corner + Eigen::Vector3d(0, 0, 0.21), Eigen::Vector3d(0.02, 0.02, 0.21)));
+    }
+  return c;
+}
+
+/// One frame as instance_matching and object_map run it: the map is rendered
+/// from T_WC occluded by the depth, the detections (instance ids of class
+/// `class_id` in `instances`) are matched to the render and integrated with it.
+inline semexp::FrameIntegration runFrame(semexp::ObjectMap& map, const semexp::PinholeCamera& cam,
+                                         const Eigen::Isometry3d& T_WC, const cv::Mat& depth_m,
+                                         const cv::Mat& instances, const std::vector<std::uint16_t>& ids,
+                                         int class_id, const semexp::MatchingConfig& matching = {}) {
+  cv::Mat rendered, cleaned;
+  map.render(cam, T_WC, depth_m, rendered);
+  const semexp::MatchingOutput out = semexp::matchDetections(instances, ids, rendered, matching, &cleaned);
+  std::vector<semexp::ObjectDetection> detections;
+  for (const semexp::MatchResult& r : out.detections)
+    if (!r.dropped) detections.push_back({r.instance_id, r.object_id, class_id});
+  return map.integrateFrame(cam, T_WC, depth_m, cv::Mat(), cleaned, detections, &rendered);
+}
+
+/// Root mean square of shape.sdf over the vertices, m (inf if none).
+inline double rmse(const std::vector<Eigen::Vector3f>& vertices_W, const Shape& shape) {
+  if (vertices_W.empty()) return std::numeric_limits<double>::infinity();
+  double sum = 0.0;
+  for (const auto& v : vertices_W) {
+    const double d = shape.sdf(v.cast<double>());
+    sum += d * d;
+  }
+  return std::sqrt(sum / static_cast<double>(vertices_W.size()));
+}
+
+}  // namespace semexp_test
