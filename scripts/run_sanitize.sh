@@ -30,10 +30,12 @@ echo "[sanitize] build done after $(( $(date +%s) - START )) s"
 # detect_leaks needs ptrace-free LeakSanitizer; it is on by default where it works.
 export ASAN_OPTIONS="halt_on_error=1:abort_on_error=0:detect_stack_use_after_return=1:strict_string_checks=1:check_initialization_order=1"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
-# Left out here (they run uninstrumented in make test's gtest step): tests whose
-# outcome depends on CPU speed. They plan with the default wall-time budget
-# (planner/time_budget_s), which an instrumented build spends on far fewer
-# RRT* iterations, so their paths, not their memory use, differ.
+# Left out here (they run uninstrumented in make test's gtest step):
+# PathPlannerTest.GoalBehindWallThroughDoorway plans with the default
+# wall-time budget (planner/time_budget_s), which an instrumented build spends
+# on far fewer RRT* iterations, so its paths, not its memory use, differ.
+# ClosedLoop.ExploresTwoRoomsUntilTermination was left out for the same
+# reason; it now stops OMPL on iterations, but has not been run instrumented.
 EXCLUDE="${SEMEXP_SANITIZE_EXCLUDE-ClosedLoop.ExploresTwoRoomsUntilTermination:PathPlannerTest.GoalBehindWallThroughDoorway}"
 run_one() {  # name: runs one program, appends "name rc" to exit_codes
   local name=$1 rc

@@ -84,7 +84,13 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
 
   // Union of the masks of the detections of each object.
   std::map<std::uint32_t, cv::Mat> masks;
-  std::map<std::uint32_t, std::uint32_t> split_from;  // object split off -> the object the map had
+  // Object split off -> the object the map had, and the plane between them (normal towards the split-off one).
+  struct SplitFrom {
+    std::uint32_t id;
+    Eigen::Vector3f normal_W;
+    float offset_m;
+  };
+  std::map<std::uint32_t, SplitFrom> split_from;
   const auto apart = [&](const cv::Mat& a, const cv::Mat& b, Eigen::Vector3f& normal_W, float& offset_m) {
     cv::Mat ea = a.clone(), eb = b.clone();  // rims bled onto surfaces behind would join the two
     markDepthEdges(ea, depth_m, camera, config_.depthEdgeParams(), TsdfMap::kMaskUnknown);
@@ -123,15 +129,16 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
       // Two detections of one known object in a frame whose surfaces lie apart: two objects the map took
       // for one (a mask bled over both). This one starts an object of its own; the part of the map's object
       // on its side of the gap is its, not the other's.
+      // The original forgets that side only once the new object is kept (below).
       const std::uint32_t split = createObject(d.class_id);
-      if (split != 0) {
-        objects_.at(id)->tsdf.dropForegroundBeyond(normal_W, offset_m);
-        result.created.push_back(split);
-        split_from[split] = id;
-        result.split.emplace_back(split, id);
-        id = split;
-        it = masks.end();
+      if (split == 0) {
+        ++result.dropped_full;
+        continue;
       }
+      result.created.push_back(split);
+      split_from[split] = {id, normal_W, offset_m};
+      id = split;
+      it = masks.end();
     }
     if (it == masks.end())
       masks.emplace(id, mask);
@@ -217,7 +224,7 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
       if (m.second == kv.first) other.setTo(0, rendered == static_cast<int>(m.first));
     // A split-off object is rendered as the one it was part of until that one forgets it.
     if (const auto sp = split_from.find(kv.first); sp != split_from.end())
-      other.setTo(0, rendered == static_cast<int>(sp->second));
+      other.setTo(0, rendered == static_cast<int>(sp->second.id));
     cv::dilate(other, other, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
     // Edges first: the pixels of the other object are the near side of the edges its bled rim lies behind.
     markDepthEdges(kv.second, depth_m, camera, config_.depthEdgeParams(), TsdfMap::kMaskUnknown);
@@ -246,6 +253,10 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
     }
     ++obj.detection_count;
     result.detected.push_back(kv.first);
+    if (const auto sp = split_from.find(kv.first); sp != split_from.end() && objects_.count(sp->second.id)) {
+      objects_.at(sp->second.id)->tsdf.dropForegroundBeyond(sp->second.normal_W, sp->second.offset_m);
+      result.split.emplace_back(kv.first, sp->second.id);
+    }
   }
   for (const std::uint32_t id : visibleIds(rendered)) {
     if (masks.count(id)) continue;

@@ -5,6 +5,8 @@ instance_matching), and what that costs of one core at the camera rate.
 
 A node's share of one core = its mean CPU ms per frame x the camera rate / 1000:
 the mean, not the median, because a core's load is the sum of all frames.
+It assumes the node handles every camera frame: for a node that reported
+fewer frames than the camera sent it is an upper bound.
 The target (issue 16): the mapping nodes together at most 25% of one core.
 """
 import math
@@ -76,7 +78,8 @@ def report_lines(s: Dict) -> List[str]:
     rate = s["camera_rate_hz"]
     lines = ["CPU time per camera frame of each mapping node (its frame_integrated reports: the handling "
              "thread plus background_map's integration pool and object_map's render for instance_matching); "
-             "share of one core = mean ms per frame x %s." % (
+             "share of one core = mean ms per frame x %s (an upper bound for a node that reported fewer frames "
+             "than the camera sent)." % (
                  "%.3g Hz (%s camera rate)" % (rate, s["camera_rate_source"]) if rate else "the camera rate (unknown)"),
              "", "| node | frames | median ms | p95 ms | mean ms | share of one core |", "|---|---|---|---|---|---|"]
     for n, d in s["nodes"].items():
