@@ -82,6 +82,19 @@ def depth_frame(stamp, metres=3.0):
     return m
 
 
+def wait_for(test, cond, timeout_s, what=None):
+    """Polls cond() until it holds (True) or timeout_s pass: then fails `test` naming `what`,
+    or returns False without one. A TestCase method of both soaks (as _wait_for)."""
+    deadline = time.time() + timeout_s
+    while time.time() < deadline and not rospy.is_shutdown():
+        if cond():
+            return True
+        time.sleep(0.002)
+    if what:
+        test.fail("timed out after %.1f s waiting for %s" % (timeout_s, what))
+    return False
+
+
 class Soak(unittest.TestCase):
     def setUp(self):
         self.rng = random.Random(rospy.get_param("~seed", 15))
@@ -128,15 +141,7 @@ class Soak(unittest.TestCase):
         with self.lock:
             return len(self.frames[node])
 
-    def _wait_for(self, cond, timeout_s, what=None):
-        deadline = time.time() + timeout_s
-        while time.time() < deadline and not rospy.is_shutdown():
-            if cond():
-                return True
-            time.sleep(0.002)
-        if what:
-            self.fail("timed out after %.1f s waiting for %s" % (timeout_s, what))
-        return False
+    _wait_for = wait_for
 
     def _stamp(self):
         self.t_s += 0.1

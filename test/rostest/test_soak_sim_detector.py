@@ -45,7 +45,7 @@ from semantic_exploration.msg import Detections, DropCounts, FrameIntegrated
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
 import soak_messages as sm  # noqa: E402
-from test_soak import camera_info, node_pid, rss_mb  # noqa: E402
+from test_soak import camera_info, node_pid, rss_mb, wait_for  # noqa: E402
 
 MAX_SIDE_PX, MAX_PIXELS = 8192, 4096 * 4096  # PinholeCamera::kMaxSidePx, kMaxPixels (core/camera.hpp)
 
@@ -137,15 +137,7 @@ class SoakSimDetector(unittest.TestCase):
             d = self.drops.get("detector", {})
             return d.get(reason, 0) if reason else sum(d.values())
 
-    def _wait_for(self, cond, timeout_s, what=None):
-        deadline = time.time() + timeout_s
-        while time.time() < deadline and not rospy.is_shutdown():
-            if cond():
-                return True
-            time.sleep(0.002)
-        if what:
-            self.fail("timed out after %.1f s waiting for %s" % (timeout_s, what))
-        return False
+    _wait_for = wait_for
 
     def _publisher(self, topic, cls):
         pub = rospy.Publisher(topic, cls, queue_size=1000)
