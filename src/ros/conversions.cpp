@@ -95,6 +95,17 @@ std::vector<std::vector<std::uint8_t>> toHistoryMasks(const std::vector<sensor_m
   return out;
 }
 
+namespace {
+/// Copies the bytes of one vector of 1-byte values into another of another 1-byte type (uint8 <-> int8:
+/// the map's log-odds codes travel as the message's bytes, same bits).
+template <class To, class From>
+void copyBytes(const std::vector<From>& from, std::vector<To>& to) {
+  static_assert(sizeof(To) == 1 && sizeof(From) == 1, "1-byte values only");
+  to.resize(from.size());
+  if (!from.empty()) std::memcpy(to.data(), from.data(), from.size());
+}
+}  // namespace
+
 std::string fromMapBlocksMsg(const semantic_exploration::MapBlocks& msg, semexp::MapBlocksData& d) {
   if (msg.encoding != semantic_exploration::MapBlocks::ENCODING_LOG_ODDS_I8)
     return "MapBlocks encoding " + std::to_string(msg.encoding) + " unsupported";
@@ -105,13 +116,9 @@ std::string fromMapBlocksMsg(const semantic_exploration::MapBlocks& msg, semexp:
   d.origin_m = fromPoint(msg.origin);
   d.encoding = msg.encoding;
   d.coords = msg.coords;
-  // uint8 bytes back to the int8 codes (same bits).
-  d.payload.resize(msg.payload.size());
-  if (!msg.payload.empty()) std::memcpy(d.payload.data(), msg.payload.data(), msg.payload.size());
+  copyBytes(msg.payload, d.payload);
   d.uniform_coords = msg.uniform_coords;
-  d.uniform_values.resize(msg.uniform_values.size());
-  if (!msg.uniform_values.empty())
-    std::memcpy(d.uniform_values.data(), msg.uniform_values.data(), msg.uniform_values.size());
+  copyBytes(msg.uniform_values, d.uniform_values);
   return "";
 }
 
@@ -415,12 +422,9 @@ semantic_exploration::MapBlocks toMapBlocksMsg(const semexp::MapBlocksData& d, c
   m.origin = toPoint(d.origin_m);
   m.encoding = d.encoding;
   m.coords = d.coords;
-  // int8 values travel as the message's bytes (same bits).
-  m.payload.resize(d.payload.size());
-  if (!d.payload.empty()) std::memcpy(m.payload.data(), d.payload.data(), d.payload.size());
+  copyBytes(d.payload, m.payload);
   m.uniform_coords = d.uniform_coords;
-  m.uniform_values.resize(d.uniform_values.size());
-  if (!d.uniform_values.empty()) std::memcpy(m.uniform_values.data(), d.uniform_values.data(), d.uniform_values.size());
+  copyBytes(d.uniform_values, m.uniform_values);
   return m;
 }
 
