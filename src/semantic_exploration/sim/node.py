@@ -5,7 +5,7 @@ Topics (relative names, resolved in the node's namespace):
   sub  planner/path (nav_msgs/Path, yaw in orientation), or with ~follow "setpoints"
        setpoint_position/local (geometry_msgs/PoseStamped in world, from setpoint_streamer; the MAV
        tracks it with the setpoints' velocity as feed-forward and reports no goal: the streamer
-       does), frame_integrated (FrameIntegrated, lockstep),
+       does; refused setpoints are counted, see setpoints.py), frame_integrated (FrameIntegrated, lockstep),
        ~load_scene (std_msgs/String: "mesh" or "mesh;labels" of a scene to switch to),
        ~hide_detections (std_msgs/UInt32MultiArray: scene object ids the detector stops reporting
        from the next frame on, replacing detector/hidden_object_ids; [] = hide none)
@@ -14,7 +14,8 @@ Topics (relative names, resolved in the node's namespace):
        camera/instance_gt (16UC1 object id), camera/class_gt (16UC1 class id), detections,
        mav/pose, mav/goal_reached (PoseStamped), mav/collisions (UInt32, latched),
        mav/path_rejected (String: why a path was refused), /clock (latched), tf,
-       ~faults (DropCounts, latched: what the fault injection withheld, see faults.py)
+       ~faults (DropCounts, latched: what the fault injection withheld, see faults.py),
+       /dropped_input (DropCounts, latched: input mav_sim dropped, per reason, as every node; drops.py)
 
 Time: the node advances sim time in physics steps and publishes /clock; it
 never reads ROS time itself (stamps come from its own counter), so it works
@@ -58,10 +59,12 @@ from std_msgs.msg import Header, String, UInt32, UInt32MultiArray
 from semantic_exploration.msg import Detection, Detections, DropCounts, FrameIntegrated
 
 from .config import ConfigError, SimConfig, from_dict
+from .drops import DropCounter
 from .faults import FaultInjector
 from .frame_lockstep import FrameLockstep
 from .planner_lockstep import PlannerLockstep
 from .scene import SceneError, export_ground_truth
+from .setpoints import SetpointRefused, check_in_bounds, check_setpoint
 from .mav import PathFollower, SetpointMotion
 from .simulator import (PathError, Simulator, load_simulator, path_pose_count, quaternion_from_matrix,
                         waypoints_from_poses)
@@ -123,6 +126,9 @@ class MavSimNode:
         self.pub_faults = rospy.Publisher("~faults", DropCounts, queue_size=1, latch=True)
         self.faults = FaultInjector(c.faults)
         self._fault_counts_sent = None
+        self.pub_drops = rospy.Publisher("/dropped_input", DropCounts, queue_size=50, latch=True)
+        self.drops = DropCounter(self._publish_drops, lambda reason, n, detail: rospy.logwarn(
+            "mav_sim: dropped input (%s, %d so far): %s", reason, n, detail))
         self.tf = tf2_ros.TransformBroadcaster()
         self.tf_static = tf2_ros.StaticTransformBroadcaster()
 
@@ -137,7 +143,8 @@ class MavSimNode:
             raise ConfigError("follow: must be \"path\" or \"setpoints\"")
         self._setpoint_motion = SetpointMotion(2 * PathFollower.SETPOINT_HOLD_S)  # the setpoints' velocity
         if self.follow == "setpoints":
-            rospy.Subscriber("setpoint_position/local", PoseStamped, self._on_setpoint, queue_size=5)
+            # Raw, as planner/path: bytes that are no PoseStamped would make rospy drop the connection.
+            rospy.Subscriber("setpoint_position/local", rospy.AnyMsg, self._on_setpoint, queue_size=5)
         else:
             # Raw: a path's length is checked before it is deserialised (1e6 poses would hold the GIL for seconds).
             rospy.Subscriber("planner/path", rospy.AnyMsg, self._on_path, queue_size=5)
@@ -195,30 +202,41 @@ class MavSimNode:
         with self._lock:
             self._pending_path = (wps, sim)  # checked against `sim`
 
-    def _on_setpoint(self, msg: PoseStamped) -> None:
-        """A setpoint and its velocity from the previous one (the streamer samples a trajectory)."""
-        frame = msg.header.frame_id.lstrip("/")
-        sim = self.sim
+    def _on_setpoint(self, raw: rospy.AnyMsg) -> None:
+        """A setpoint and its velocity from the previous one (the streamer samples a trajectory).
+        A refused one is counted per reason (setpoints.py); the previous one stays."""
         try:
-            if frame and frame != self.cfg.frames.world:
-                raise PathError("in frame '%s' (expected '%s')" % (frame, self.cfg.frames.world))
-            p, q = msg.pose.position, msg.pose.orientation
-            wp = waypoints_from_poses([((p.x, p.y, p.z), (q.x, q.y, q.z, q.w))])
-            if sim is not None:
-                wp = sim.check_path(wp)
-        except PathError as e:
-            rospy.logerr_throttle(5.0, "mav_sim: ignored setpoint %s; keeping the previous one" % e)
-            return
+            self._take_setpoint(raw)
+        except SetpointRefused as e:
+            self.drops.drop(e.reason, "setpoint %s; keeping the previous one" % e)
+        except Exception as e:  # a defect here must not cost a setpoint silently
+            self.drops.drop("setpoint_error", "setpoint: unexpected %s: %s; keeping the previous one"
+                            % (type(e).__name__, e))
+
+    def _take_setpoint(self, raw: rospy.AnyMsg) -> None:
+        try:
+            msg = PoseStamped().deserialize(raw._buff)
+        except Exception as e:  # genpy raises several types for a malformed buffer
+            raise SetpointRefused("setpoint_unreadable", "of %d bytes: cannot deserialise it (%s: %s)"
+                                  % (len(raw._buff), type(e).__name__, e))
+        sim = self.sim
+        p, q = msg.pose.position, msg.pose.orientation
+        wp = check_setpoint(msg.header.frame_id, self.cfg.frames.world, (p.x, p.y, p.z), (q.x, q.y, q.z, q.w),
+                            sim.bounds if sim is not None else None)
         t = msg.header.stamp.to_sec()
-        velocity, yaw_rate, accel, yaw_accel = self._setpoint_motion.update(t, wp[0])
+        velocity, yaw_rate, accel, yaw_accel = self._setpoint_motion.update(t, wp)
         with self._lock:
-            self._pending_setpoint = (wp[0], velocity, yaw_rate, t, accel, yaw_accel)
+            self._pending_setpoint = (wp, velocity, yaw_rate, t, accel, yaw_accel, sim)  # checked against `sim`
 
     def _on_hide(self, msg: UInt32MultiArray) -> None:
         self._hidden = [int(i) for i in msg.data]
         if self.sim is not None:
             self.sim.detector.set_hidden(self._hidden)  # one attribute swap: safe against the frame loop
         rospy.loginfo("mav_sim: detector hides objects %s", self._hidden)
+
+    def _publish_drops(self, counts) -> None:
+        self.pub_drops.publish(DropCounts(header=Header(stamp=rospy.Time.now()), node=rospy.get_name(),
+                                          reasons=list(counts), counts=list(counts.values())))
 
     def _reject(self, why: str) -> None:
         rospy.logerr("mav_sim: rejected %s; keeping the previous path", why)
@@ -353,8 +371,13 @@ class MavSimNode:
                 pending, self._pending_path = self._pending_path, None
                 setpoint, self._pending_setpoint = self._pending_setpoint, None
             if setpoint is not None:  # sent at its stamp; sim time may have run on since (no lockstep wait for it)
-                target, velocity, yaw_rate, stamp_s, accel, yaw_accel = setpoint
-                sim.follower.set_setpoint(target, velocity, yaw_rate, t_ns / NS - stamp_s, accel, yaw_accel)
+                target, velocity, yaw_rate, stamp_s, accel, yaw_accel, checked_by = setpoint
+                try:
+                    if checked_by is not sim:  # checked against no scene, or one replaced since
+                        check_in_bounds(target[:3], sim.bounds)
+                    sim.follower.set_setpoint(target, velocity, yaw_rate, t_ns / NS - stamp_s, accel, yaw_accel)
+                except SetpointRefused as e:
+                    self.drops.drop(e.reason, "setpoint %s (scene changed); keeping the previous one" % e)
             if pending is not None:
                 path, checked_by = pending
                 try:

@@ -73,10 +73,13 @@ def waypoints_from_poses(poses: Sequence[Tuple[Sequence[float], Sequence[float]]
     for k, (p, q) in enumerate(poses):
         if not all(math.isfinite(v) for v in list(p) + list(q)):
             raise PathError("pose %d has a NaN or infinite value" % k)
-        n = math.sqrt(sum(v * v for v in q))
-        if n < 1e-6:
+        if math.hypot(*q) < 1e-6:  # hypot: no underflow of tiny components to 0
             raise PathError("pose %d has a zero quaternion (yaw undefined)" % k)
-        out.append((float(p[0]), float(p[1]), float(p[2]), yaw_from_quaternion(*(v / n for v in q))))
+        # Normalised in two steps: the sum of squares of components near 1e200 would overflow to inf.
+        scale = max(abs(v) for v in q)
+        u = [v / scale for v in q]
+        n = math.hypot(*u)
+        out.append((float(p[0]), float(p[1]), float(p[2]), yaw_from_quaternion(*(v / n for v in u))))
     return out
 
 
