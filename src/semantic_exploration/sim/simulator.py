@@ -75,11 +75,13 @@ def waypoints_from_poses(poses: Sequence[Tuple[Sequence[float], Sequence[float]]
             raise PathError("pose %d has a NaN or infinite value" % k)
         if math.hypot(*q) < 1e-6:  # hypot: no underflow of tiny components to 0
             raise PathError("pose %d has a zero quaternion (yaw undefined)" % k)
-        # Normalised in two steps: the sum of squares of components near 1e200 would overflow to inf.
-        scale = max(abs(v) for v in q)
-        u = [v / scale for v in q]
-        n = math.hypot(*u)
-        out.append((float(p[0]), float(p[1]), float(p[2]), yaw_from_quaternion(*(v / n for v in u))))
+        n2 = sum(v * v for v in q)
+        if n2 == math.inf:  # components near 1e200: scaled first (other quaternions as ever, to the bit)
+            scale = max(abs(v) for v in q)
+            q = [v / scale for v in q]
+            n2 = sum(v * v for v in q)
+        n = math.sqrt(n2)
+        out.append((float(p[0]), float(p[1]), float(p[2]), yaw_from_quaternion(*(v / n for v in q))))
     return out
 
 
