@@ -148,7 +148,8 @@ class MavSimNode:
         else:
             # Raw: a path's length is checked before it is deserialised (1e6 poses would hold the GIL for seconds).
             rospy.Subscriber("planner/path", rospy.AnyMsg, self._on_path, queue_size=5)
-        rospy.Subscriber("~load_scene", String, lambda m: self._requests.put(m.data), queue_size=2)
+        # Every request is applied in order: a queue of 2 lost some of a burst that rospy read at once (loaded machine).
+        rospy.Subscriber("~load_scene", String, lambda m: self._requests.put(m.data), queue_size=50)
         self._hidden = list(c.detector.hidden_object_ids)
         rospy.Subscriber("~hide_detections", UInt32MultiArray, self._on_hide, queue_size=5)
         self._planner_lockstep = PlannerLockstep(
