@@ -13,7 +13,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "occupancy_test_scene.hpp"
+#include "semexp_test/box_room.hpp"
 #include "semantic_exploration/core/gains.hpp"
 #include "semantic_exploration/core/marching_cubes.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
