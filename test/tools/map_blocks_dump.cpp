@@ -44,9 +44,7 @@ int main(int argc, char** argv) {
   }
   const std::string dir = argv[1];
   const semexp_test::BoxRoom room = semexp_test::standardRoom();
-  semexp::Bounds bounds;
-  bounds.min_m = room.room.lo;
-  bounds.max_m = room.room.hi;
+  const semexp::Bounds bounds = room.bounds();
   semexp::BackgroundMapConfig cfg;  // 4 cm, 8^3 blocks
   semexp::OccupancyMap map(cfg, bounds);
   const semexp::PinholeCamera cam = semexp_test::halfSizeCamera();

@@ -11,6 +11,7 @@
 
 #include "cameras.hpp"
 #include "rendering.hpp"
+#include "semantic_exploration/core/bounds.hpp"
 #include "shapes.hpp"
 
 namespace semexp_test {
@@ -45,6 +46,14 @@ struct BoxRoom {
     }
     for (const Box& b : boxes) d = std::min(d, std::abs(b.sdf(p)));
     return d;
+  }
+
+  /// Map bounds holding the room and `margin_m` more on every side, m.
+  semexp::Bounds bounds(double margin_m = 0.0) const {
+    semexp::Bounds b;
+    b.min_m = room.lo - Eigen::Vector3d::Constant(margin_m);
+    b.max_m = room.hi + Eigen::Vector3d::Constant(margin_m);
+    return b;
   }
 
   bool insideSolid(const Eigen::Vector3d& p) const {
