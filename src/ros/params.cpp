@@ -1,148 +1,16 @@
+// Every loader of params.hpp: each reads one section of the node's private
+// namespace into its Config struct and validates it. Sections every node
+// reads first, then the map nodes' (background_map ... display_cut), then the
+// planner's (exploration ... setpoint_streamer); allLoaders() last.
 #include "semantic_exploration/ros/params.hpp"
 
-#include <ros/node_handle.h>
-
 #include <cmath>
-#include <cstdio>
-#include <sstream>
+#include <cstdint>
+#include <string>
 
 namespace semexp_ros {
 
 using semexp::ConfigError;
-using XmlRpc::XmlRpcValue;
-
-namespace {
-
-const char* typeName(const XmlRpcValue& v) {
-  switch (v.getType()) {
-    case XmlRpcValue::TypeBoolean: return "bool";
-    case XmlRpcValue::TypeInt: return "int";
-    case XmlRpcValue::TypeDouble: return "double";
-    case XmlRpcValue::TypeString: return "string";
-    case XmlRpcValue::TypeArray: return "list";
-    case XmlRpcValue::TypeStruct: return "map";
-    default: return "unset";
-  }
-}
-
-[[noreturn]] void wrongType(const std::string& path, const XmlRpcValue& v, const char* want) {
-  throw ConfigError(path, std::string("must be ") + want + ", got " + typeName(v));
-}
-
-std::string text(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof(buf), "%.17g", v);
-  return buf;
-}
-std::string text(int v) { return std::to_string(v); }
-std::string text(bool v) { return v ? "true" : "false"; }
-std::string text(const std::string& v) { return "\"" + v + "\""; }
-template <typename T>
-std::string text(const std::vector<T>& v) {
-  std::string out = "[";
-  for (const auto& e : v) out += (out.size() > 1 ? ", " : "") + text(e);
-  return out + "]";
-}
-
-double asDouble(const std::string& path, const XmlRpcValue& v) {
-  XmlRpcValue& m = const_cast<XmlRpcValue&>(v);  // XmlRpc's conversion operators are non-const
-  if (v.getType() == XmlRpcValue::TypeDouble) return static_cast<double>(m);
-  if (v.getType() == XmlRpcValue::TypeInt) return static_cast<int>(m);
-  wrongType(path, v, "a number");
-}
-
-}  // namespace
-
-ParamReader ParamReader::fromNodeHandle(const ros::NodeHandle& pnh) {
-  XmlRpcValue root;
-  if (!pnh.getParam(pnh.getNamespace(), root) || root.getType() != XmlRpcValue::TypeStruct) root = XmlRpcValue();
-  return ParamReader(root);
-}
-
-const XmlRpcValue* ParamReader::find(const std::string& path) const {
-  const XmlRpcValue* cur = &root_;
-  std::stringstream ss(path);
-  std::string key;
-  while (std::getline(ss, key, '/')) {
-    if (key.empty()) continue;
-    if (cur->getType() != XmlRpcValue::TypeStruct) return nullptr;
-    XmlRpcValue& m = const_cast<XmlRpcValue&>(*cur);
-    if (!m.hasMember(key)) return nullptr;
-    cur = &m[key];
-  }
-  return cur;
-}
-
-bool ParamReader::has(const std::string& path) const { return find(path) != nullptr; }
-
-void ParamReader::record(const std::string& path, std::string default_text) const {
-  if (log_) log_->push_back({path, std::move(default_text)});
-}
-
-void ParamReader::get(const std::string& path, double& out) const {
-  record(path, text(out));
-  if (const auto* v = find(path)) out = asDouble(path, *v);
-}
-
-void ParamReader::get(const std::string& path, int& out) const {
-  record(path, text(out));
-  const auto* v = find(path);
-  if (!v) return;
-  if (v->getType() != XmlRpcValue::TypeInt) wrongType(path, *v, "an integer");
-  out = static_cast<int>(const_cast<XmlRpcValue&>(*v));
-}
-
-void ParamReader::get(const std::string& path, bool& out) const {
-  record(path, text(out));
-  const auto* v = find(path);
-  if (!v) return;
-  if (v->getType() != XmlRpcValue::TypeBoolean) wrongType(path, *v, "true or false");
-  out = static_cast<bool>(const_cast<XmlRpcValue&>(*v));
-}
-
-void ParamReader::get(const std::string& path, std::string& out) const {
-  record(path, text(out));
-  const auto* v = find(path);
-  if (!v) return;
-  if (v->getType() != XmlRpcValue::TypeString) wrongType(path, *v, "a string");
-  out = static_cast<std::string>(const_cast<XmlRpcValue&>(*v));
-}
-
-void ParamReader::get(const std::string& path, std::vector<std::string>& out) const {
-  record(path, text(out));
-  const auto* v = find(path);
-  if (!v) return;
-  if (v->getType() != XmlRpcValue::TypeArray) wrongType(path, *v, "a list of strings");
-  XmlRpcValue& m = const_cast<XmlRpcValue&>(*v);
-  std::vector<std::string> r;
-  for (int i = 0; i < m.size(); ++i) {
-    if (m[i].getType() != XmlRpcValue::TypeString) wrongType(path, m[i], "a list of strings");
-    r.push_back(static_cast<std::string>(m[i]));
-  }
-  out = r;
-}
-
-void ParamReader::get(const std::string& path, std::vector<double>& out) const {
-  record(path, text(out));
-  const auto* v = find(path);
-  if (!v) return;
-  if (v->getType() != XmlRpcValue::TypeArray) wrongType(path, *v, "a list of numbers");
-  XmlRpcValue& m = const_cast<XmlRpcValue&>(*v);
-  std::vector<double> r;
-  for (int i = 0; i < m.size(); ++i) r.push_back(asDouble(path, m[i]));
-  out = r;
-}
-
-void ParamReader::getAtLeast(const std::string& path, double& out, double min_value, const std::string& unit) const {
-  double v = out;
-  get(path, v);
-  if (!(v >= min_value)) {
-    char buf[64];
-    std::snprintf(buf, sizeof(buf), "must be >= %g %s", min_value, unit.c_str());
-    throw ConfigError(path, buf);
-  }
-  out = v;
-}
 
 namespace {
 
@@ -182,28 +50,36 @@ semexp::ClassTable loadClasses(const ParamReader& p) {
   p.get("classes/names", t.names);
   p.get("classes/of_interest", t.of_interest);
   p.get("classes/default_resolution_m", t.default_resolution_m);
-  if (const auto* v = p.find("classes/resolution_m")) {
-    if (v->getType() != XmlRpcValue::TypeStruct)
-      throw ConfigError("classes/resolution_m", "must be a map class name -> resolution in m");
-    t.resolution_m.clear();
-    XmlRpcValue& m = const_cast<XmlRpcValue&>(*v);
-    for (auto it = m.begin(); it != m.end(); ++it) {
-      double r = 0;
-      p.get("classes/resolution_m/" + it->first, r);
-      t.resolution_m[it->first] = r;
-    }
-  }
+  p.getMap("classes/resolution_m", t.resolution_m, "class name -> resolution in m");
   t.validate("classes/");
   return t;
 }
 
-semexp::ExplorationConfig loadExploration(const ParamReader& p) {
-  semexp::ExplorationConfig c;
-  p.get("exploration/d_bg_m", c.d_bg_m);
-  p.get("exploration/d_obj_m", c.d_obj_m);
-  c.validate("exploration/");
+FrameNames loadFrames(const ParamReader& p) {
+  FrameNames f;
+  p.get("frames/world", f.world);
+  p.get("frames/body", f.body);
+  p.get("frames/camera", f.camera);
+  if (f.world.empty()) throw ConfigError("frames/world", "must not be empty");
+  if (f.body.empty()) throw ConfigError("frames/body", "must not be empty");
+  if (f.camera.empty()) throw ConfigError("frames/camera", "must not be empty");
+  return f;
+}
+
+TfSettings loadTf(const ParamReader& p) {
+  TfSettings t;
+  p.getAtLeast("tf_timeout_s", t.timeout_s, 0.0, "s");
+  p.getAtLeast("max_tf_gap_s", t.max_gap_s, 0.0, "s");
+  return t;
+}
+
+ImageSyncConfig loadImageSync(const ParamReader& p) {
+  ImageSyncConfig c;
+  p.getAtLeast("sync_max_interval_s", c.max_interval_s, 0.0, "s");
   return c;
 }
+
+// ------------------------------------------------------------ map nodes
 
 semexp::BackgroundMapConfig loadBackgroundMap(const ParamReader& p) {
   semexp::BackgroundMapConfig c;
@@ -223,6 +99,15 @@ semexp::BackgroundMapConfig loadBackgroundMap(const ParamReader& p) {
   p.get(n + "publish_period_s", c.publish_period_s);
   p.get(n + "integration_threads", c.integration_threads);
   c.validate(n);
+  return c;
+}
+
+BackgroundMapNodeConfig loadBackgroundMapNode(const ParamReader& p) {
+  BackgroundMapNodeConfig c;
+  const std::string n = "background_map/";
+  p.getAtLeast(n + "frontier_period_s", c.frontier_period_s, 0.0, "s");
+  p.getAtLeast(n + "colour_wait_s", c.colour_wait_s, 0.0, "s");
+  p.getAtLeast(n + "start_free_radius_m", c.start_free_radius_m, 0.0, "m");
   return c;
 }
 
@@ -264,6 +149,80 @@ semexp::DepthHistoryConfig loadDepthHistory(const ParamReader& p) {
   return c;
 }
 
+DepthHistoryNodeConfig loadDepthHistoryNode(const ParamReader& p, const semexp::DepthHistoryConfig& history) {
+  DepthHistoryNodeConfig c;
+  p.getAtLeast("depth_history/marker_period_s", c.marker_period_s, 0.0, "s");
+  // The planner asks get_masks for its raycast images, and get_masks answers only its own size: a mismatch would
+  // fail every planning iteration, so it fails here (every node loads the whole YAML, planner section included).
+  if (!p.has("planner")) return c;  // no planner configured alongside
+  semexp::PlannerConfig planner;
+  p.get("planner/raycast_width", planner.raycast_width);
+  p.get("planner/raycast_height", planner.raycast_height);
+  if (history.width != planner.raycast_width)
+    throw ConfigError("depth_history/width", "is " + std::to_string(history.width) + " but planner/raycast_width is " +
+                                                 std::to_string(planner.raycast_width) + "; they must be equal");
+  if (history.height != planner.raycast_height)
+    throw ConfigError("depth_history/height", "is " + std::to_string(history.height) +
+                                                  " but planner/raycast_height is " +
+                                                  std::to_string(planner.raycast_height) + "; they must be equal");
+  return c;
+}
+
+semexp::FrontierEvidenceConfig loadFrontierEvidence(const ParamReader& p) {
+  semexp::FrontierEvidenceConfig c;
+  const std::string n = "frontier_evidence/";
+  p.get(n + "enabled", c.enabled);
+  p.get(n + "view_range_m", c.view_range_m);
+  p.get(n + "looks_to_retire", c.looks_to_retire);
+  p.get(n + "min_look_separation_m", c.min_look_separation_m);
+  p.get(n + "min_look_rotation_rad", c.min_look_rotation_rad);
+  p.get(n + "occlusion_margin_m", c.occlusion_margin_m);
+  c.validate(n);
+  return c;
+}
+
+semexp::DetectorConfig loadDetector(const ParamReader& p, const semexp::ClassTable& classes) {
+  semexp::DetectorConfig c;
+  const std::string n = "detector/";
+  p.get(n + "model_path", c.model_path);
+  std::vector<double> size = {static_cast<double>(c.input_size[0]), static_cast<double>(c.input_size[1])};
+  p.get(n + "input_size", size);
+  {
+    if (size.size() != 2 || size[0] != std::floor(size[0]) || size[1] != std::floor(size[1]))
+      throw ConfigError(n + "input_size", "must be [width, height] in whole px");
+    c.input_size = {{static_cast<int>(size[0]), static_cast<int>(size[1])}};
+  }
+  p.get(n + "conf_threshold", c.conf_threshold);
+  p.get(n + "nms_iou", c.nms_iou);
+  p.get(n + "mask_threshold", c.mask_threshold);
+  p.get(n + "model_classes", c.model_classes);
+  p.getMap(n + "class_map", c.class_map, "model class name -> project class name");
+  p.get(n + "backend", c.backend);
+  p.get(n + "target", c.target);
+  c.validate(n);
+  for (const auto& kv : c.class_map)
+    if (!classes.id(kv.second))
+      throw ConfigError(n + "class_map", "maps '" + kv.first + "' to '" + kv.second + "', which is not in classes/names");
+  return c;
+}
+
+double loadDisplayCut(const ParamReader& p) {
+  double max_z_m = 2.0;
+  p.get("display_cut/max_z_m", max_z_m);
+  if (!std::isfinite(max_z_m)) throw ConfigError("display_cut/max_z_m", "must be a finite height, m");
+  return max_z_m;
+}
+
+// ------------------------------------------------------------ planner
+
+semexp::ExplorationConfig loadExploration(const ParamReader& p) {
+  semexp::ExplorationConfig c;
+  p.get("exploration/d_bg_m", c.d_bg_m);
+  p.get("exploration/d_obj_m", c.d_obj_m);
+  c.validate("exploration/");
+  return c;
+}
+
 semexp::PlannerConfig loadPlanner(const ParamReader& p) {
   semexp::PlannerConfig c;
   const std::string n = "planner/";
@@ -302,57 +261,21 @@ semexp::PlannerConfig loadPlanner(const ParamReader& p) {
   return c;
 }
 
-semexp::DetectorConfig loadDetector(const ParamReader& p, const semexp::ClassTable& classes) {
-  semexp::DetectorConfig c;
-  const std::string n = "detector/";
-  p.get(n + "model_path", c.model_path);
-  std::vector<double> size = {static_cast<double>(c.input_size[0]), static_cast<double>(c.input_size[1])};
-  p.get(n + "input_size", size);
-  {
-    if (size.size() != 2 || size[0] != std::floor(size[0]) || size[1] != std::floor(size[1]))
-      throw ConfigError(n + "input_size", "must be [width, height] in whole px");
-    c.input_size = {{static_cast<int>(size[0]), static_cast<int>(size[1])}};
-  }
-  p.get(n + "conf_threshold", c.conf_threshold);
-  p.get(n + "nms_iou", c.nms_iou);
-  p.get(n + "mask_threshold", c.mask_threshold);
-  p.get(n + "model_classes", c.model_classes);
-  if (const auto* v = p.find(n + "class_map")) {
-    if (v->getType() != XmlRpcValue::TypeStruct)
-      throw ConfigError(n + "class_map", "must be a map model class name -> project class name");
-    c.class_map.clear();
-    XmlRpcValue& m = const_cast<XmlRpcValue&>(*v);
-    for (auto it = m.begin(); it != m.end(); ++it) {
-      std::string project;
-      p.get(n + "class_map/" + it->first, project);
-      c.class_map[it->first] = project;
-    }
-  }
-  p.get(n + "backend", c.backend);
-  p.get(n + "target", c.target);
-  c.validate(n);
-  for (const auto& kv : c.class_map)
-    if (!classes.id(kv.second))
-      throw ConfigError(n + "class_map", "maps '" + kv.first + "' to '" + kv.second + "', which is not in classes/names");
+PlannerNodeConfig loadPlannerNode(const ParamReader& p) {
+  PlannerNodeConfig c;
+  p.getPositiveAtMost("planner/service_timeout_s", c.service_timeout_s, 3600, "s");
+  p.getPositiveAtMost("planner/retry_period_s", c.retry_period_s, 3600, "s");
+  p.getAtLeast("planner/goal_timeout_factor", c.goal_timeout_factor, 1.0, "(a factor)");
   return c;
 }
 
-FrameNames loadFrames(const ParamReader& p) {
-  FrameNames f;
-  p.get("frames/world", f.world);
-  p.get("frames/body", f.body);
-  p.get("frames/camera", f.camera);
-  if (f.world.empty()) throw ConfigError("frames/world", "must not be empty");
-  if (f.body.empty()) throw ConfigError("frames/body", "must not be empty");
-  if (f.camera.empty()) throw ConfigError("frames/camera", "must not be empty");
-  return f;
-}
-
-TfSettings loadTf(const ParamReader& p) {
-  TfSettings t;
-  p.getAtLeast("tf_timeout_s", t.timeout_s, 0.0, "s");
-  p.getAtLeast("max_tf_gap_s", t.max_gap_s, 0.0, "s");
-  return t;
+semexp::TrajectoryConfig loadTrajectory(const ParamReader& p) {
+  semexp::TrajectoryConfig c;
+  p.get("planner/a_max_mps2", c.a_max_mps2);
+  p.get("planner/alpha_max_radps2", c.alpha_max_radps2);
+  p.get("planner/trajectory_sample_period_s", c.trajectory_sample_period_s);
+  c.validate("planner/");
+  return c;
 }
 
 semexp::TerminationConfig loadTermination(const ParamReader& p) {
@@ -361,19 +284,6 @@ semexp::TerminationConfig loadTermination(const ParamReader& p) {
   p.get(n + "max_active_frontiers", c.max_active_frontiers);
   p.get(n + "background_observed_share", c.background_observed_share);
   p.get(n + "stall_share", c.stall_share);
-  c.validate(n);
-  return c;
-}
-
-semexp::FrontierEvidenceConfig loadFrontierEvidence(const ParamReader& p) {
-  semexp::FrontierEvidenceConfig c;
-  const std::string n = "frontier_evidence/";
-  p.get(n + "enabled", c.enabled);
-  p.get(n + "view_range_m", c.view_range_m);
-  p.get(n + "looks_to_retire", c.looks_to_retire);
-  p.get(n + "min_look_separation_m", c.min_look_separation_m);
-  p.get(n + "min_look_rotation_rad", c.min_look_rotation_rad);
-  p.get(n + "occlusion_margin_m", c.occlusion_margin_m);
   c.validate(n);
   return c;
 }
@@ -393,81 +303,14 @@ semexp::FrontierRetirementConfig loadFrontierRetirement(const ParamReader& p) {
   return c;
 }
 
-PlannerNodeConfig loadPlannerNode(const ParamReader& p) {
-  PlannerNodeConfig c;
-  p.get("planner/service_timeout_s", c.service_timeout_s);
-  if (!(c.service_timeout_s > 0 && c.service_timeout_s <= 3600))
-    throw semexp::ConfigError("planner/service_timeout_s", "must be in (0, 3600] s");
-  p.get("planner/retry_period_s", c.retry_period_s);
-  if (!(c.retry_period_s > 0 && c.retry_period_s <= 3600))
-    throw semexp::ConfigError("planner/retry_period_s", "must be in (0, 3600] s");
-  p.getAtLeast("planner/goal_timeout_factor", c.goal_timeout_factor, 1.0, "(a factor)");
-  return c;
-}
-
-semexp::TrajectoryConfig loadTrajectory(const ParamReader& p) {
-  semexp::TrajectoryConfig c;
-  p.get("planner/a_max_mps2", c.a_max_mps2);
-  p.get("planner/alpha_max_radps2", c.alpha_max_radps2);
-  p.get("planner/trajectory_sample_period_s", c.trajectory_sample_period_s);
-  c.validate("planner/");
-  return c;
-}
-
 SetpointStreamerConfig loadSetpointStreamer(const ParamReader& p) {
   SetpointStreamerConfig c;
-  const auto positive = [&](const char* name, double& v, double max, const char* unit) {
-    const std::string path = std::string("setpoint_streamer/") + name;
-    p.get(path, v);
-    if (!(v > 0 && v <= max))
-      throw semexp::ConfigError(path, "must be in (0, " + std::to_string(static_cast<int>(max)) + "] " + unit);
-  };
-  positive("rate_hz", c.rate_hz, 1000, "Hz");
-  positive("pose_timeout_s", c.pose_timeout_s, 3600, "s");
-  positive("max_start_offset_m", c.max_start_offset_m, 1000, "m");
-  positive("goal_tolerance_m", c.goal_tolerance_m, 1000, "m");
-  positive("goal_yaw_tolerance_rad", c.goal_yaw_tolerance_rad, 4, "rad");
-  return c;
-}
-
-double loadDisplayCut(const ParamReader& p) {
-  double max_z_m = 2.0;
-  p.get("display_cut/max_z_m", max_z_m);
-  if (!std::isfinite(max_z_m)) throw semexp::ConfigError("display_cut/max_z_m", "must be a finite height, m");
-  return max_z_m;
-}
-
-BackgroundMapNodeConfig loadBackgroundMapNode(const ParamReader& p) {
-  BackgroundMapNodeConfig c;
-  const std::string n = "background_map/";
-  p.getAtLeast(n + "frontier_period_s", c.frontier_period_s, 0.0, "s");
-  p.getAtLeast(n + "colour_wait_s", c.colour_wait_s, 0.0, "s");
-  p.getAtLeast(n + "start_free_radius_m", c.start_free_radius_m, 0.0, "m");
-  return c;
-}
-
-DepthHistoryNodeConfig loadDepthHistoryNode(const ParamReader& p, const semexp::DepthHistoryConfig& history) {
-  DepthHistoryNodeConfig c;
-  p.getAtLeast("depth_history/marker_period_s", c.marker_period_s, 0.0, "s");
-  // The planner asks get_masks for its raycast images, and get_masks answers only its own size: a mismatch would
-  // fail every planning iteration, so it fails here (every node loads the whole YAML, planner section included).
-  if (!p.has("planner")) return c;  // no planner configured alongside
-  semexp::PlannerConfig planner;
-  p.get("planner/raycast_width", planner.raycast_width);
-  p.get("planner/raycast_height", planner.raycast_height);
-  if (history.width != planner.raycast_width)
-    throw ConfigError("depth_history/width", "is " + std::to_string(history.width) + " but planner/raycast_width is " +
-                                                 std::to_string(planner.raycast_width) + "; they must be equal");
-  if (history.height != planner.raycast_height)
-    throw ConfigError("depth_history/height", "is " + std::to_string(history.height) +
-                                                  " but planner/raycast_height is " +
-                                                  std::to_string(planner.raycast_height) + "; they must be equal");
-  return c;
-}
-
-ImageSyncConfig loadImageSync(const ParamReader& p) {
-  ImageSyncConfig c;
-  p.getAtLeast("sync_max_interval_s", c.max_interval_s, 0.0, "s");
+  const std::string n = "setpoint_streamer/";
+  p.getPositiveAtMost(n + "rate_hz", c.rate_hz, 1000, "Hz");
+  p.getPositiveAtMost(n + "pose_timeout_s", c.pose_timeout_s, 3600, "s");
+  p.getPositiveAtMost(n + "max_start_offset_m", c.max_start_offset_m, 1000, "m");
+  p.getPositiveAtMost(n + "goal_tolerance_m", c.goal_tolerance_m, 1000, "m");
+  p.getPositiveAtMost(n + "goal_yaw_tolerance_rad", c.goal_yaw_tolerance_rad, 4, "rad");
   return c;
 }
 

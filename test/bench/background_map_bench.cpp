@@ -30,7 +30,7 @@
 #include <string>
 #include <vector>
 
-#include "../core/occupancy_test_scene.hpp"
+#include "semexp_test/box_room.hpp"
 #include "bench_common.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 

@@ -7,7 +7,8 @@
 #include <cstdio>
 #include <vector>
 
-#include "../core/tsdf_test_scenes.hpp"
+#include "semexp_test/cameras.hpp"
+#include "semexp_test/rendering.hpp"
 #include "bench_common.hpp"
 #include "semantic_exploration/core/instance_matching.hpp"
 #include "semantic_exploration/core/object_map.hpp"

@@ -22,28 +22,13 @@
 #include <cstdio>
 #include <thread>
 
-#include "../core/planning_test_map.hpp"
+#include "semexp_test/test_grid.hpp"
 #include "bench_common.hpp"
 #include "semantic_exploration/core/depth_history.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
 
 using semexp_test::TestGrid;
-
-namespace {
-
-Eigen::Isometry3d camera_pose(const Eigen::Vector3d& p, double yaw) {
-  Eigen::Matrix3d R_WC;
-  R_WC.col(0) = Eigen::Vector3d(std::sin(yaw), -std::cos(yaw), 0.0);
-  R_WC.col(1) = -Eigen::Vector3d::UnitZ();
-  R_WC.col(2) = Eigen::Vector3d(std::cos(yaw), std::sin(yaw), 0.0);
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = R_WC;
-  T.translation() = p;
-  return T;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   semexp_bench::Reporter rep(argc, argv);
@@ -81,24 +66,13 @@ int main(int argc, char** argv) {
   semexp::DepthHistory history(semexp::DepthHistoryConfig(), bounds, camera);
 
   // Render and integrate: 12 yaws at each of three places.
-  std::vector<Eigen::Vector3d> rays_C;
-  for (int v = 0; v < camera.height; ++v)
-    for (int u = 0; u < camera.width; ++u)
-      rays_C.push_back(camera.ray_C(static_cast<float>(u), static_cast<float>(v)).cast<double>());
   const auto t_map = semexp_bench::Clock::now();
   int frames = 0;
   for (const Eigen::Vector3d& p : {Eigen::Vector3d(2.0, 4.0, 1.3), Eigen::Vector3d(2.0, 2.5, 1.0),
                                    Eigen::Vector3d(6.0, 4.0, 1.3)}) {
     for (int k = 0; k < 12; ++k) {
-      const Eigen::Isometry3d T_WC = camera_pose(p, k * M_PI / 6.0);
-      cv::Mat depth(camera.height, camera.width, CV_32FC1);
-      for (int v = 0; v < camera.height; ++v)
-        for (int u = 0; u < camera.width; ++u) {
-          const Eigen::Vector3d& r = rays_C[static_cast<std::size_t>(v * camera.width + u)];
-          const double n = r.norm();
-          const double t = truth.first_hit(p, T_WC.linear() * (r / n), camera.d_max_m * n);
-          depth.at<float>(v, u) = std::isfinite(t) ? static_cast<float>(t / n) : 0.f;
-        }
+      const Eigen::Isometry3d T_WC = semexp_test::levelCameraPose(p, k * M_PI / 6.0);
+      const cv::Mat depth = semexp_test::renderDepth(truth, camera, T_WC);
       map.integrate(depth, cv::Mat(), camera, T_WC);
       history.integrate(depth, T_WC);
       ++frames;

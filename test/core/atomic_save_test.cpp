@@ -16,7 +16,8 @@
 #include "semantic_exploration/core/marching_cubes.hpp"
 #include "semantic_exploration/core/object_map.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
-#include "tsdf_test_scenes.hpp"
+#include "semexp_test/cameras.hpp"
+#include "semexp_test/rendering.hpp"
 
 using namespace semexp;
 using namespace semexp_test;
@@ -75,12 +76,7 @@ class FileSizeLimit {
 
 /// One chair (a sphere) seen once by a 64 x 48 camera.
 ObjectMap oneChair() {
-  PinholeCamera cam;
-  cam.width = 64;
-  cam.height = 48;
-  cam.fx = cam.fy = 52.5;
-  cam.cx = 31.5;
-  cam.cy = 23.5;
+  const PinholeCamera cam = tinyCamera();
   ObjectMap map{ObjectMapConfig(), ClassTable()};
   const Sphere chair(Eigen::Vector3d(0.0, 0.0, 1.0), 0.25);
   const Eigen::Isometry3d T_WC = lookAt(Eigen::Vector3d(-0.9, 0.0, 1.0), chair.centre);

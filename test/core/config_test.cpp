@@ -11,20 +11,11 @@
 #include "semantic_exploration/core/matching_config.hpp"
 #include "semantic_exploration/core/object_map_config.hpp"
 #include "semantic_exploration/core/planner_config.hpp"
+#include "semexp_test/config_errors.hpp"
 
 using namespace semexp;
 
-// Runs `fn` and returns the parameter named by the ConfigError it throws ("" if none).
-template <typename Fn>
-std::string rejected(Fn fn) {
-  try {
-    fn();
-  } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find(e.parameter()), std::string::npos) << "message must name the parameter";
-    return e.parameter();
-  }
-  return "";
-}
+using semexp_test::rejected;
 
 TEST(Config, DefaultsAreValidAndMatchTableI) {
   PinholeCamera cam;

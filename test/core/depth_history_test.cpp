@@ -5,24 +5,12 @@
 #include <limits>
 
 #include "semantic_exploration/core/depth_history.hpp"
+#include "semexp_test/cameras.hpp"
 
 namespace semexp {
 namespace {
 
-// Optical camera frame (z forward, x right, y down) of a level camera at
-// p_W looking along world azimuth yaw.
-Eigen::Isometry3d level_camera(const Eigen::Vector3d& p_W, double yaw) {
-  const Eigen::Vector3d fwd(std::cos(yaw), std::sin(yaw), 0.0);
-  const Eigen::Vector3d left(-std::sin(yaw), std::cos(yaw), 0.0);
-  Eigen::Matrix3d R_WC;
-  R_WC.col(0) = -left;                        // x right
-  R_WC.col(1) = -Eigen::Vector3d::UnitZ();    // y down
-  R_WC.col(2) = fwd;                          // z forward
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = R_WC;
-  T.translation() = p_W;
-  return T;
-}
+using semexp_test::levelCameraPose;
 
 struct DepthHistoryTest : ::testing::Test {
   Bounds bounds;
@@ -46,7 +34,7 @@ TEST_F(DepthHistoryTest, StartsAllValid) {
   ASSERT_EQ(m.size(), 36u * 10u);
   EXPECT_EQ(zeros(m), 0);
   EXPECT_TRUE(h.invalid_cells().empty());
-  EXPECT_EQ(h.integrate(all_valid(), level_camera({0.1, 0.1, 1.1}, 0.3)), 0u);
+  EXPECT_EQ(h.integrate(all_valid(), levelCameraPose({0.1, 0.1, 1.1}, 0.3)), 0u);
   EXPECT_TRUE(h.invalid_cells().empty());
 }
 
@@ -58,7 +46,7 @@ TEST_F(DepthHistoryTest, MarksExactPixelLookingAlongX) {
   DepthHistory h(config, bounds, camera);
   cv::Mat d = all_valid();
   d.at<float>(119, 159) = 0.f;
-  EXPECT_EQ(h.integrate(d, level_camera({0.1, 0.1, 1.1}, 0.0)), 1u);
+  EXPECT_EQ(h.integrate(d, levelCameraPose({0.1, 0.1, 1.1}, 0.0)), 1u);
   const auto m = h.mask({0.1, 0.1, 1.1});
   EXPECT_EQ(zeros(m), 1);
   EXPECT_EQ(m[4 * 36 + 18], 0);
@@ -71,7 +59,7 @@ TEST_F(DepthHistoryTest, MarksExactPixelAtImageEdge) {
   DepthHistory h(config, bounds, camera);
   cv::Mat d = all_valid();
   d.at<float>(119, 0) = std::numeric_limits<float>::quiet_NaN();
-  h.integrate(d, level_camera({0.1, 0.1, 1.1}, 0.0));
+  h.integrate(d, levelCameraPose({0.1, 0.1, 1.1}, 0.0));
   const auto m = h.mask({0.1, 0.1, 1.1});
   EXPECT_EQ(zeros(m), 1);
   EXPECT_EQ(m[4 * 36 + 21], 0);
@@ -83,7 +71,7 @@ TEST_F(DepthHistoryTest, MarksPixelAtTheSeam) {
   DepthHistory h(config, bounds, camera);
   cv::Mat d = all_valid();
   d.at<float>(119, 159) = 11.f;
-  h.integrate(d, level_camera({0.1, 0.1, 1.1}, M_PI));
+  h.integrate(d, levelCameraPose({0.1, 0.1, 1.1}, M_PI));
   const auto m = h.mask({0.1, 0.1, 1.1});
   EXPECT_EQ(zeros(m), 1);
   EXPECT_EQ(m[4 * 36 + 0], 0);
@@ -99,13 +87,13 @@ TEST_F(DepthHistoryTest, ElevationRowsAndBand) {
   DepthHistory h(config, bounds, camera);
   cv::Mat d = all_valid();
   d.at<float>(239, 159) = 0.05f;  // below d_min: invalid
-  Eigen::Isometry3d pitched = level_camera({0.1, 0.1, 1.1}, M_PI / 2);
+  Eigen::Isometry3d pitched = levelCameraPose({0.1, 0.1, 1.1}, M_PI / 2);
   pitched.linear() = pitched.linear() * Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitX()).toRotationMatrix();
   EXPECT_EQ(h.integrate(d, pitched), 1u);
   EXPECT_EQ(zeros(h.mask({0.1, 0.1, 1.1})), 0);
   d.at<float>(239, 159) = 2.f;
   d.at<float>(230, 159) = std::numeric_limits<float>::infinity();
-  EXPECT_EQ(h.integrate(d, level_camera({0.1, 0.1, 1.1}, M_PI / 2)), 1u);
+  EXPECT_EQ(h.integrate(d, levelCameraPose({0.1, 0.1, 1.1}, M_PI / 2)), 1u);
   const auto m = h.mask({0.1, 0.1, 1.1});
   EXPECT_EQ(zeros(m), 1);
   EXPECT_EQ(m[9 * 36 + 27], 0);
@@ -115,7 +103,7 @@ TEST_F(DepthHistoryTest, OnlyTheCameraCellAndBatchMasks) {
   DepthHistory h(config, bounds, camera);
   cv::Mat d(camera.height, camera.width, CV_16UC1, cv::Scalar(2000));
   d.at<std::uint16_t>(119, 159) = 0;  // 16UC1 millimetres, 0 = invalid
-  h.integrate(d, level_camera({0.1, 0.1, 1.1}, 0.0));
+  h.integrate(d, levelCameraPose({0.1, 0.1, 1.1}, 0.0));
   // Cells are 0.5 m from bounds.min (-2, -2, 0): (0.1, 0.1, 1.1) is cell
   // (4, 4, 2) with centre (0.25, 0.25, 1.25).
   const auto cells = h.invalid_cells();
@@ -133,10 +121,10 @@ TEST_F(DepthHistoryTest, CameraOutsideBoundsAndBadInput) {
   DepthHistory h(config, bounds, camera);
   cv::Mat d = all_valid();
   d.at<float>(10, 10) = 0.f;
-  EXPECT_EQ(h.integrate(d, level_camera({3.0, 0.0, 1.0}, 0.0)), 0u);
+  EXPECT_EQ(h.integrate(d, levelCameraPose({3.0, 0.0, 1.0}, 0.0)), 0u);
   EXPECT_TRUE(h.invalid_cells().empty());
-  EXPECT_THROW(h.integrate(cv::Mat(10, 10, CV_32FC1), level_camera({0, 0, 1}, 0.0)), std::invalid_argument);
-  EXPECT_THROW(h.integrate(cv::Mat(camera.height, camera.width, CV_8UC1), level_camera({0, 0, 1}, 0.0)),
+  EXPECT_THROW(h.integrate(cv::Mat(10, 10, CV_32FC1), levelCameraPose({0, 0, 1}, 0.0)), std::invalid_argument);
+  EXPECT_THROW(h.integrate(cv::Mat(camera.height, camera.width, CV_8UC1), levelCameraPose({0, 0, 1}, 0.0)),
                std::invalid_argument);
   DepthHistoryConfig bad;
   bad.cell_size_m = 0.0;

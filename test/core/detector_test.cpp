@@ -28,6 +28,7 @@
 
 #include "semantic_exploration/core/detector/instance_segmenter.hpp"
 #include "semantic_exploration/core/detector/yolo_seg.hpp"
+#include "semexp_test/config_errors.hpp"
 
 using namespace semexp;
 
@@ -99,15 +100,7 @@ void sceneOutputs(cv::Mat& out0, cv::Mat& out1, Letterbox& lb) {
   out1 = outs[1].clone();
 }
 
-template <typename Fn>
-std::string rejected(Fn fn) {
-  try {
-    fn();
-  } catch (const ConfigError& e) {
-    return e.parameter();
-  }
-  return "";
-}
+using semexp_test::rejected;
 
 }  // namespace
 

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <vector>
 
-#include "occupancy_test_scene.hpp"
+#include "semexp_test/box_room.hpp"
 #include "semantic_exploration/core/frontier_evidence.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 

@@ -6,7 +6,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "planning_test_map.hpp"
+#include "semexp_test/test_grid.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 #include "semantic_exploration/core/planning/map_replica.hpp"
 

@@ -5,7 +5,8 @@
 
 #include "semantic_exploration/core/object_id_pool.hpp"
 #include "semantic_exploration/core/object_map.hpp"
-#include "tsdf_test_scenes.hpp"
+#include "semexp_test/cameras.hpp"
+#include "semexp_test/rendering.hpp"
 
 using namespace semexp;
 using namespace semexp_test;
@@ -40,12 +41,7 @@ TEST(ObjectIdPool, FreshIdsGoFirstThenTheOldestReleased) {
 TEST(ObjectMap, EmptyCandidatesInEveryFrameDoNotUseUpTheIds) {
   // A small camera keeps 65535 frames fast; a chair mask over all-zero depth (no valid pixel) is a candidate
   // that is erased in its own frame, as an out-of-range detection would be.
-  PinholeCamera cam;
-  cam.width = 64;
-  cam.height = 48;
-  cam.fx = cam.fy = 52.5;
-  cam.cx = 31.5;
-  cam.cy = 23.5;
+  const PinholeCamera cam = tinyCamera();
   ObjectMap map{ObjectMapConfig(), ClassTable()};
   constexpr int kChair = 1;
   const Sphere chair(Eigen::Vector3d(0.0, 0.0, 1.0), 0.25);

@@ -7,7 +7,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "object_test_scenes.hpp"
+#include "semexp_test/object_scenes.hpp"
 
 using namespace semexp;
 using namespace semexp_test;

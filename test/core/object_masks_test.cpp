@@ -6,7 +6,8 @@
 
 #include "semantic_exploration/core/object_masks.hpp"
 #include "semantic_exploration/core/tsdf.hpp"
-#include "tsdf_test_scenes.hpp"
+#include "semexp_test/cameras.hpp"
+#include "semexp_test/rendering.hpp"
 
 using namespace semexp;
 using namespace semexp_test;

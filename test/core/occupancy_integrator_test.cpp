@@ -16,7 +16,7 @@
 #include <thread>
 #include <vector>
 
-#include "occupancy_test_scene.hpp"
+#include "semexp_test/box_room.hpp"
 #include "semantic_exploration/core/occupancy/integrator.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 
@@ -29,17 +29,7 @@ using semexp::occupancy::kUnknown;
 
 namespace {
 
-PinholeCamera smallCamera() {
-  PinholeCamera c;
-  c.width = 64;
-  c.height = 48;
-  c.fx = c.fy = 50.0;
-  c.cx = 31.5;
-  c.cy = 23.5;
-  c.d_min_m = 0.1;
-  c.d_max_m = 10.0;
-  return c;
-}
+PinholeCamera smallCamera() { return semexp_test::centredCamera(64, 48, 50.0); }
 
 // Temporary directory, removed with its files when the test ends.
 struct TempDir {

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "occupancy_test_scene.hpp"
+#include "semexp_test/box_room.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 
 using namespace semexp;
@@ -23,8 +23,7 @@ struct Fixture {
   std::vector<Eigen::Isometry3d> poses;
 
   Fixture() {
-    bounds.min_m = scene.room.lo - Eigen::Vector3d::Constant(0.3);
-    bounds.max_m = scene.room.hi + Eigen::Vector3d::Constant(0.3);
+    bounds = scene.bounds(0.3);
     const int n = 24;
     for (int i = 0; i < n; ++i) {
       const double a = 2 * M_PI * i / n;

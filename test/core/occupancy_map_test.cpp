@@ -13,7 +13,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "occupancy_test_scene.hpp"
+#include "semexp_test/box_room.hpp"
 #include "semantic_exploration/core/gains.hpp"
 #include "semantic_exploration/core/marching_cubes.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
@@ -330,9 +330,7 @@ TEST(OccupancyMap, SaveLoadRoundTripIsBitIdentical) {
   BackgroundMapConfig cfg;
   PinholeCamera cam;
   const BoxRoom scene = semexp_test::standardRoom();
-  Bounds b;
-  b.min_m = scene.room.lo - Eigen::Vector3d::Constant(0.2);
-  b.max_m = scene.room.hi + Eigen::Vector3d::Constant(0.2);
+  const Bounds b = scene.bounds(0.2);
   OccupancyMap map(cfg, b);
   auto rgb = constantRgb(cam, 10, 200, 30);
   for (int i = 0; i < 5; ++i) {
@@ -401,9 +399,7 @@ TEST(OccupancyMap, IncrementalFrontiersEqualABruteForceScan) {
   BackgroundMapConfig cfg;
   PinholeCamera cam;
   const BoxRoom scene = semexp_test::standardRoom();
-  Bounds b;
-  b.min_m = scene.room.lo - Eigen::Vector3d::Constant(0.2);
-  b.max_m = scene.room.hi + Eigen::Vector3d::Constant(0.2);
+  const Bounds b = scene.bounds(0.2);
   OccupancyMap map(cfg, b);
   for (int i = 0; i < 8; ++i) {
     const Eigen::Isometry3d T = lookPose({-1.5 + 0.4 * i, 0.3 * std::sin(i), 1.0 + 0.1 * i}, 0.8 * i, 0.1 * (i % 3));
@@ -457,9 +453,7 @@ TEST(OccupancyMap, RaycastAndEntropyGainMatchFineSampling) {
   BackgroundMapConfig cfg;
   PinholeCamera cam;
   const BoxRoom scene = semexp_test::standardRoom();
-  Bounds b;
-  b.min_m = scene.room.lo - Eigen::Vector3d::Constant(0.2);
-  b.max_m = scene.room.hi + Eigen::Vector3d::Constant(0.2);
+  const Bounds b = scene.bounds(0.2);
   OccupancyMap map(cfg, b);
   for (int i = 0; i < 6; ++i) {
     const Eigen::Isometry3d T = lookPose({-1.0 + 0.4 * i, 0.2, 1.3}, 1.1 * i, 0.15);

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "occupancy_test_scene.hpp"
+#include "semexp_test/box_room.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 
 using namespace semexp;

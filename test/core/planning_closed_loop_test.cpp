@@ -10,7 +10,7 @@
 
 #include <cstdio>
 
-#include "planning_test_map.hpp"
+#include "semexp_test/test_grid.hpp"
 #include "semantic_exploration/core/depth_history.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
@@ -36,17 +36,6 @@ TestGrid building(const Bounds& b) {
   return g;
 }
 
-Eigen::Isometry3d camera_pose(const Eigen::Vector3d& p, double yaw) {
-  Eigen::Matrix3d R_WC;
-  R_WC.col(0) = Eigen::Vector3d(std::sin(yaw), -std::cos(yaw), 0.0);  // right
-  R_WC.col(1) = -Eigen::Vector3d::UnitZ();                            // down
-  R_WC.col(2) = Eigen::Vector3d(std::cos(yaw), std::sin(yaw), 0.0);   // forward
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = R_WC;
-  T.translation() = p;
-  return T;
-}
-
 double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }
 
 TEST(ClosedLoop, ExploresTwoRoomsUntilTermination) {
@@ -55,13 +44,7 @@ TEST(ClosedLoop, ExploresTwoRoomsUntilTermination) {
   bounds.max_m = {6.0, 4.0, 2.3};
   const TestGrid truth = building(bounds);
 
-  // Half the Table I image size, same fields of view.
-  PinholeCamera camera;
-  camera.width = 160;
-  camera.height = 120;
-  camera.fx = camera.fy = 131.25;
-  camera.cx = 79.5;
-  camera.cy = 59.5;
+  const PinholeCamera camera = semexp_test::halfSizeCamera();
 
   BackgroundMapConfig map_config;
   map_config.resolution_m = kRes;
@@ -84,20 +67,9 @@ TEST(ClosedLoop, ExploresTwoRoomsUntilTermination) {
   gain_settings.d_desired_m = exploration.d_bg_m;
 
   // Depth by exact voxel traversal of the ground truth; no return beyond d_max.
-  std::vector<Eigen::Vector3d> rays_C;
-  for (int v = 0; v < camera.height; ++v)
-    for (int u = 0; u < camera.width; ++u)
-      rays_C.push_back(camera.ray_C(static_cast<float>(u), static_cast<float>(v)).cast<double>());
   auto observe = [&](const Eigen::Vector3d& p, double yaw) {
-    const Eigen::Isometry3d T_WC = camera_pose(p, yaw);
-    cv::Mat depth(camera.height, camera.width, CV_32FC1);
-    for (int v = 0; v < camera.height; ++v)
-      for (int u = 0; u < camera.width; ++u) {
-        const Eigen::Vector3d& r = rays_C[static_cast<std::size_t>(v * camera.width + u)];
-        const double n = r.norm();
-        const double t = truth.first_hit(p, T_WC.linear() * (r / n), camera.d_max_m * n);
-        depth.at<float>(v, u) = std::isfinite(t) ? static_cast<float>(t / n) : 0.f;
-      }
+    const Eigen::Isometry3d T_WC = semexp_test::levelCameraPose(p, yaw);
+    const cv::Mat depth = semexp_test::renderDepth(truth, camera, T_WC);
     map.integrate(depth, cv::Mat(), camera, T_WC);
     history.integrate(depth, T_WC);
   };

@@ -4,7 +4,7 @@
 
 #include <ompl/util/RandomNumbers.h>
 
-#include "planning_test_map.hpp"
+#include "semexp_test/test_grid.hpp"
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
 
 namespace semexp {

@@ -7,7 +7,7 @@
 #include <random>
 #include <thread>
 
-#include "planning_test_map.hpp"
+#include "semexp_test/test_grid.hpp"
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
 
 namespace semexp {

@@ -13,7 +13,8 @@
 #include "semantic_exploration/core/occupancy_map.hpp"
 #include "semantic_exploration/core/planning/candidate_evaluation.hpp"
 #include "semantic_exploration/core/planning/interfaces.hpp"
-#include "tsdf_test_scenes.hpp"
+#include "semexp_test/cameras.hpp"
+#include "semexp_test/rendering.hpp"
 
 using namespace semexp;
 using namespace semexp_test;

@@ -5,7 +5,7 @@
 
 #include <ompl/util/RandomNumbers.h>
 
-#include "planning_test_map.hpp"
+#include "semexp_test/test_grid.hpp"
 #include "semantic_exploration/core/planning/path_planner.hpp"
 
 namespace semexp {

@@ -7,7 +7,8 @@
 #include <cstdio>
 
 #include "semantic_exploration/core/tsdf.hpp"
-#include "tsdf_test_scenes.hpp"
+#include "semexp_test/cameras.hpp"
+#include "semexp_test/rendering.hpp"
 
 using semexp::PinholeCamera;
 using semexp::TsdfMap;

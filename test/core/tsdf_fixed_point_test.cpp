@@ -9,7 +9,8 @@
 #include <unistd.h>
 
 #include "semantic_exploration/core/tsdf.hpp"
-#include "tsdf_test_scenes.hpp"
+#include "semexp_test/cameras.hpp"
+#include "semexp_test/rendering.hpp"
 
 using namespace semexp;
 using namespace semexp_test;

@@ -130,7 +130,7 @@ def test_parameters_are_read_only_in_params_cpp():
     offenders = []
     src = os.path.join(ROOT, "src", "ros")
     for f in sorted(os.listdir(src)):
-        if f == "params.cpp":
+        if f in ("params.cpp", "param_reader.cpp"):  # the loaders and the reader they use
             continue
         with open(os.path.join(src, f)) as fh:
             text = fh.read()

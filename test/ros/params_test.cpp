@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "semantic_exploration/ros/params.hpp"
+#include "semexp_test/config_errors.hpp"
 
-using semexp::ConfigError;
 using semexp_ros::ParamReader;
 using XmlRpc::XmlRpcValue;
 
@@ -21,15 +21,7 @@ XmlRpcValue cameraTree() {
   return root;
 }
 
-template <typename Fn>
-std::string rejected(Fn fn) {
-  try {
-    fn();
-  } catch (const ConfigError& e) {
-    return e.parameter();
-  }
-  return "";
-}
+using semexp_test::rejected;
 
 }  // namespace
 

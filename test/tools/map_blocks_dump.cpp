@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "../core/occupancy_test_scene.hpp"
+#include "semexp_test/box_room.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 #include "semantic_exploration/ros/conversions.hpp"
 
@@ -44,17 +44,10 @@ int main(int argc, char** argv) {
   }
   const std::string dir = argv[1];
   const semexp_test::BoxRoom room = semexp_test::standardRoom();
-  semexp::Bounds bounds;
-  bounds.min_m = room.room.lo;
-  bounds.max_m = room.room.hi;
+  const semexp::Bounds bounds = room.bounds();
   semexp::BackgroundMapConfig cfg;  // 4 cm, 8^3 blocks
   semexp::OccupancyMap map(cfg, bounds);
-  semexp::PinholeCamera cam;
-  cam.width = 160;
-  cam.height = 120;
-  cam.fx = cam.fy = 131.25;
-  cam.cx = 79.5;
-  cam.cy = 59.5;
+  const semexp::PinholeCamera cam = semexp_test::halfSizeCamera();
   // Two views that see different walls, so that the map differs along every axis.
   for (const auto& T : {semexp_test::lookPose({-0.5, 0.0, 1.3}, 0.3, 0.2), semexp_test::lookPose({0.5, -0.5, 1.0}, 2.2, 0.4)}) {
     const std::vector<float> depth = room.render(cam, T);

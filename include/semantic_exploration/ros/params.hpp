@@ -1,6 +1,7 @@
 #pragma once
 /// @file params.hpp
-/// The one place that turns ROS parameters into the core Config structs.
+/// The one place that turns ROS parameters into the core Config structs
+/// (loaders in src/ros/params.cpp, ParamReader in src/ros/param_reader.cpp).
 ///
 /// Every node reads its private namespace (launch files load config/*.yaml
 /// there), so a setting has the same name in YAML, code and docs, e.g.
@@ -11,6 +12,7 @@
 #include <xmlrpcpp/XmlRpcValue.h>
 
 #include <functional>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -99,6 +101,23 @@ class ParamReader {
   void get(const std::string& path, std::vector<double>& out) const;
   /// Optional number that must be >= `min_value` (`unit` names its unit in the error).
   void getAtLeast(const std::string& path, double& out, double min_value, const std::string& unit) const;
+  /// Optional number that must lie in (0, max_value] (`unit` names its unit in the error).
+  void getPositiveAtMost(const std::string& path, double& out, double max_value, const std::string& unit) const;
+  /// Optional map name -> value (`what` describes it in the error, e.g. "class name -> resolution in m"):
+  /// replaces `out` as a whole if present; each entry is read as `path/name`.
+  template <typename T>
+  void getMap(const std::string& path, std::map<std::string, T>& out, const std::string& what) const {
+    const XmlRpc::XmlRpcValue* v = find(path);
+    if (!v) return;
+    if (v->getType() != XmlRpc::XmlRpcValue::TypeStruct) throw semexp::ConfigError(path, "must be a map " + what);
+    out.clear();
+    auto& m = const_cast<XmlRpc::XmlRpcValue&>(*v);  // XmlRpc's iterators are non-const
+    for (auto it = m.begin(); it != m.end(); ++it) {
+      T value{};
+      get(path + "/" + it->first, value);
+      out[it->first] = value;
+    }
+  }
   /// Required parameters: throw ConfigError("missing") if absent.
   template <typename T>
   void require(const std::string& path, T& out) const {

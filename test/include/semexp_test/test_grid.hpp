@@ -1,9 +1,10 @@
 #pragma once
-// A small dense voxel grid (unknown / free / occupied) standing in for the
-// background map in planning tests and benchmarks: sphere queries and a
-// simple 360-degree entropy raycast in the SphericalGrid layout. Also the
-// scene fixtures the map and planning tests share: the camera, level camera
-// poses, depth images rendered from a grid, and the room with a table.
+/// @file test_grid.hpp
+/// A small dense voxel grid (unknown / free / occupied) standing in for the
+/// background map in planning tests and benchmarks: sphere queries and a
+/// simple 360-degree entropy raycast in the SphericalGrid layout. Also depth
+/// images rendered from a grid and the room with a table that the map and
+/// planning tests share.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -14,6 +15,8 @@
 #include <limits>
 #include <vector>
 
+#include "cameras.hpp"
+#include "rendering.hpp"
 #include "semantic_exploration/core/bounds.hpp"
 #include "semantic_exploration/core/camera.hpp"
 #include "semantic_exploration/core/planning/candidate_evaluation.hpp"
@@ -175,42 +178,14 @@ class TestGrid {
 
 // ------------------------------------------------------------ scene fixtures
 
-/// Half the Table I image (160 x 120 px) with the same fields of view.
-inline semexp::PinholeCamera halfSizeCamera() {
-  semexp::PinholeCamera cam;
-  cam.width = 160;
-  cam.height = 120;
-  cam.fx = cam.fy = 131.25;
-  cam.cx = 79.5;
-  cam.cy = 59.5;
-  return cam;
-}
-
-/// T_WC of a level camera (optical frame: x right, y down, z forward) at
-/// p_W looking along yaw_rad (about world +z from +x).
-inline Eigen::Isometry3d levelCameraPose(const Eigen::Vector3d& p_W, double yaw_rad) {
-  Eigen::Matrix3d R_WC;
-  R_WC.col(0) = Eigen::Vector3d(std::sin(yaw_rad), -std::cos(yaw_rad), 0.0);  // right
-  R_WC.col(1) = -Eigen::Vector3d::UnitZ();                                    // down
-  R_WC.col(2) = Eigen::Vector3d(std::cos(yaw_rad), std::sin(yaw_rad), 0.0);   // forward
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = R_WC;
-  T.translation() = p_W;
-  return T;
-}
-
 /// z-depth image (CV_32FC1, m) of `grid` seen by `cam` at T_WC: exact voxel
 /// traversal to the first occupied voxel; 0 where there is none within d_max.
 inline cv::Mat renderDepth(const TestGrid& grid, const semexp::PinholeCamera& cam, const Eigen::Isometry3d& T_WC) {
-  cv::Mat depth(cam.height, cam.width, CV_32FC1);
-  for (int v = 0; v < cam.height; ++v)
-    for (int u = 0; u < cam.width; ++u) {
-      const Eigen::Vector3d r = cam.ray_C(static_cast<float>(u), static_cast<float>(v)).cast<double>();  // z = 1
-      const double n = r.norm();
-      const double t = grid.first_hit(T_WC.translation(), T_WC.linear() * (r / n), cam.d_max_m * n);
-      depth.at<float>(v, u) = std::isfinite(t) ? static_cast<float>(t / n) : 0.f;
-    }
-  return depth;
+  return renderDepthImage(cam, [&](int, int, const Eigen::Vector3d& r_C) {
+    const double n = r_C.norm();
+    const double t = grid.first_hit(T_WC.translation(), T_WC.linear() * (r_C / n), cam.d_max_m * n);
+    return std::isfinite(t) ? static_cast<float>(t / n) : 0.f;
+  });
 }
 
 /// Bounds of tableRoom(): [0, 5] x [0, 4] x [0, 2.4] m.

@@ -1,42 +1,23 @@
 #pragma once
-// Scenes for the object-map tests on constructed frames: a chair made of
-// boxes, and one frame run as the nodes run it (render the map from the
-// pose, match the detections to the render, integrate).
+/// @file object_scenes.hpp
+/// Scenes for the object-map tests on constructed frames: a chair made of
+/// boxes, one frame run as the nodes run it (render the map from the pose,
+/// match the detections to the render, integrate), and mesh accuracy.
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <opencv2/core.hpp>
 #include <vector>
 
+#include "cameras.hpp"
+#include "rendering.hpp"
 #include "semantic_exploration/core/instance_matching.hpp"
 #include "semantic_exploration/core/object_map.hpp"
-#include "tsdf_test_scenes.hpp"
+#include "shapes.hpp"
 
 namespace semexp_test {
-
-/// Union of boxes: a chair, a table. The signed distance is exact outside and
-/// on the surface (what mesh accuracy measures).
-struct BoxUnion : Shape {
-  std::vector<Box> parts;
-  double sdf(const Eigen::Vector3d& p) const override {
-    double d = std::numeric_limits<double>::infinity();
-    for (const Box& b : parts) d = std::min(d, b.sdf(p));
-    return d;
-  }
-  bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& s) const override {
-    bool hit = false;
-    s = std::numeric_limits<double>::infinity();
-    for (const Box& b : parts) {
-      double t;
-      if (b.intersect(o, d, t) && t < s) {
-        s = t;
-        hit = true;
-      }
-    }
-    return hit;
-  }
-};
 
 /// A chair 0.44 m wide standing on z = 0 at (x, y), facing -x: a seat 0.45 m
 /// high, a back up to 0.95 m on its +x side and four 4 cm legs.

@@ -1,12 +1,14 @@
 #pragma once
-// Solids with an exact signed distance and an exact ray intersection, shared
-// by the scene helpers of the map tests (tsdf_test_scenes.hpp,
-// occupancy_test_scene.hpp): one definition of each.
+/// @file shapes.hpp
+/// Solids with an exact signed distance and an exact ray intersection: the
+/// one definition of each that the scene helpers and tests share (the box
+/// slab test here is also what BoxRoom uses for its furniture).
 
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace semexp_test {
 
@@ -14,7 +16,8 @@ struct Shape {
   virtual ~Shape() = default;
   /// Exact signed distance (negative inside), m.
   virtual double sdf(const Eigen::Vector3d& p_W) const = 0;
-  /// Smallest s > 0 with o + s d on the surface (d need not be unit).
+  /// Smallest s > 0 with o + s d on the surface (d need not be unit); false if none
+  /// (also when o is inside the solid).
   virtual bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& s) const = 0;
 };
 
@@ -46,11 +49,16 @@ struct Box : Shape {
   }
   Eigen::Vector3d centre() const { return 0.5 * (lo + hi); }
   Eigen::Vector3d half() const { return 0.5 * (hi - lo); }
+  /// p in the closed box.
+  bool contains(const Eigen::Vector3d& p) const {
+    return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all();
+  }
 
   double sdf(const Eigen::Vector3d& p) const override {
     const Eigen::Vector3d q = (p - centre()).cwiseAbs() - half();
     return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
   }
+  /// Slab test: entry parameter of the ray into the box.
   bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& s) const override {
     double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
     for (int i = 0; i < 3; ++i) {
@@ -66,6 +74,41 @@ struct Box : Shape {
     if (t0 > t1 || t0 <= 0) return false;
     s = t0;
     return true;
+  }
+};
+
+namespace detail {
+inline const Shape& shapeRef(const Shape& s) { return s; }
+inline const Shape& shapeRef(const Shape* s) { return *s; }
+}  // namespace detail
+
+/// Index of the first of `shapes` (shapes or pointers to them) hit along
+/// o + s d, with its entry parameter in s; -1 (s = inf) if none is hit.
+template <class Shapes>
+int nearestHit(const Shapes& shapes, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& s) {
+  int best = -1;
+  s = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < shapes.size(); ++k) {
+    double t;
+    if (detail::shapeRef(shapes[k]).intersect(o, d, t) && t < s) {
+      s = t;
+      best = static_cast<int>(k);
+    }
+  }
+  return best;
+}
+
+/// Union of boxes: a chair, a table. The signed distance is exact outside and
+/// on the surface (what mesh accuracy measures).
+struct BoxUnion : Shape {
+  std::vector<Box> parts;
+  double sdf(const Eigen::Vector3d& p) const override {
+    double d = std::numeric_limits<double>::infinity();
+    for (const Box& b : parts) d = std::min(d, b.sdf(p));
+    return d;
+  }
+  bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& s) const override {
+    return nearestHit(parts, o, d, s) >= 0;
   }
 };
 
