@@ -158,7 +158,9 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
             if (w_obs <= 0.f) continue;
             const float w_new = w + w_obs;
             const float s = std::min(sdf, trunc);
-            if (vx.fuseSdf(s, w_obs, w, w_new, trunc) < 0.f) block.has_negative = true;
+            const float sdf_new = (vx.sdf(trunc) * w + s * w_obs) / w_new;
+            vx.setSdf(sdf_new, trunc);
+            if (sdf_new < 0.f) block.has_negative = true;
             vx.setWeight(std::min(w_new, max_w));
             if (std::abs(sdf) < trunc) {
               if (use_rgb) {

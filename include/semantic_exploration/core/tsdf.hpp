@@ -69,22 +69,16 @@ struct TsdfVoxel {
     const float q = std::max(-32767.f, std::min(32767.f, sdf_m / truncation_m * 32767.f));
     sdf_q = static_cast<std::int16_t>(tsdf_fixed::roundToInt(q));
   }
-  /// Fuses an observed SDF s_m (|s_m| <= truncation_m) with weight w_obs into the stored one of weight w
-  /// (w_new = w + w_obs > 0), in stored units: no dequantisation and one division, like the float layout.
-  /// Returns the fused value (stored units, before rounding): its sign is that of the fused SDF.
-  float fuseSdf(float s_m, float w_obs, float w, float w_new, float truncation_m) {
-    const float q = (sdf_q * w + s_m * (32767.f / truncation_m) * w_obs) / w_new;
-    sdf_q = static_cast<std::int16_t>(tsdf_fixed::roundToInt(std::max(-32767.f, std::min(32767.f, q))));
-    return q;
-  }
   float weight() const { return weight_q * (1.f / 16.f); }
   void setWeight(float w) {
-    weight_q = static_cast<std::uint16_t>(tsdf_fixed::roundNonNegativeToInt(std::max(0.f, std::min(65535.f, w * 16.f))));
+    const float q = std::max(0.f, std::min(65535.f, w * 16.f));
+    weight_q = static_cast<std::uint16_t>(tsdf_fixed::roundNonNegativeToInt(q));
   }
   static constexpr double kMaxWeight = 65535.0 / 16.0;  ///< largest representable weight
   float foreground() const { return tsdf_fixed::kForeground.p[foreground_q]; }
   void setForeground(float p) {
-    foreground_q = static_cast<std::uint8_t>(tsdf_fixed::roundNonNegativeToInt(std::max(0.f, std::min(1.f, p)) * 254.f));
+    const float q = std::max(0.f, std::min(1.f, p)) * 254.f;
+    foreground_q = static_cast<std::uint8_t>(tsdf_fixed::roundNonNegativeToInt(q));
   }
   float minDistance() const {
     return min_distance_mm == 65535 ? std::numeric_limits<float>::infinity() : min_distance_mm * 1e-3f;
@@ -97,7 +91,8 @@ struct TsdfVoxel {
 
  private:
   static std::uint16_t quantiseDistance(float d_m) {
-    return static_cast<std::uint16_t>(tsdf_fixed::roundNonNegativeToInt(std::max(0.f, std::min(65534.f, d_m * 1e3f))));
+    const float q = std::max(0.f, std::min(65534.f, d_m * 1e3f));
+    return static_cast<std::uint16_t>(tsdf_fixed::roundNonNegativeToInt(q));
   }
 };
 
@@ -111,12 +106,6 @@ struct TsdfVoxelFloat {
 
   float sdf(float) const { return sdf_m; }
   void setSdf(float sdf, float truncation_m) { sdf_m = std::max(-truncation_m, std::min(truncation_m, sdf)); }
-  /// See TsdfVoxel::fuseSdf; returns the fused SDF, m.
-  float fuseSdf(float s_m, float w_obs, float w, float w_new, float truncation_m) {
-    const float sdf = (sdf_m * w + s_m * w_obs) / w_new;
-    setSdf(sdf, truncation_m);
-    return sdf;
-  }
   float weight() const { return weight_f; }
   void setWeight(float w) { weight_f = w; }
   float foreground() const { return foreground_p; }
