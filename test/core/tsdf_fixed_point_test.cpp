@@ -95,7 +95,9 @@ TEST(TsdfFixedPoint, InlineRoundingMatchesStdRound) {
   std::size_t checked = 0;
   const auto check = [&](float x) {
     ASSERT_EQ(tsdf_fixed::roundToInt(x), static_cast<int>(std::round(x))) << x;
-    if (x >= 0.f) ASSERT_EQ(tsdf_fixed::roundNonNegativeToInt(x), static_cast<int>(std::round(x))) << x;
+    if (x >= 0.f) {
+      ASSERT_EQ(tsdf_fixed::roundNonNegativeToInt(x), static_cast<int>(std::round(x))) << x;
+    }
     ++checked;
   };
   // Around every integer and half-integer of the stored ranges (the cases a shortcut like (int)(x + 0.5f) gets
@@ -149,10 +151,11 @@ TEST(TsdfFixedPoint, WallMatchesFloatLayoutVoxelByVoxel) {
     EXPECT_LE(std::abs(a.sdf_q - b->sdf(trunc) / trunc * 32767.f), 0.52f) << index.transpose();
     EXPECT_EQ(a.foreground_q, 254);  // every observation inside the mask: p = 1
     EXPECT_EQ(b->foreground(), 1.f);
-    if (std::isfinite(b->minDistance()))
+    if (std::isfinite(b->minDistance())) {
       EXPECT_EQ(a.min_distance_mm, static_cast<int>(std::round(b->minDistance() * 1e3f))) << index.transpose();
-    else
+    } else {
       EXPECT_EQ(a.min_distance_mm, 65535);
+    }
   });
   EXPECT_GT(observed, 10000u);
   // Voxel centre (0.99, -0.01, -0.01) m is 0.99 m deep, 1 cm in front of the wall, 0.990101 m from the camera.
