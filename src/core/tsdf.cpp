@@ -168,7 +168,7 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
                 for (int k = 0; k < 3; ++k)
                   vx.rgb[k] = static_cast<std::uint8_t>(std::lround((vx.rgb[k] * w + c[k] * w_obs) / w_new));
               }
-              if (dist < vx.minDistance()) vx.setMinDistance(dist);
+              vx.lowerMinDistance(dist);
             }
             if (update_foreground) vx.setForeground((vx.foreground() * w + w_obs) / w_new);
             ++updated;

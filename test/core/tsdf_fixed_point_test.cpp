@@ -1,10 +1,11 @@
-// Fixed-point voxel against the float layout: size and mesh difference on the
-// same data; marching-cubes table and PLY round trip.
+// Fixed-point voxel against the float layout: size, inline rounding, voxel-by-voxel
+// and mesh difference on the same data; marching-cubes table and PLY round trip.
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <filesystem>
+#include <random>
 #include <set>
 #include <unistd.h>
 
@@ -88,6 +89,85 @@ TEST(TsdfFixedPoint, MeshDiffersFromFloatLayoutByLessThanQuarterVoxel) {
   EXPECT_LT(rms, 0.25 * p.resolution_m);
   EXPECT_EQ(fixed.blockCount(), flt.blockCount());
   EXPECT_LT(fixed.voxelBytes(), 0.65 * flt.voxelBytes());
+}
+
+// The voxel setters round inline instead of calling std::round: same result for every input they get.
+TEST(TsdfFixedPoint, InlineRoundingMatchesStdRound) {
+  std::size_t checked = 0;
+  const auto check = [&](float x) {
+    ASSERT_EQ(tsdf_fixed::roundToInt(x), static_cast<int>(std::round(x))) << x;
+    if (x >= 0.f) {
+      ASSERT_EQ(tsdf_fixed::roundNonNegativeToInt(x), static_cast<int>(std::round(x))) << x;
+    }
+    ++checked;
+  };
+  // Around every integer and half-integer of the stored ranges (the cases a shortcut like (int)(x + 0.5f) gets
+  // wrong, e.g. 0.49999997f), three floats on either side.
+  for (int k = -2 * 70000; k <= 2 * 70000; ++k) {
+    float lo = 0.5f * k, hi = 0.5f * k;
+    check(lo);
+    for (int j = 0; j < 3; ++j) {
+      lo = std::nextafter(lo, -1e9f);
+      hi = std::nextafter(hi, 1e9f);
+      check(lo);
+      check(hi);
+    }
+  }
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> uni(-70000.f, 70000.f);
+  for (int i = 0; i < 200000; ++i) check(uni(rng));
+  EXPECT_GT(checked, 1000000u);
+}
+
+// A wall 1 m in front of the camera, integrated three times from the same pose into both layouts: every
+// fixed-point voxel is the float voxel quantised (SDF within half a step, min distance exactly its rounding,
+// weight within one 1/16 rounding per frame), and one voxel is checked by hand.
+TEST(TsdfFixedPoint, WallMatchesFloatLayoutVoxelByVoxel) {
+  const PinholeCamera cam;
+  TsdfParams p;
+  p.resolution_m = 0.02;
+  p.truncation_m = 0.08;
+  p.behind_surface_m = 0.04;
+  TsdfMap fixed(p);
+  TsdfMapFloat flt(p);
+  const Box wall = Box::around(Eigen::Vector3d(1.1, 0.0, 0.0), Eigen::Vector3d(0.1, 5.0, 5.0));
+  const Eigen::Isometry3d T_WC = lookAt(Eigen::Vector3d::Zero(), Eigen::Vector3d(1.0, 0.0, 0.0));
+  cv::Mat depth, labels;
+  renderShapes(cam, T_WC, {&wall}, depth, labels);
+  const int frames = 3;
+  for (int k = 0; k < frames; ++k) {
+    EXPECT_GT(fixed.integrate(cam, T_WC, depth, cv::Mat(), labels > 0, true), 10000u);
+    flt.integrate(cam, T_WC, depth, cv::Mat(), labels > 0, true);
+  }
+  ASSERT_EQ(fixed.blockCount(), flt.blockCount());
+  const float trunc = static_cast<float>(p.truncation_m);
+  std::size_t observed = 0;
+  fixed.forEachVoxel([&](const Eigen::Vector3i& index, const TsdfVoxel& a) {
+    const TsdfVoxelFloat* b = flt.voxel(index);
+    ASSERT_NE(b, nullptr);
+    // Weights below 1/32 (far behind the wall) round to "never observed".
+    EXPECT_LE(std::abs(a.weight() - b->weight()), frames / 32.f + 1e-5f) << index.transpose();
+    if (a.weight_q == 0) return;
+    ++observed;
+    EXPECT_LE(std::abs(a.sdf_q - b->sdf(trunc) / trunc * 32767.f), 0.52f) << index.transpose();
+    EXPECT_EQ(a.foreground_q, 254);  // every observation inside the mask: p = 1
+    EXPECT_EQ(b->foreground(), 1.f);
+    if (std::isfinite(b->minDistance())) {
+      EXPECT_EQ(a.min_distance_mm, static_cast<int>(std::round(b->minDistance() * 1e3f))) << index.transpose();
+    } else {
+      EXPECT_EQ(a.min_distance_mm, 65535);
+    }
+  });
+  EXPECT_GT(observed, 10000u);
+  // Voxel centre (0.99, -0.01, -0.01) m is 0.99 m deep, 1 cm in front of the wall, 0.990101 m from the camera.
+  // Along its pixel's ray the wall is 0.01 * 0.990101 / 0.99 m = 0.0100010 m away:
+  // 0.0100010 / 0.08 * 32767 = 4096.3 -> 4096; three unit weights -> 48 / 16; 990.101 mm -> 990 mm.
+  const TsdfVoxel* v = fixed.voxel(Eigen::Vector3i(49, -1, -1));
+  ASSERT_NE(v, nullptr);
+  EXPECT_EQ(v->sdf_q, 4096);
+  EXPECT_EQ(v->weight_q, 48);
+  EXPECT_EQ(v->min_distance_mm, 990);
+  EXPECT_NEAR(flt.voxel(Eigen::Vector3i(49, -1, -1))->sdf(trunc), 0.0100010f, 2e-6f);
 }
 
 TEST(MarchingCubesTable, TrianglesUseExactlyTheCrossedEdges) {

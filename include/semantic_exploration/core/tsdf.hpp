@@ -22,10 +22,41 @@
 
 namespace semexp {
 
+/// Helpers of the fixed-point voxel. Without SSE4.1 std::round compiles to a
+/// libm call, and the voxel update quantises four fields per voxel; inline
+/// rounding and a table for the foreground division keep the fixed-point
+/// update close to the float one (issue 16) with bit-identical results.
+namespace tsdf_fixed {
+
+/// std::round (halfway cases away from zero) for |x| < 2^31, as an int, inline.
+/// Exact: the truncated value and the fraction x - trunc(x) are exact floats.
+inline int roundToInt(float x) {
+  const int i = static_cast<int>(x);  // truncates towards zero
+  const float frac = x - static_cast<float>(i);
+  return i + (frac >= 0.5f) - (frac <= -0.5f);
+}
+/// roundToInt for 0 <= x < 2^31 (one comparison fewer).
+inline int roundNonNegativeToInt(float x) {
+  const int i = static_cast<int>(x);
+  return i + (x - static_cast<float>(i) >= 0.5f);
+}
+
+/// Foreground probability of each stored byte, q / 254.f, so that reading it costs no division.
+struct ForegroundTable {
+  float p[256];
+  constexpr ForegroundTable() : p() {
+    for (int q = 0; q < 256; ++q) p[q] = static_cast<float>(q) / 254.f;
+  }
+};
+inline constexpr ForegroundTable kForeground{};
+
+}  // namespace tsdf_fixed
+
 /// Fixed-point voxel: SDF as int16 normalised by the truncation distance,
 /// foreground probability as uint8 (p = q / 254, so 0.5 is exact), weight as
 /// uint16 in 1/16 steps (so at most 4095.9), minimum observed distance in
-/// millimetres.
+/// millimetres. Setters round half away from zero (as std::round) after
+/// clamping to the representable range; NaN saturates to the upper bound.
 struct TsdfVoxel {
   std::int16_t sdf_q = 32767;           ///< sdf / truncation * 32767
   std::uint16_t weight_q = 0;           ///< weight * 16 (capped), 0 = never observed
@@ -35,21 +66,34 @@ struct TsdfVoxel {
 
   float sdf(float truncation_m) const { return sdf_q * (truncation_m / 32767.f); }
   void setSdf(float sdf_m, float truncation_m) {
-    const float q = std::round(sdf_m / truncation_m * 32767.f);
-    sdf_q = static_cast<std::int16_t>(std::max(-32767.f, std::min(32767.f, q)));
+    // Clamping first equals clamping the rounded value (round is monotonic, the bounds are integers).
+    const float q = std::max(-32767.f, std::min(32767.f, sdf_m / truncation_m * 32767.f));
+    sdf_q = static_cast<std::int16_t>(tsdf_fixed::roundToInt(q));
   }
   float weight() const { return weight_q * (1.f / 16.f); }
-  void setWeight(float w) { weight_q = static_cast<std::uint16_t>(std::max(0.f, std::min(65535.f, std::round(w * 16.f)))); }
+  void setWeight(float w) {
+    const float q = std::max(0.f, std::min(65535.f, w * 16.f));
+    weight_q = static_cast<std::uint16_t>(tsdf_fixed::roundNonNegativeToInt(q));
+  }
   static constexpr double kMaxWeight = 65535.0 / 16.0;  ///< largest representable weight
-  float foreground() const { return foreground_q / 254.f; }
+  float foreground() const { return tsdf_fixed::kForeground.p[foreground_q]; }
   void setForeground(float p) {
-    foreground_q = static_cast<std::uint8_t>(std::round(std::max(0.f, std::min(1.f, p)) * 254.f));
+    const float q = std::max(0.f, std::min(1.f, p)) * 254.f;
+    foreground_q = static_cast<std::uint8_t>(tsdf_fixed::roundNonNegativeToInt(q));
   }
   float minDistance() const {
     return min_distance_mm == 65535 ? std::numeric_limits<float>::infinity() : min_distance_mm * 1e-3f;
   }
-  void setMinDistance(float d_m) {
-    min_distance_mm = static_cast<std::uint16_t>(std::max(0.f, std::min(65534.f, std::round(d_m * 1e3f))));
+  void setMinDistance(float d_m) { min_distance_mm = quantiseDistance(d_m); }
+  /// Same result as `if (d_m < minDistance()) setMinDistance(d_m)` for finite d_m (the rounded value of a
+  /// smaller distance is never larger, of a larger one never smaller), without the data-dependent branch
+  /// that mispredicts when the stored distance is a rounded copy of the one seen again.
+  void lowerMinDistance(float d_m) { min_distance_mm = std::min(min_distance_mm, quantiseDistance(d_m)); }
+
+ private:
+  static std::uint16_t quantiseDistance(float d_m) {
+    const float q = std::max(0.f, std::min(65534.f, d_m * 1e3f));
+    return static_cast<std::uint16_t>(tsdf_fixed::roundNonNegativeToInt(q));
   }
 };
 
@@ -69,6 +113,7 @@ struct TsdfVoxelFloat {
   void setForeground(float p) { foreground_p = p; }
   float minDistance() const { return min_distance_m; }
   void setMinDistance(float d_m) { min_distance_m = d_m; }
+  void lowerMinDistance(float d_m) { min_distance_m = std::min(min_distance_m, d_m); }
   static constexpr double kMaxWeight = 1e30;
 };
 
