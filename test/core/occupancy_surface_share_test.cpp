@@ -65,6 +65,7 @@ Counts bruteForce(const OccupancyMap& map, double d_m) {
 
 TEST(SurfaceObservation, AWallSeenFrom2mAndAnotherFrom4m) {
   BackgroundMapConfig cfg;
+  cfg.free_margin_quadratic_per_m = 0.0;  // every surface voxel has a free neighbour (bruteForce's definition)
   PinholeCamera cam;  // 320 x 240, f 262.5: the 2 m view's corner rays are 2.0 x 1.23 = 2.47 m long
   const BoxRoom scene = twoWalls();
   OccupancyMap map(cfg, twoWallBounds());
@@ -134,6 +135,7 @@ TEST(SurfaceObservation, AFreeMarginGapDoesNotHideAFarWall) {
   const Eigen::Isometry3d T_near = lookPose({0.0, 0.0, 0.0}, 0.0, 0.0);
   const Eigen::Isometry3d T_far = lookPose({0.0, 0.0, 0.0}, M_PI, 0.0);
   BackgroundMapConfig plain_cfg, margin_cfg;
+  plain_cfg.free_margin_quadratic_per_m = 0.0;
   margin_cfg.free_margin_quadratic_per_m = 0.006;
   OccupancyMap plain(plain_cfg, twoWallBounds()), margin(margin_cfg, twoWallBounds());
   for (OccupancyMap* map : {&plain, &margin}) {
