@@ -65,6 +65,7 @@ Counts bruteForce(const OccupancyMap& map, double d_m) {
 
 TEST(SurfaceObservation, AWallSeenFrom2mAndAnotherFrom4m) {
   BackgroundMapConfig cfg;
+  cfg.free_margin_quadratic_per_m = 0.0;  // every surface voxel has a free neighbour (bruteForce's definition)
   PinholeCamera cam;  // 320 x 240, f 262.5: the 2 m view's corner rays are 2.0 x 1.23 = 2.47 m long
   const BoxRoom scene = twoWalls();
   OccupancyMap map(cfg, twoWallBounds());
@@ -123,4 +124,55 @@ TEST(SurfaceObservation, OccupiedVoxelsBehindTheExposedLayerAreNotSurface) {
   const OccupancyMap::SurfaceObservation s = map.surfaceObservedWithin(3.0);
   EXPECT_EQ(s.occupied_voxels, c.all);
   EXPECT_EQ(s.within_voxels, c.within);
+}
+
+// With the free margin on (free_margin_quadratic_per_m), carving stops q d^2 in front of each depth and leaves
+// the voxels in between unknown: 9.7 cm (2-3 voxels) in front of the wall seen from 4 m. That wall still bounds
+// observed free space across the gap, so it must count as surface, seen from 4 m, as it does without the margin.
+TEST(SurfaceObservation, AFreeMarginGapDoesNotHideAFarWall) {
+  PinholeCamera cam;
+  const BoxRoom scene = twoWalls();
+  const Eigen::Isometry3d T_near = lookPose({0.0, 0.0, 0.0}, 0.0, 0.0);
+  const Eigen::Isometry3d T_far = lookPose({0.0, 0.0, 0.0}, M_PI, 0.0);
+  BackgroundMapConfig plain_cfg, margin_cfg;
+  plain_cfg.free_margin_quadratic_per_m = 0.0;
+  margin_cfg.free_margin_quadratic_per_m = 0.006;
+  OccupancyMap plain(plain_cfg, twoWallBounds()), margin(margin_cfg, twoWallBounds());
+  for (OccupancyMap* map : {&plain, &margin}) {
+    map->integrate(scene.render(cam, T_near).data(), nullptr, cam, T_near);
+    map->integrate(scene.render(cam, T_far).data(), nullptr, cam, T_far);
+  }
+  // The gap is there: the far wall's face has no free neighbour with the margin.
+  const Counts gap = bruteForce(margin, 3.0);
+  const Counts ref = bruteForce(plain, 3.0);
+  ASSERT_GT(ref.all - ref.near_wall, 1000u);
+  EXPECT_LT(gap.all - gap.near_wall, (ref.all - ref.near_wall) / 10);
+  // Across the gap, both walls count: about the same surface and the same share (about 1/5, as without it).
+  const OccupancyMap::SurfaceObservation p = plain.surfaceObservedWithin(3.0);
+  const OccupancyMap::SurfaceObservation s = margin.surfaceObservedWithin(3.0);
+  EXPECT_NEAR(static_cast<double>(s.occupied_voxels), static_cast<double>(p.occupied_voxels), 0.05 * p.occupied_voxels);
+  EXPECT_NEAR(s.share(), p.share(), 0.02);
+  EXPECT_NEAR(s.share(), 0.2, 0.03);
+  EXPECT_DOUBLE_EQ(margin.surfaceObservedWithin(5.1).share(), 1.0);
+}
+
+// The walk across the gap goes through unknown voxels only: with a thick occupied band and the margin on, the
+// voxels behind the exposed layer (occupied in front, unknown behind the wall) still do not count.
+TEST(SurfaceObservation, TheGapWalkStopsAtOccupiedVoxels) {
+  BackgroundMapConfig cfg;
+  cfg.surface_band_m = 0.12;
+  cfg.free_margin_quadratic_per_m = 0.006;
+  PinholeCamera cam;
+  const BoxRoom scene = twoWalls();
+  OccupancyMap map(cfg, twoWallBounds());
+  const Eigen::Isometry3d T_far = lookPose({0.0, 0.0, 0.0}, M_PI, 0.0);
+  map.integrate(scene.render(cam, T_far).data(), nullptr, cam, T_far);
+  BackgroundMapConfig thin = cfg;
+  thin.surface_band_m = 0.02;
+  OccupancyMap one_layer(thin, twoWallBounds());
+  one_layer.integrate(scene.render(cam, T_far).data(), nullptr, cam, T_far);
+  // The same exposed face, whatever the band's depth behind it.
+  const std::size_t face = one_layer.surfaceObservedWithin(5.1).occupied_voxels;
+  ASSERT_GT(face, 1000u);
+  EXPECT_NEAR(static_cast<double>(map.surfaceObservedWithin(5.1).occupied_voxels), static_cast<double>(face), 0.02 * face);
 }

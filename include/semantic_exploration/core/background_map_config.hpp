@@ -25,12 +25,12 @@ struct BackgroundMapConfig {
   /// depth d, 1/m; voxels between there and the surface are left as they are
   /// (neither free nor occupied). With the sensor's sigma = s d^2, 3 s keeps a
   /// depth measured up to three sigma behind a thin wall from carving free
-  /// space through it (3 s = 0.006 for the paper's Table I sensor). Off by
-  /// default: the band it leaves unknown in front of a surface seen only
-  /// from far hides that surface from surfaceObservedWithin, which counts
-  /// occupied voxels with a free neighbour (docs/BENCHMARKS.md
-  /// "Termination"). Not above surface_front_quadratic_per_m: no gap.
-  double free_margin_quadratic_per_m = 0.0;
+  /// space through it (3 s = 0.006 for the paper's Table I sensor). Without it,
+  /// far returns carve free space through 10 cm walls and leave frontiers
+  /// and surface outside the house (docs/BENCHMARKS.md "Termination");
+  /// surfaceObservedWithin counts a surface across the gap it leaves. Not
+  /// above surface_front_quadratic_per_m: no gap; 0: off.
+  double free_margin_quadratic_per_m = 0.006;
   double publish_period_s = 1.0;   ///< minimum period between ~occupied point clouds, s
   int integration_threads = 2;     ///< threads that integrate a frame, the caller's included (same map for any count)
 

@@ -128,12 +128,14 @@ class OccupancyMap {
                                        const GainSettings& settings,
                                        const std::vector<float>& max_depth_m = {}) const;
 
-  /// Surface voxels (occupied voxels with a free 6-neighbour: the observed
-  /// surface) and how many of them were updated from <= d_m: the share of the
+  /// Surface voxels (occupied voxels with a free 6-neighbour, or, with
+  /// free_margin_quadratic_per_m, free space along an axis across the
+  /// unknown gap the margin leaves in front of them: the observed surface)
+  /// and how many of them were updated from <= d_m: the share of the
   /// background observed from close by (paper Section IV-D's termination
-  /// condition with d_m = d_bg). Occupied voxels without a free neighbour are
-  /// left out: they are the inside of walls and floors, which noisy far
-  /// returns mark occupied and no view from inside can reach from close by.
+  /// condition with d_m = d_bg). Other occupied voxels are left out: they
+  /// are the inside of walls and floors, which noisy far returns mark
+  /// occupied and no view from inside can reach from close by.
   struct SurfaceObservation {
     std::size_t occupied_voxels = 0;  ///< surface voxels (finest level; a uniform cell counts its exposed face voxels)
     std::size_t within_voxels = 0;    ///< of those, updated from <= d_m
