@@ -173,6 +173,7 @@ bool g_ours_only = false;  // --ours-only: skip OctoMap (for profiling our side)
 void run(const std::string& name, const std::vector<Frame>& frames, const semexp::PinholeCamera& cam,
          const semexp::Bounds& bounds, semexp_bench::Reporter& rep) {
   semexp::BackgroundMapConfig cfg;  // 4 cm, colour and minimum distance on
+  cfg.free_margin_quadratic_per_m = 0.0;  // OctoMap carves free space up to the measured depth: compare like with like
   cfg.integration_threads = 1;
   semexp::OccupancyMap map(cfg, bounds);
   octomap::OcTree tree(cfg.resolution_m);

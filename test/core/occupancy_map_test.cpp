@@ -505,6 +505,7 @@ TEST(OccupancyMap, NoiseMarginKeepsVoxelsInFrontOfTheSurfaceFromBeingCarved) {
   const std::vector<float> depth = scene.render(cam, T);
   const Eigen::Vector3d in_front(1.94, 0.02, 0.02);  // voxel [1.92, 1.96): 5.3 to 9.3 cm before the wall at 2.013
   BackgroundMapConfig plain;
+  plain.free_margin_quadratic_per_m = 0.0;  // carves up to the measured depth
   OccupancyMap a(plain, smallBounds());
   a.integrate(depth.data(), nullptr, cam, T);
   EXPECT_EQ(a.state(in_front), VoxelState::kFree);
@@ -533,6 +534,7 @@ TEST(OccupancyMap, FreeMarginKeepsNoisyDepthFromCarvingThroughAWall) {
   const Eigen::Vector3d measured(2.06, 0.02, 0.02);  // voxel [2.04, 2.08): the measured depth, 2.073
   const Eigen::Vector3d before(1.98, 0.02, 0.02);    // voxel [1.96, 2.00): before the free limit 1.987
   BackgroundMapConfig plain;
+  plain.free_margin_quadratic_per_m = 0.0;  // carves up to the measured depth
   OccupancyMap a(plain, smallBounds());
   a.integrate(depth.data(), nullptr, cam, T);
   EXPECT_EQ(a.state(face), VoxelState::kFree);  // carved through the wall's surface

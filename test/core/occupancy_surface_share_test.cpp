@@ -108,6 +108,7 @@ TEST(SurfaceObservation, AWallSeenFrom2mAndAnotherFrom4m) {
 // exposed layer; only the exposed layer counts as surface.
 TEST(SurfaceObservation, OccupiedVoxelsBehindTheExposedLayerAreNotSurface) {
   BackgroundMapConfig cfg;
+  cfg.free_margin_quadratic_per_m = 0.0;  // bruteForce counts free neighbours only
   cfg.surface_band_m = 0.12;
   PinholeCamera cam;
   const BoxRoom scene = twoWalls();

@@ -88,8 +88,9 @@ std::vector<CandidateSample> CandidateSampler::sample(const std::vector<Eigen::V
       s.source = CandidateSource::kObject;
       s.object_id = o.id;
       const double yaw0 = unit(rng_) * 2.0 * M_PI;
-      // From as low as the MAV clears the floor the object stands on to its top (see objectViewPoint).
-      const double z_lo = std::min(o.centroid_W.z(), o.bbox_min_W.z() + planner_.clearance_radius_m());
+      // From two clearance radii above the box bottom (the clearance sphere then stays off the floor the object
+      // stands on and its voxels) to the box top (see objectViewPoint).
+      const double z_lo = std::min(o.centroid_W.z(), o.bbox_min_W.z() + 2.0 * planner_.clearance_radius_m());
       const double z = z_lo + unit(rng_) * std::max(0.0, o.bbox_max_W.z() - z_lo);
       s.position_W = objectViewPoint(o, yaw0, z);
       if (is_free) {

@@ -63,12 +63,12 @@ class CandidateSampler {
   /// The view point next to `object` along horizontal direction yaw_rad, at the centroid's height.
   Eigen::Vector3d objectViewPoint(const ObjectSummary& object, double yaw_rad) const;
   /// The same at camera height z_W, m. Object candidates draw z_W uniformly
-  /// from the clearance radius above the box bottom (or the centroid, if
-  /// lower) to the box top: a level camera (49 deg vertical field of view)
-  /// sees a seat's top only from above it and the legs below it only from
-  /// low down. With cameras above a chair's centroid only, 73-94% of the
-  /// chairs' observable surface can be seen from <= d_obj; from 0.3 m up,
-  /// 96-100% (docs/BENCHMARKS.md "Termination").
+  /// from two clearance radii above the box bottom (0.33 m by default; or the
+  /// centroid, if lower) to the box top: a level camera (49 deg vertical
+  /// field of view) sees a seat's top only from above it and the legs below
+  /// it only from low down. With cameras from 0.45 m up, 73-94% of the
+  /// default house's chairs' observable surface can be seen from <= d_obj;
+  /// from 0.30 m up, 96-100% (docs/BENCHMARKS.md "Termination").
   Eigen::Vector3d objectViewPoint(const ObjectSummary& object, double yaw_rad, double z_W) const;
 
  private:
