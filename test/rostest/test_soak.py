@@ -12,6 +12,7 @@ cloud, each non-finite object), and its peak RSS stays under ~max_rss_mb.
 
 One line per topic and service goes to the log (rosout and stdout) with the
 counts; docs/BENCHMARKS.md quotes them."""
+import io
 import os
 import random
 import sys
@@ -41,6 +42,31 @@ NODES = ("background_map", "depth_history", "instance_matching", "object_map", "
 CAMERA_NODES = ("background_map", "depth_history", "instance_matching", "object_map")
 FRAME_NODES = ("background_map", "depth_history")  # one frame_integrated per depth frame
 NOT_PER_FRAME = ("frame_gap", "bad_rgb")  # counted per missing frame / per colour image, not per depth frame
+
+
+def raw_message_type(msg_class):
+    """A message type that publishes any bytes under msg_class's type (for nodes that read a topic raw)."""
+
+    class Raw(genpy.Message):
+        _type, _md5sum, _full_text, _has_header = msg_class._type, msg_class._md5sum, msg_class._full_text, False
+        __slots__ = ["buff"]
+        _slot_types = ["uint8[]"]
+
+        def __init__(self, buff=b""):
+            self.buff = buff
+
+        def serialize(self, out):
+            out.write(self.buff)
+
+    Raw.__name__ = "Raw" + msg_class.__name__
+    return Raw
+
+
+def serialised(msg):
+    """The bytes msg is sent as."""
+    b = io.BytesIO()
+    msg.serialize(b)
+    return b.getvalue()
 
 
 def node_pid(name):

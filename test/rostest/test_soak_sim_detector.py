@@ -22,7 +22,6 @@ camera_info is counted; a path in another frame is rejected; a valid colour
 frame gives detections), the simulator still publishes frames, and each
 peak RSS (VmHWM) is under its bound (~detector_max_rss_mb,
 ~sim_max_rss_mb). One line per input to the log; docs/BENCHMARKS.md quotes them."""
-import io
 import os
 import random
 import struct
@@ -45,28 +44,12 @@ from semantic_exploration.msg import Detections, DropCounts, FrameIntegrated
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
 import soak_messages as sm  # noqa: E402
-from test_soak import camera_info, node_pid, rss_mb, wait_for  # noqa: E402
+from test_soak import camera_info, node_pid, raw_message_type, rss_mb, serialised, wait_for  # noqa: E402
 
 MAX_SIDE_PX, MAX_PIXELS = 8192, 4096 * 4096  # PinholeCamera::kMaxSidePx, kMaxPixels (core/camera.hpp)
 
 
-class RawPath(genpy.Message):
-    """Any bytes published as a nav_msgs/Path (mav_sim reads planner/path raw)."""
-    _type, _md5sum, _full_text, _has_header = Path._type, Path._md5sum, Path._full_text, False
-    __slots__ = ["buff"]
-    _slot_types = ["uint8[]"]
-
-    def __init__(self, buff=b""):
-        self.buff = buff
-
-    def serialize(self, out):
-        out.write(self.buff)
-
-
-def serialised(msg):
-    b = io.BytesIO()
-    msg.serialize(b)
-    return b.getvalue()
+RawPath = raw_message_type(Path)  # mav_sim reads this topic raw
 
 
 class SoakSimDetector(unittest.TestCase):

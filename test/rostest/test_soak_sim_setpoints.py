@@ -19,7 +19,6 @@ Afterwards mav_sim is the process it was, still publishes camera frames,
 counts a ping (a setpoint in another frame), flies to a valid setpoint
 streamed at 20 Hz, and its peak RSS (VmHWM) is under ~sim_max_rss_mb.
 One line per category to the log; docs/BENCHMARKS.md quotes them."""
-import io
 import math
 import os
 import random
@@ -37,28 +36,12 @@ from semantic_exploration.msg import DropCounts
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
 import soak_messages as sm  # noqa: E402
-from test_soak import node_pid, rss_mb, wait_for  # noqa: E402
+from test_soak import node_pid, raw_message_type, rss_mb, serialised, wait_for  # noqa: E402
 
 FRAMES_OTHER = ("map", "camera", "body", "odom", "world2", "World", " world", "world/")
 
 
-class RawPoseStamped(genpy.Message):
-    """Any bytes published as a geometry_msgs/PoseStamped (mav_sim reads the setpoints raw)."""
-    _type, _md5sum, _full_text, _has_header = PoseStamped._type, PoseStamped._md5sum, PoseStamped._full_text, False
-    __slots__ = ["buff"]
-    _slot_types = ["uint8[]"]
-
-    def __init__(self, buff=b""):
-        self.buff = buff
-
-    def serialize(self, out):
-        out.write(self.buff)
-
-
-def serialised(msg):
-    b = io.BytesIO()
-    msg.serialize(b)
-    return b.getvalue()
+RawPoseStamped = raw_message_type(PoseStamped)  # mav_sim reads this topic raw
 
 
 def expected_reason(m, lo, hi):
