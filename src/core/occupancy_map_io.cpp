@@ -224,7 +224,8 @@ OccupancyMap OccupancyMap::load(const std::string& path) {
   cfg.surface_band_m = get<double>(f);
   cfg.surface_front_m = get<double>(f);
   cfg.surface_front_quadratic_per_m = get<double>(f);
-  if (version >= 2) cfg.free_margin_quadratic_per_m = get<double>(f);
+  // Version 1 maps were made before the free margin existed: without one, whatever the default is now.
+  cfg.free_margin_quadratic_per_m = version >= 2 ? get<double>(f) : 0.0;
   cfg.integrate_colour = get<std::uint8_t>(f) != 0;
   cfg.integrate_min_distance = get<std::uint8_t>(f) != 0;
   cfg.publish_period_s = get<double>(f);

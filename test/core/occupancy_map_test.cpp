@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -324,6 +325,33 @@ TEST(OccupancyMap, FrontierAppearsAndDisappears) {
           }
     EXPECT_TRUE(unk) << q.transpose() << " size " << size;
   });
+}
+
+// A version-1 file (written before free_margin_quadratic_per_m existed) loads as a map without a free margin,
+// whatever the default is now. Made from a version-2 file: version 1 at byte 8, and the margin's 8 bytes at
+// byte 80 (after the magic, the version, resolution_m, block_size and seven doubles) removed.
+TEST(OccupancyMap, AVersion1FileLoadsWithoutAFreeMargin) {
+  BackgroundMapConfig cfg;
+  cfg.free_margin_quadratic_per_m = 0.0;
+  PinholeCamera cam;
+  const BoxRoom scene = semexp_test::standardRoom();
+  OccupancyMap map(cfg, scene.bounds(0.2));
+  const Eigen::Isometry3d T = lookPose({0.3, 0.2, 1.2}, 0.9, 0.2);
+  map.integrate(scene.render(cam, T).data(), nullptr, cam, T);
+  const std::string v2 = tempPath("v2.semexpmap"), v1 = tempPath("v1.semexpmap"), again = tempPath("again.semexpmap");
+  map.save(v2);
+  std::string bytes = readFile(v2);
+  const std::uint32_t one = 1;
+  std::memcpy(&bytes[8], &one, sizeof(one));
+  bytes.erase(80, 8);
+  {
+    std::ofstream out(v1, std::ios::binary);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  }
+  const OccupancyMap loaded = OccupancyMap::load(v1);
+  EXPECT_EQ(loaded.config().free_margin_quadratic_per_m, 0.0);
+  loaded.save(again);
+  EXPECT_TRUE(readFile(again) == readFile(v2));  // saved as version 2, the same map
 }
 
 TEST(OccupancyMap, SaveLoadRoundTripIsBitIdentical) {
