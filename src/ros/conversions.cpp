@@ -210,7 +210,9 @@ semantic_exploration::CandidateViewArray toCandidateViewArray(const semexp::Iter
 
 semantic_exploration::ExplorationStatus toExplorationStatus(const semexp::IterationResult& r, uint8_t state,
                                                             uint32_t iteration, const std::string& frame,
-                                                            const ros::Time& stamp) {
+                                                            const ros::Time& stamp,
+                                                            const std::vector<semexp::ObjectSummary>& objects,
+                                                            double background_share) {
   semantic_exploration::ExplorationStatus s;
   s.header.stamp = stamp;
   s.header.frame_id = frame;
@@ -234,7 +236,23 @@ semantic_exploration::ExplorationStatus toExplorationStatus(const semexp::Iterat
   s.background_done = r.termination.background_done;
   s.objects_done = r.termination.objects_done;
   s.last_condition = r.termination.last_condition;
+  s.background_observed_share = static_cast<float>(background_share);
+  for (const auto& o : objects) {
+    s.object_ids.push_back(o.id);
+    s.object_observed_shares.push_back(static_cast<float>(o.observed_fraction));
+  }
   return s;
+}
+
+std::string fromMapStats(const semantic_exploration::MapStats& msg, double& explored_volume_m3,
+                         double& background_share) {
+  const double share = msg.surface_observed_share;
+  if (!std::isfinite(msg.explored_volume_m3) || msg.explored_volume_m3 < 0 ||
+      !(share == -1 || (std::isfinite(share) && share >= 0 && share <= 1)))
+    return "map stats with a negative or non-finite explored volume or a share outside [0, 1]";
+  explored_volume_m3 = msg.explored_volume_m3;
+  if (share >= 0) background_share = share;
+  return "";
 }
 
 sensor_msgs::PointCloud2 toPointCloud(const std::vector<Eigen::Vector3d>& points_W, const ros::Time& stamp,

@@ -132,17 +132,11 @@ void PlannerNode::objectsCallback(const semantic_exploration::ObjectArrayConstPt
 }
 
 void PlannerNode::statsCallback(const semantic_exploration::MapStatsConstPtr& msg) {
-  const bool volume_ok = std::isfinite(msg->explored_volume_m3) && msg->explored_volume_m3 >= 0;
-  // -1: background_map does not know the share yet (see MapStats.msg).
-  const bool share_ok = msg->surface_observed_share == -1 || (std::isfinite(msg->surface_observed_share) &&
-                                                              msg->surface_observed_share >= 0 &&
-                                                              msg->surface_observed_share <= 1);
-  if (!volume_ok || !share_ok) {
-    drops_.drop("bad_stats", "map stats with a negative or non-finite explored volume or a share outside [0, 1]");
+  const std::string bad = fromMapStats(*msg, explored_volume_m3_, background_share_);
+  if (!bad.empty()) {
+    drops_.drop("bad_stats", bad);
     return;
   }
-  explored_volume_m3_ = msg->explored_volume_m3;
-  if (msg->surface_observed_share >= 0) background_share_ = msg->surface_observed_share;
   map_retired_frontiers_ = msg->retired_frontier_count;
 }
 
@@ -188,28 +182,21 @@ bool PlannerNode::planOnce(std_srvs::Trigger::Request&, std_srvs::Trigger::Respo
 bool PlannerNode::iterate(std::string& message) {
   last_attempt_ = ros::WallTime::now();
   const ros::Time now = ros::Time::now();
-  if (replica_.empty()) {
-    message = "waiting for the map (the replica is empty)";
+  const auto wait = [&](const std::string& why) {
+    message = why;
     publishStatus(ExplorationStatus::STATE_WAITING, message);
     return false;
-  }
+  };
+  if (replica_.empty()) return wait("waiting for the map (the replica is empty)");
   Eigen::Isometry3d T_WB;
   const std::string err = poses_->lookup(frames_.world, frames_.body, ros::Time(0), T_WB);
-  if (!err.empty()) {
-    message = "waiting for the MAV pose: " + err;
-    publishStatus(ExplorationStatus::STATE_WAITING, message);
-    return false;
-  }
+  if (!err.empty()) return wait("waiting for the MAV pose: " + err);
   if (!planner_ || planner_resolution_m_ != replica_.resolution_m()) {
     planner_ = std::make_unique<semexp::ExplorationPlanner>(config_, exploration_, bounds_, camera_,
                                                              replica_.resolution_m(), termination_, retirement_);
     planner_resolution_m_ = replica_.resolution_m();
   }
-  if (!have_frontiers_) {
-    message = "waiting for the first frontier cloud";
-    publishStatus(ExplorationStatus::STATE_WAITING, message);
-    return false;
-  }
+  if (!have_frontiers_) return wait("waiting for the first frontier cloud");
   if (!started_) {
     started_ = true;
     start_time_ = now;
@@ -229,12 +216,11 @@ bool PlannerNode::iterate(std::string& message) {
   in.background_observed_share = background_share_;
 
   semexp::ExplorationProviders prov;
-  const semexp::MapReplica& replica = replica_;
-  const semexp::Bounds bounds = bounds_;
-  prov.is_free = [&replica, bounds](const Eigen::Vector3d& p, double r) {
-    return bounds.contains(p) && replica.sphereFree(p, r);
+  // Read-only while planning: the map and bounds change only in this node's callbacks, which wait for it.
+  prov.is_free = [this](const Eigen::Vector3d& p, double r) {
+    return bounds_.contains(p) && replica_.sphereFree(p, r);
   };
-  prov.not_occupied = [&replica](const Eigen::Vector3d& p, double r) { return replica.sphereNotOccupied(p, r); };
+  prov.not_occupied = [this](const Eigen::Vector3d& p, double r) { return replica_.sphereNotOccupied(p, r); };
   prov.gains = [this](const std::vector<Eigen::Vector3d>& ps) {
     return services_->gains(ps, objects_, replica_.resolution_m());
   };
@@ -274,13 +260,8 @@ bool PlannerNode::iterate(std::string& message) {
     state_ = published ? ExplorationStatus::STATE_EXECUTING : ExplorationStatus::STATE_WAITING;
     if (!published) ROS_WARN("planner: iteration %u: %s", iteration_, r.message.c_str());
   }
-  auto status = toExplorationStatus(r, state_, iteration_, frames_.world, now);
+  auto status = toExplorationStatus(r, state_, iteration_, frames_.world, now, objects_, background_share_);
   status.service_timeouts = static_cast<uint32_t>(drops_.count("service_timeout"));
-  status.background_observed_share = static_cast<float>(background_share_);
-  for (const auto& o : objects_) {
-    status.object_ids.push_back(o.id);
-    status.object_observed_shares.push_back(static_cast<float>(o.observed_fraction));
-  }
   status_pub_.publish(status);
   message = r.message;
   last_attempt_ = ros::WallTime::now();  // the retry period is the pause after an attempt, however long it took
@@ -311,10 +292,9 @@ void PlannerNode::publishResult(const semexp::IterationResult& r, const ros::Tim
   markers_pub_.publish(candidateMarkers(r, arr.header, replica_.resolution_m()));
   if (r.winner < 0) return;
   const int w = config_.raycast_width, h = config_.raycast_height;
-  gain_pubs_[0].publish(floatImageMsg(arr.header, r.winner_gains.entropy.values, w, h));
-  gain_pubs_[1].publish(floatImageMsg(arr.header, r.winner_gains.background.values, w, h));
-  gain_pubs_[2].publish(floatImageMsg(arr.header, r.winner_gains.object.values, w, h));
-  gain_pubs_[3].publish(floatImageMsg(arr.header, r.winner_combined.values, w, h));
+  const std::vector<float>* images[4] = {&r.winner_gains.entropy.values, &r.winner_gains.background.values,
+                                         &r.winner_gains.object.values, &r.winner_combined.values};  // gain_pubs_ order
+  for (int k = 0; k < 4; ++k) gain_pubs_[k].publish(floatImageMsg(arr.header, *images[k], w, h));
 }
 
 }  // namespace semexp_ros

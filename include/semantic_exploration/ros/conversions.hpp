@@ -24,6 +24,7 @@
 #include "semantic_exploration/ComputeGains.h"
 #include "semantic_exploration/ExplorationStatus.h"
 #include "semantic_exploration/MapBlocks.h"
+#include "semantic_exploration/MapStats.h"
 #include "semantic_exploration/ObjectArray.h"
 #include "semantic_exploration/core/object_map.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
@@ -87,10 +88,20 @@ semantic_exploration::CandidateViewArray toCandidateViewArray(const semexp::Iter
                                                               const std::string& frame, const ros::Time& stamp,
                                                               double current_yaw_rad);
 
-/// The status of a finished iteration (the planner's state and iteration count come from the node).
+/// The status of a finished iteration (the planner's state and iteration count come from the node), with
+/// the objects' shares seen from <= d_obj and the background share seen from <= d_bg ([0, 1], -1 unknown)
+/// the iteration used.
 semantic_exploration::ExplorationStatus toExplorationStatus(const semexp::IterationResult& r, uint8_t state,
                                                             uint32_t iteration, const std::string& frame,
-                                                            const ros::Time& stamp);
+                                                            const ros::Time& stamp,
+                                                            const std::vector<semexp::ObjectSummary>& objects,
+                                                            double background_share);
+
+/// The explored volume (m^3) and the background share seen from <= d_bg of a MapStats message. Returns ""
+/// or why the message is unusable (a negative or non-finite volume, a share outside [0, 1] other than -1),
+/// in which case nothing is written. A share of -1 (not measured yet) leaves `background_share` as it is.
+std::string fromMapStats(const semantic_exploration::MapStats& msg, double& explored_volume_m3,
+                         double& background_share);
 
 /// Trajectory samples -> MultiDOFJointTrajectory with one joint, `joint`
 /// (the body frame): per point the pose (translation, yaw quaternion), the
