@@ -23,12 +23,6 @@ OccupancyMap::SurfaceObservation OccupancyMap::surfaceObservedWithin(double d_m)
   const auto within = [d_mm](std::uint16_t d) { return d != kNoDist && d <= d_mm; };
   const auto isFree = [](std::int16_t v) { return v != kUnknown && v < 0; };
   const int m = store_.bs - 1;
-  // Whether voxel (x, y, z) of the grid has a free 6-neighbour: the voxel bounds observed free space, so it
-  // is surface, not the inside of a wall that noisy far returns marked occupied.
-  const auto exposed = [&](int x, int y, int z) {
-    return isFree(store_.voxelValue(x + 1, y, z)) || isFree(store_.voxelValue(x - 1, y, z)) || isFree(store_.voxelValue(x, y + 1, z)) ||
-           isFree(store_.voxelValue(x, y - 1, z)) || isFree(store_.voxelValue(x, y, z + 1)) || isFree(store_.voxelValue(x, y, z - 1));
-  };
   // With a free margin (free_margin_quadratic_per_m), carving stops q d^2 in front of a depth d and the voxels
   // in between stay unknown, so a surface seen only from far has no free neighbour. It still bounds observed
   // free space across that gap: look along each axis through unknown voxels only, as far as the gap reaches
@@ -39,10 +33,13 @@ OccupancyMap::SurfaceObservation OccupancyMap::surfaceObservedWithin(double d_m)
     const double dd = d * 1e-3;
     return std::min(kMaxGapSteps, static_cast<int>(std::ceil(std::sqrt(3.0) * gap_q * dd * dd / store_.res)));
   };
-  const auto exposedAcrossGap = [&](int x, int y, int z, int steps) {
+  // Whether voxel (x, y, z) of the grid bounds observed free space: a free 6-neighbour, or free space along an
+  // axis beyond at most `gap_steps` unknown voxels. Surface, not the inside of a wall that noisy far returns
+  // marked occupied.
+  const auto exposed = [&](int x, int y, int z, int gap_steps) {
     static const int kDir[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
     for (const auto& dir : kDir)
-      for (int s = 1; s <= steps + 1; ++s) {
+      for (int s = 1; s <= gap_steps + 1; ++s) {
         const std::int16_t v = store_.voxelValue(x + s * dir[0], y + s * dir[1], z + s * dir[2]);
         if (isFree(v)) return true;
         if (v != kUnknown) break;  // occupied: the walk left the gap
@@ -62,8 +59,7 @@ OccupancyMap::SurfaceObservation OccupancyMap::surfaceObservedWithin(double d_m)
         for (int y = 0; y < store_.bs; ++y)
           for (int x = 0; x < store_.bs; ++x) {
             if (x != 0 && x != m && y != 0 && y != m && z != 0 && z != m) continue;
-            if (!exposed(gx0 + x, gy0 + y, gz0 + z) && (steps == 0 || !exposedAcrossGap(gx0 + x, gy0 + y, gz0 + z, steps)))
-              continue;
+            if (!exposed(gx0 + x, gy0 + y, gz0 + z, steps)) continue;
             ++out.occupied_voxels;
             out.within_voxels += near;
           }
@@ -77,13 +73,11 @@ OccupancyMap::SurfaceObservation OccupancyMap::surfaceObservedWithin(double d_m)
       if (L[i] == kUnknown || L[i] < 0) continue;
       const int x = i & m, y = (i >> store_.bshift) & m, z = i >> (2 * store_.bshift);
       const bool inner = x > 0 && x < m && y > 0 && y < m && z > 0 && z < m;
-      bool ex = inner ? isFree(L[i + 1]) || isFree(L[i - 1]) || isFree(L[i + s1]) || isFree(L[i - s1]) ||
-                            isFree(L[i + s2]) || isFree(L[i - s2])
-                      : exposed(gx0 + x, gy0 + y, gz0 + z);
-      if (!ex && D) {
-        const int steps = gapSteps(D[i]);
-        ex = steps > 0 && exposedAcrossGap(gx0 + x, gy0 + y, gz0 + z, steps);
-      }
+      const int steps = D ? gapSteps(D[i]) : 0;
+      // Inside the block the direct neighbours are read from it; the grid walk only where that cannot decide.
+      const bool ex = (inner && (isFree(L[i + 1]) || isFree(L[i - 1]) || isFree(L[i + s1]) || isFree(L[i - s1]) ||
+                                 isFree(L[i + s2]) || isFree(L[i - s2]))) ||
+                      ((!inner || steps > 0) && exposed(gx0 + x, gy0 + y, gz0 + z, steps));
       if (!ex) continue;
       ++out.occupied_voxels;
       if (D && within(D[i])) ++out.within_voxels;
