@@ -11,6 +11,7 @@
 
 #include "semantic_exploration/core/tsdf.hpp"
 #include "semexp_test/cameras.hpp"
+#include "semexp_test/object_scenes.hpp"
 #include "semexp_test/rendering.hpp"
 
 using namespace semexp;
@@ -48,10 +49,7 @@ TEST(TsdfFixedPoint, QuantisationRoundTrips) {
 
 TEST(TsdfFixedPoint, MeshDiffersFromFloatLayoutByLessThanQuarterVoxel) {
   PinholeCamera cam;
-  TsdfParams p;
-  p.resolution_m = 0.02;
-  p.truncation_m = 0.08;
-  p.behind_surface_m = 0.04;
+  const TsdfParams p = objectTsdfParams();
   TsdfMap fixed(p);
   TsdfMapFloat flt(p);
   const Sphere sphere(Eigen::Vector3d(0.0, 0.0, 0.0), 0.25);
@@ -124,10 +122,7 @@ TEST(TsdfFixedPoint, InlineRoundingMatchesStdRound) {
 // weight within one 1/16 rounding per frame), and one voxel is checked by hand.
 TEST(TsdfFixedPoint, WallMatchesFloatLayoutVoxelByVoxel) {
   const PinholeCamera cam;
-  TsdfParams p;
-  p.resolution_m = 0.02;
-  p.truncation_m = 0.08;
-  p.behind_surface_m = 0.04;
+  const TsdfParams p = objectTsdfParams();
   TsdfMap fixed(p);
   TsdfMapFloat flt(p);
   const Box wall = Box::around(Eigen::Vector3d(1.1, 0.0, 0.0), Eigen::Vector3d(0.1, 5.0, 5.0));

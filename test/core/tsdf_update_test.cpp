@@ -5,6 +5,7 @@
 
 #include "semantic_exploration/core/tsdf.hpp"
 #include "semexp_test/cameras.hpp"
+#include "semexp_test/object_scenes.hpp"
 #include "semexp_test/rendering.hpp"
 
 using namespace semexp;
@@ -12,13 +13,7 @@ using namespace semexp_test;
 
 namespace {
 
-TsdfParams params() {
-  TsdfParams p;
-  p.resolution_m = 0.02;
-  p.truncation_m = 0.08;
-  p.behind_surface_m = 0.04;
-  return p;
-}
+TsdfParams params() { return objectTsdfParams(); }
 
 const Sphere kSphere(Eigen::Vector3d(0.1, -0.05, 0.02), 0.25);
 

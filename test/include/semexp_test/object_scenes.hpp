@@ -19,6 +19,16 @@
 
 namespace semexp_test {
 
+/// An object TSDF as the tests integrate it: 2 cm voxels (config's chair resolution), 8 cm truncation, 4 cm
+/// carved behind the surface.
+inline semexp::TsdfParams objectTsdfParams() {
+  semexp::TsdfParams p;
+  p.resolution_m = 0.02;
+  p.truncation_m = 0.08;
+  p.behind_surface_m = 0.04;
+  return p;
+}
+
 /// A chair 0.44 m wide standing on z = 0 at (x, y), facing -x: a seat 0.45 m
 /// high, a back up to 0.95 m on its +x side and four 4 cm legs.
 inline BoxUnion chair(double x, double y) {
