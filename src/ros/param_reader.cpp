@@ -53,6 +53,13 @@ double asDouble(const std::string& path, const XmlRpcValue& v) {
   wrongType(path, v, "a number");
 }
 
+// The value of a parameter that must have XmlRpc type `type` (`want` names it in the error).
+template <typename T>
+T asType(const std::string& path, const XmlRpcValue& v, XmlRpcValue::Type type, const char* want) {
+  if (v.getType() != type) wrongType(path, v, want);
+  return static_cast<T>(const_cast<XmlRpcValue&>(v));  // XmlRpc's conversion operators are non-const
+}
+
 }  // namespace
 
 ParamReader ParamReader::fromNodeHandle(const ros::NodeHandle& pnh) {
@@ -88,26 +95,17 @@ void ParamReader::get(const std::string& path, double& out) const {
 
 void ParamReader::get(const std::string& path, int& out) const {
   record(path, text(out));
-  const auto* v = find(path);
-  if (!v) return;
-  if (v->getType() != XmlRpcValue::TypeInt) wrongType(path, *v, "an integer");
-  out = static_cast<int>(const_cast<XmlRpcValue&>(*v));
+  if (const auto* v = find(path)) out = asType<int>(path, *v, XmlRpcValue::TypeInt, "an integer");
 }
 
 void ParamReader::get(const std::string& path, bool& out) const {
   record(path, text(out));
-  const auto* v = find(path);
-  if (!v) return;
-  if (v->getType() != XmlRpcValue::TypeBoolean) wrongType(path, *v, "true or false");
-  out = static_cast<bool>(const_cast<XmlRpcValue&>(*v));
+  if (const auto* v = find(path)) out = asType<bool>(path, *v, XmlRpcValue::TypeBoolean, "true or false");
 }
 
 void ParamReader::get(const std::string& path, std::string& out) const {
   record(path, text(out));
-  const auto* v = find(path);
-  if (!v) return;
-  if (v->getType() != XmlRpcValue::TypeString) wrongType(path, *v, "a string");
-  out = static_cast<std::string>(const_cast<XmlRpcValue&>(*v));
+  if (const auto* v = find(path)) out = asType<std::string>(path, *v, XmlRpcValue::TypeString, "a string");
 }
 
 void ParamReader::get(const std::string& path, std::vector<std::string>& out) const {
@@ -117,10 +115,8 @@ void ParamReader::get(const std::string& path, std::vector<std::string>& out) co
   if (v->getType() != XmlRpcValue::TypeArray) wrongType(path, *v, "a list of strings");
   XmlRpcValue& m = const_cast<XmlRpcValue&>(*v);
   std::vector<std::string> r;
-  for (int i = 0; i < m.size(); ++i) {
-    if (m[i].getType() != XmlRpcValue::TypeString) wrongType(path, m[i], "a list of strings");
-    r.push_back(static_cast<std::string>(m[i]));
-  }
+  for (int i = 0; i < m.size(); ++i)
+    r.push_back(asType<std::string>(path, m[i], XmlRpcValue::TypeString, "a list of strings"));
   out = r;
 }
 
