@@ -47,13 +47,8 @@ struct Frame {
 };
 
 std::string defaultDataDir() {
-  // this file lives at <repo>/test/bench/; the data at <repo>/../shared/data/box-room-tum
-  std::string f = __FILE__;
-  for (int i = 0; i < 3; ++i) {
-    const auto p = f.find_last_of('/');
-    f = p == std::string::npos ? "." : f.substr(0, p);
-  }
-  return f + "/../shared/data/box-room-tum";
+  // <repo>/../shared/data/box-room-tum, set by CMake as an absolute path
+  return SEMEXP_DEFAULT_BOX_ROOM_DIR;
 }
 
 std::vector<std::pair<double, std::string>> readList(const std::string& path) {
