@@ -42,6 +42,7 @@ std::uint32_t ObjectMap::createObject(int class_id) {
   p.resolution_m = classes_.resolution(class_id);
   p.truncation_m = config_.truncation_voxels * p.resolution_m;
   p.behind_surface_m = config_.behind_surface_voxels * p.resolution_m;
+  p.behind_surface_quadratic_per_m = config_.behind_surface_quadratic_per_m;
   p.block_size = config_.block_size;
   p.max_weight = config_.max_weight;
   objects_.emplace(id, std::make_unique<MappedObject>(id, class_id, name, p));

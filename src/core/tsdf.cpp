@@ -93,7 +93,14 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
 
   const float res = static_cast<float>(params_.resolution_m);
   const float trunc = truncation_m_;
-  const float behind = static_cast<float>(std::min(params_.behind_surface_m, params_.truncation_m));
+  const float behind_fixed = static_cast<float>(std::min(params_.behind_surface_m, params_.truncation_m));
+  const float q = static_cast<float>(params_.behind_surface_quadratic_per_m);
+  // The band behind a depth d (m), or -1 where the noise outgrows the truncation band (not integrated).
+  auto behindAt = [&](float d) {
+    if (q <= 0.f) return behind_fixed;
+    const float b = q * d * d;
+    return b > trunc ? -1.f : std::max(behind_fixed, b);
+  };
   const float max_w = static_cast<float>(params_.max_weight);
   const Eigen::Isometry3f T_WCf = T_WC.cast<float>();
   const Eigen::Isometry3f T_CWf = T_WCf.inverse();
@@ -106,6 +113,8 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
     const std::uint8_t* mrow = mask.ptr<std::uint8_t>(v);
     for (int u = 0; u < depth_m.cols; ++u) {
       if (!mrow[u] || mrow[u] == kMaskUnknown || !validDepth(drow[u], camera)) continue;
+      const float behind = behindAt(drow[u]);
+      if (behind < 0.f) continue;
       const Eigen::Vector3f ray = camera.ray_C(static_cast<float>(u), static_cast<float>(v));
       const float n = ray.norm();
       const Eigen::Vector3f dir_W = T_WCf.linear() * (ray / n);
@@ -147,7 +156,8 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
           const float dist = p_C.norm();
           // Distance along the pixel's ray between the measured surface and the voxel.
           const float sdf = (d - p_C.z()) * dist / p_C.z();
-          if (sdf < -behind) continue;
+          const float behind = behindAt(d);
+          if (behind < 0.f || sdf < -behind) continue;
           V& vx = block[i];
           const float w = vx.weight();
           if (in_mask) {

@@ -161,3 +161,11 @@ TEST(ClassTable, IdsAreOneBasedAndResolutionFallsBack) {
   EXPECT_DOUBLE_EQ(ct.resolution(1), 0.02);
   EXPECT_DOUBLE_EQ(ct.resolution(2), 0.05);
 }
+
+TEST(Config, ObjectNoiseBandMustBeNonNegative) {
+  ObjectMapConfig c;
+  c.behind_surface_quadratic_per_m = -0.001;
+  EXPECT_EQ(rejected([&] { c.validate(); }), "object_map/behind_surface_quadratic_per_m");
+  c.behind_surface_quadratic_per_m = 0.0;  // a fixed band
+  EXPECT_EQ(rejected([&] { c.validate(); }), "");
+}

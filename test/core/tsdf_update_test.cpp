@@ -88,6 +88,39 @@ TEST(TsdfUpdate, BledMaskLosesForegroundWhenSeenOutsideTheMask) {
   EXPECT_LT(off, mesh.vertices_W.size() / 100) << off << " of " << mesh.vertices_W.size() << " vertices off the sphere";
 }
 
+// The band behind the surface is max(behind_surface_m, q d^2): for a wall 3 m ahead and q = 0.006 that is
+// 0.054 m, so the voxel centred 5 cm behind the wall is updated with weight (0.054 - 0.05) / (0.054 - 0.02) =
+// 0.118 (one voxel behind the weight is 1, falling linearly to 0 at the band's end), while the fixed 4 cm band
+// leaves it unseen. A wall 4 m ahead has q d^2 = 0.096 m > the 0.08 m truncation: not integrated at all.
+TEST(TsdfUpdate, BandBehindTheSurfaceFollowsTheDepthNoise) {
+  const PinholeCamera cam = tinyCamera();
+  const Eigen::Isometry3d T_WC = lookAlong(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  auto weightBehind = [&](double wall_x, double q, std::size_t* updated) {
+    const Box wall(Eigen::Vector3d(wall_x, -2.0, -2.0), Eigen::Vector3d(wall_x + 0.5, 2.0, 2.0));
+    TsdfParams p = params();
+    p.behind_surface_quadratic_per_m = q;
+    TsdfMap map(p);
+    cv::Mat depth, labels;
+    renderShapes(cam, T_WC, {&wall}, depth, labels);
+    *updated = map.integrate(cam, T_WC, depth, cv::Mat(), labels > 0, true);
+    float w = 0.f;
+    map.forEachVoxel([&](const Eigen::Vector3i& idx, const TsdfVoxel& vx) {
+      if (map.voxelCentre(idx).isApprox(Eigen::Vector3f(static_cast<float>(wall_x) + 0.05f, 0.01f, 0.01f), 1e-4f))
+        w = vx.weight();
+    });
+    return w;
+  };
+  std::size_t updated = 0;
+  EXPECT_NEAR(weightBehind(3.0, 0.006, &updated), 0.118, 1.0 / 32.0);  // fixed point: weight in steps of 1/16
+  EXPECT_GT(updated, 0u);
+  EXPECT_EQ(weightBehind(3.0, 0.0, &updated), 0.f);
+  EXPECT_GT(updated, 0u);
+  EXPECT_EQ(weightBehind(4.0, 0.006, &updated), 0.f);
+  EXPECT_EQ(updated, 0u);
+  EXPECT_EQ(weightBehind(4.0, 0.0, &updated), 0.f);  // 5 cm behind: outside the fixed 4 cm band
+  EXPECT_GT(updated, 0u);
+}
+
 TEST(TsdfUpdate, RayCastHitsTheSurface) {
   PinholeCamera cam;
   TsdfMap map(params());

@@ -18,6 +18,11 @@ struct ObjectMapConfig {
   /// How far behind the measured surface voxels are still updated, in voxels
   /// (<= truncation_voxels); keeps free space hidden behind edges from being dug in.
   double behind_surface_voxels = 2.0;
+  /// The band behind the surface also covers q d^2 behind a depth d (3 sigma of
+  /// the depth noise: q = 3 s for sigma = s d^2), 1/m; depths whose q d^2 exceeds
+  /// the truncation are not integrated (TsdfParams::behind_surface_quadratic_per_m).
+  /// 0 = a fixed band.
+  double behind_surface_quadratic_per_m = 0.006;
   /// A rendered object surface farther than the measured depth d plus
   /// render_depth_tolerance_m + render_depth_tolerance_rel * d is hidden
   /// (the relative part follows the depth noise, which grows with distance).
@@ -64,6 +69,8 @@ struct ObjectMapConfig {
     require(std::isfinite(behind_surface_voxels) && behind_surface_voxels >= 1 &&
                 behind_surface_voxels <= truncation_voxels,
             ns + "behind_surface_voxels", "must be in [1, truncation_voxels]");
+    require(std::isfinite(behind_surface_quadratic_per_m) && behind_surface_quadratic_per_m >= 0,
+            ns + "behind_surface_quadratic_per_m", "must be >= 0 1/m");
     require(std::isfinite(render_depth_tolerance_m) && render_depth_tolerance_m >= 0, ns + "render_depth_tolerance_m",
             "must be >= 0 m");
     require(std::isfinite(merge_fraction) && merge_fraction > 0.5 && merge_fraction <= 1, ns + "merge_fraction",

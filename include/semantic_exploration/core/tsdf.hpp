@@ -125,6 +125,15 @@ struct TsdfParams {
   /// (clamped to truncation_m), m; the weight falls linearly from 1 at one
   /// voxel behind to 0 here, so free space hidden behind edges is not dug in.
   double behind_surface_m = 0.04;
+  /// The band behind the surface grows with the depth noise: it reaches
+  /// max(behind_surface_m, q d^2) behind a depth d (clamped to truncation_m),
+  /// with q this value, 1/m (3 sigma of a sensor with sigma = s d^2 is q = 3 s).
+  /// A narrower band than the noise updates a voxel inside a solid only from
+  /// the rare rays that overshoot it, whose mean SDF is biased towards free,
+  /// and that bias leaves surface inside solid objects seen from far. Pixels
+  /// whose q d^2 exceeds truncation_m are not integrated at all: the band
+  /// cannot hold their noise. 0 = a fixed band of behind_surface_m.
+  double behind_surface_quadratic_per_m = 0.0;
   int block_size = 8;          ///< voxels per block edge (power of two)
   double max_weight = 100.0;   ///< weight cap (one unit per observation at the surface)
 

@@ -4,9 +4,11 @@
 /// analytic scenes (z-depth along the optical axis, m; 0 = no return).
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <random>
 #include <vector>
 
 #include "semantic_exploration/core/camera.hpp"
@@ -47,6 +49,20 @@ inline void renderShapes(const semexp::PinholeCamera& cam, const Eigen::Isometry
     labels.at<std::uint16_t>(v, u) = static_cast<std::uint16_t>(k + 1);
     return static_cast<float>(s);
   });
+}
+
+/// Adds the simulator's depth noise to every return of a z-depth image
+/// (CV_32FC1): Gaussian, sigma(d) = max(sigma_min_m, min(s_per_m d^2, sigma_max_m)),
+/// the paper's Table I model and values by default.
+inline void addQuadraticDepthNoise(cv::Mat& depth_m, std::mt19937& rng, double s_per_m = 0.002,
+                                   double sigma_min_m = 0.005, double sigma_max_m = 0.2) {
+  for (int v = 0; v < depth_m.rows; ++v)
+    for (int u = 0; u < depth_m.cols; ++u) {
+      float& d = depth_m.at<float>(v, u);
+      if (d <= 0.f) continue;
+      const double sigma = std::max(sigma_min_m, std::min(s_per_m * d * d, sigma_max_m));
+      d += static_cast<float>(std::normal_distribution<double>(0.0, sigma)(rng));
+    }
 }
 
 }  // namespace semexp_test
