@@ -25,6 +25,7 @@
 // Peer: the paper reports 2.8 s per iteration on a Jetson Xavier NX; that is
 // a reference value from the paper, not measured here.
 #include <cstdio>
+#include <string>
 #include <thread>
 
 #include "semexp_test/test_grid.hpp"
@@ -135,6 +136,8 @@ int main(int argc, char** argv) {
   const Eigen::Vector3d starts[5] = {{2.0, 4.0, 1.3}, {2.0, 2.5, 1.0}, {6.0, 4.0, 1.3}, {1.0, 6.5, 1.2}, {5.5, 5.0, 1.0}};
   std::vector<double> total, sampling, paths, gains, yaw, retire, total_all, paths_all, retire_all;
   int planned = 0, planned_all = 0, reachable = 0, identical = 0, winners = 0;
+  std::string winner_list;  // to compare builds: the same winners and retirement mean the same decisions
+  semexp::IterationResult last;
   const int kIterations = 20;
   for (int it = 0; it < kIterations; ++it) {
     semexp::ExplorationInputs in;
@@ -155,6 +158,7 @@ int main(int argc, char** argv) {
     if (r.winner != a.winner || r.path_W != a.path_W)
       std::fprintf(stderr, "iteration %d: lazy winner %d, exhaustive winner %d\n", it, r.winner, a.winner);
     winners += a.winner >= 0;
+    winner_list += " " + std::to_string(r.winner);
     identical += r.winner == a.winner && r.path_W == a.path_W;
     total.push_back(1e3 * r.total_s);
     sampling.push_back(1e3 * r.sampling_s);
@@ -168,6 +172,7 @@ int main(int argc, char** argv) {
     planned += r.candidates_planned;
     planned_all += a.candidates_planned;
     reachable += a.candidates_reachable;
+    if (it + 1 == kIterations) last = std::move(r);
   }
 
   const double lazy_ms = semexp_bench::median(total), all_ms = semexp_bench::median(total_all);
@@ -195,6 +200,12 @@ int main(int argc, char** argv) {
               "intermediate yaw %.1f, frontier retirement %.1f\n",
               semexp_bench::median(sampling), semexp_bench::median(paths), semexp_bench::median(gains),
               semexp_bench::median(yaw), semexp_bench::median(retire));
+
+  std::printf("  lazy winners:%s; after %d iterations %zu of %zu frontier clusters retired (geometry %zu, evidence %zu), "
+              "%zu active frontier voxels\n",
+              winner_list.c_str(), kIterations, last.retired_clusters_geometry + last.retired_clusters_evidence,
+              last.frontier_clusters, last.retired_clusters_geometry, last.retired_clusters_evidence,
+              last.active_frontiers);
 
   rep.add("planner.lazy_speedup_vs_exhaustive", speedup, "x");
   rep.add("planner.identical_winner_share", share, "");
