@@ -12,20 +12,27 @@
 // camera, 320 x 240) rendered from it by exact voxel traversal are integrated
 // into the real background map core (OccupancyMap at r = 0.04 m) and the
 // invalid-depth history: a spin at two places in the first room and one in
-// the second, leaving the third room unknown. Collision queries, frontiers
-// and entropy / background gains then come from that map, as in the planner
-// node (minus the service round trips; the object raycast, a third service,
-// is not part of this figure).
+// the second, leaving the third room unknown. Frontiers and entropy /
+// background gains then come from that map, and the collision queries from a
+// MapReplica of it, the planner node's own copy answering its sphere queries
+// (is_free = in the bounds and MapReplica::sphereFree, not_occupied =
+// MapReplica::sphereNotOccupied, exactly the node's providers), as in the
+// planner node minus the service round trips (the object raycast, a third
+// service, is not part of this figure). The iteration includes frontier
+// retirement (judging the frontiers, recording the winner's views), which
+// the node runs on every iteration too; it is printed as its own stage.
 //
 // Peer: the paper reports 2.8 s per iteration on a Jetson Xavier NX; that is
 // a reference value from the paper, not measured here.
 #include <cstdio>
+#include <string>
 #include <thread>
 
 #include "semexp_test/test_grid.hpp"
 #include "bench_common.hpp"
 #include "semantic_exploration/core/depth_history.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
+#include "semantic_exploration/core/planning/map_replica.hpp"
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
 
 using semexp_test::TestGrid;
@@ -93,20 +100,18 @@ int main(int argc, char** argv) {
   gain_settings.d_max_m = camera.d_max_m;
   gain_settings.d_desired_m = exploration.d_bg_m;
 
+  // The planner node's collision queries: its MapReplica, fed here by one
+  // full snapshot instead of the MapBlocks stream.
+  semexp::MapReplica replica;
+  if (replica.apply(map.snapshot()) != semexp::MapReplica::Result::kApplied) {
+    std::fprintf(stderr, "the map replica refused the snapshot: %s\n", replica.lastError().c_str());
+    return 1;
+  }
   semexp::ExplorationProviders prov;
-  prov.is_free = [&map](const Eigen::Vector3d& p, double r) { return map.isSphereFree(p, r); };
-  // Escapes from a start sphere that touches unknown space (the spin centres
-  // never see straight down or up): no occupied voxel centre within r.
-  prov.not_occupied = [&map, res](const Eigen::Vector3d& p, double r) {
-    const int n = static_cast<int>(std::ceil(r / res));
-    for (int x = -n; x <= n; ++x)
-      for (int y = -n; y <= n; ++y)
-        for (int z = -n; z <= n; ++z) {
-          const Eigen::Vector3d q = p + res * Eigen::Vector3d(x, y, z);
-          if ((q - p).norm() <= r + 0.5 * res && map.state(q) == semexp::VoxelState::kOccupied) return false;
-        }
-    return true;
+  prov.is_free = [&replica, &bounds](const Eigen::Vector3d& p, double r) {
+    return bounds.contains(p) && replica.sphereFree(p, r);
   };
+  prov.not_occupied = [&replica](const Eigen::Vector3d& p, double r) { return replica.sphereNotOccupied(p, r); };
   prov.gains = [&](const std::vector<Eigen::Vector3d>& ps) {
     const auto images = map.computeGains(ps, sgrid, gain_settings);
     std::vector<semexp::GainSet> out(ps.size());
@@ -129,8 +134,10 @@ int main(int argc, char** argv) {
   semexp::ExplorationPlanner lazy(lazy_config, exploration, bounds, camera, res);
   semexp::ExplorationPlanner exhaustive(all_config, exploration, bounds, camera, res);
   const Eigen::Vector3d starts[5] = {{2.0, 4.0, 1.3}, {2.0, 2.5, 1.0}, {6.0, 4.0, 1.3}, {1.0, 6.5, 1.2}, {5.5, 5.0, 1.0}};
-  std::vector<double> total, sampling, paths, gains, yaw, total_all, paths_all;
+  std::vector<double> total, sampling, paths, gains, yaw, retire, total_all, paths_all, retire_all;
   int planned = 0, planned_all = 0, reachable = 0, identical = 0, winners = 0;
+  std::string winner_list;  // to compare builds: the same winners and retirement mean the same decisions
+  semexp::IterationResult last;
   const int kIterations = 20;
   for (int it = 0; it < kIterations; ++it) {
     semexp::ExplorationInputs in;
@@ -151,17 +158,21 @@ int main(int argc, char** argv) {
     if (r.winner != a.winner || r.path_W != a.path_W)
       std::fprintf(stderr, "iteration %d: lazy winner %d, exhaustive winner %d\n", it, r.winner, a.winner);
     winners += a.winner >= 0;
+    winner_list += " " + std::to_string(r.winner);
     identical += r.winner == a.winner && r.path_W == a.path_W;
     total.push_back(1e3 * r.total_s);
     sampling.push_back(1e3 * r.sampling_s);
     paths.push_back(1e3 * r.path_planning_s);
     gains.push_back(1e3 * r.gains_s);
     yaw.push_back(1e3 * r.yaw_s);
+    retire.push_back(1e3 * r.retirement_s);
+    retire_all.push_back(1e3 * a.retirement_s);
     total_all.push_back(1e3 * a.total_s);
     paths_all.push_back(1e3 * a.path_planning_s);
     planned += r.candidates_planned;
     planned_all += a.candidates_planned;
     reachable += a.candidates_reachable;
+    if (it + 1 == kIterations) last = std::move(r);
   }
 
   const double lazy_ms = semexp_bench::median(total), all_ms = semexp_bench::median(total_all);
@@ -177,6 +188,8 @@ int main(int argc, char** argv) {
               "iteration median, ms", lazy_ms, all_ms, speedup);
   std::printf("  %-34s %12.1f %12.1f\n", "path planning median, ms", semexp_bench::median(paths),
               semexp_bench::median(paths_all));
+  std::printf("  %-34s %12.1f %12.1f\n", "frontier retirement median, ms", semexp_bench::median(retire),
+              semexp_bench::median(retire_all));
   std::printf("  %-34s %12.1f %12.1f\n", "candidates planned per iteration", static_cast<double>(planned) / kIterations,
               static_cast<double>(planned_all) / kIterations);
   std::printf("  identical winner (candidate and path): %d of %d iterations (%.0f%%); exhaustive: %.1f of %d candidates "
@@ -184,9 +197,15 @@ int main(int argc, char** argv) {
               identical, kIterations, 100.0 * share, static_cast<double>(reachable) / kIterations, config.n_candidates,
               winners);
   std::printf("  lazy stages, median ms: sampling %.2f, path planning %.1f, gains (entropy+bg raycasts) %.1f, "
-              "intermediate yaw %.1f\n",
+              "intermediate yaw %.1f, frontier retirement %.1f\n",
               semexp_bench::median(sampling), semexp_bench::median(paths), semexp_bench::median(gains),
-              semexp_bench::median(yaw));
+              semexp_bench::median(yaw), semexp_bench::median(retire));
+
+  std::printf("  lazy winners:%s; after %d iterations %zu of %zu frontier clusters retired (geometry %zu, evidence %zu), "
+              "%zu active frontier voxels\n",
+              winner_list.c_str(), kIterations, last.retired_clusters_geometry + last.retired_clusters_evidence,
+              last.frontier_clusters, last.retired_clusters_geometry, last.retired_clusters_evidence,
+              last.active_frontiers);
 
   rep.add("planner.lazy_speedup_vs_exhaustive", speedup, "x");
   rep.add("planner.identical_winner_share", share, "");
@@ -198,5 +217,6 @@ int main(int argc, char** argv) {
   rep.add("planner_path_planning_median", semexp_bench::median(paths), "ms");
   rep.add("planner_gains_median", semexp_bench::median(gains), "ms");
   rep.add("planner_yaw_median", semexp_bench::median(yaw), "ms");
+  rep.add("planner_retirement_median", semexp_bench::median(retire), "ms");
   return 0;
 }

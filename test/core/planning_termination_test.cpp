@@ -264,3 +264,65 @@ TEST(FrontierRetirement, SettingsThatWouldRetireEveryFrontierAreRefused) {
   EXPECT_EQ(parameter(c, box(5.0, 3.0)), "frontier_retirement/fov_margin_rad");
   EXPECT_EQ(parameter(FrontierRetirementConfig(), box(5.0, 0.3)), "bounds/max_m");  // < 2 x 0.165 m tall
 }
+
+namespace {
+
+// Walls across x: occupied where x lies in one of the [lo, hi] slabs (all y
+// and z); a sphere is not occupied when it keeps clear of every slab.
+CollisionQuery slabs(std::vector<std::pair<double, double>> walls) {
+  return [walls](const Eigen::Vector3d& p, double r) {
+    for (const auto& w : walls)
+      if (p.x() >= w.first - r && p.x() <= w.second + r) return false;
+    return true;
+  };
+}
+
+}  // namespace
+
+TEST(FrontierRetirement, TheRecheckOfAnEvidenceRetiredClusterAgreesWithAFreshCount) {
+  // view_range_m 1 m around a cluster at (0.25, 0.25, 1.5): at its height
+  // standoffs 0.3 and 0.8 m, at +-0.3 m 0.3 / tan(21.7 deg) = 0.75 m (the
+  // vertical field of view leaves 0.6 m out of range): 4 x 12 = 48 view points.
+  // A wall 0.5 to 0.6 m towards +x takes 5 of the 12 azimuths (0, +-30,
+  // +-60 deg) at 0.8 and 0.75 m (line of sight or clearance sphere), none at
+  // 0.3 m: 48 - 3 x 5 = 33. Retired with 33, the recheck (which judges only
+  // as many view points as the comparison needs) must decide as the full
+  // count does: back to active only with more than 33.
+  FrontierRetirementConfig cfg;
+  cfg.view_range_m = 1.0;
+  cfg.max_failed_views = 1;
+  cfg.recheck_iterations = 1;
+  FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
+  const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.5);
+  const auto voxels = patch(centre);
+  const CollisionQuery plus_x = slabs({{0.75, 0.85}}), minus_x = slabs({{-0.35, -0.25}});
+  const CollisionQuery both = slabs({{0.75, 0.85}, {-0.35, -0.25}});
+  const CollisionQuery open = slabs({});
+  const CollisionQuery enclosed = [&centre](const Eigen::Vector3d& p, double r) { return (p - centre).norm() + r < 0.1; };
+  EXPECT_EQ(fr.viewPoints(centre, open), 48);
+  EXPECT_EQ(fr.viewPoints(centre, plus_x), 33);
+  EXPECT_EQ(fr.viewPoints(centre, minus_x), 33);  // the mirror image: the other 5 azimuths
+  EXPECT_EQ(fr.viewPoints(centre, both), 18);
+  EXPECT_EQ(fr.viewPoints(centre, enclosed), 0);
+
+  EXPECT_EQ(fr.update(voxels, plus_x).active_W.size(), 25u);
+  fr.recordViews({}, plus_x, {centre});
+  FrontierRetirement::Split s = fr.update(voxels, plus_x);  // the view did not shrink it: retired with 33
+  EXPECT_EQ(s.retired_by_evidence, 1u);
+  s = fr.update(voxels, plus_x);  // 33, as at retirement
+  EXPECT_EQ(s.retired_by_evidence, 1u);
+  EXPECT_EQ(s.retired_by_geometry, 0u);
+  s = fr.update(voxels, minus_x);  // 33 again, 15 of them new: not more
+  EXPECT_EQ(s.retired_by_evidence, 1u);
+  EXPECT_EQ(s.active_W.size(), 0u);
+  s = fr.update(voxels, both);  // 18
+  EXPECT_EQ(s.retired_by_evidence, 1u);
+  EXPECT_EQ(s.retired_by_geometry, 0u);
+  s = fr.update(voxels, enclosed);  // none: now retired by geometry as well, counted there
+  EXPECT_EQ(s.retired_by_geometry, 1u);
+  EXPECT_EQ(s.retired_by_evidence, 0u);
+  EXPECT_EQ(s.active_W.size(), 0u);
+  s = fr.update(voxels, open);  // 48 > 33: worth another look
+  EXPECT_EQ(s.active_W.size(), 25u);
+  EXPECT_EQ(s.retired_by_geometry + s.retired_by_evidence, 0u);
+}

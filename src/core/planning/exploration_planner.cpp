@@ -116,7 +116,9 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
       prov.not_occupied ? prov.not_occupied : CollisionQuery([](const Eigen::Vector3d&, double) { return true; });
 
   // Frontiers no reachable view can observe do not hold the exploration open.
+  auto t0 = Clock::now();
   FrontierRetirement::Split split = retirement_.update(in.frontiers_W, not_occupied);
+  r.retirement_s = secondsSince(t0);
   r.active_frontiers = split.active_W.size();
   r.retired_frontiers_W = std::move(split.retired_W);
   r.frontier_clusters = split.clusters;
@@ -139,7 +141,7 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   }
 
   // 1. Sampling.
-  auto t0 = Clock::now();
+  t0 = Clock::now();
   const std::uint64_t iteration = sampling_iterations_++;
   std::vector<CandidateSample> samples = sampler_.sample(split.active_W, in.objects, prov.is_free);
   // Frontiers and objects done but background seen from too far: the paper
@@ -327,7 +329,9 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   }
   std::vector<Eigen::Vector3d> targets;
   if (win.sample.source == CandidateSource::kFrontier) targets.push_back(win.sample.position_W);
+  t0 = Clock::now();
   retirement_.recordViews(poses, not_occupied, targets);
+  r.retirement_s += secondsSince(t0);
 
   failed_iterations_ = 0;
   r.message += fmt("winner %.0f: utility %.3f 1/s, gain %.3f", r.winner, win.utility, win.gain) +

@@ -67,14 +67,13 @@ bool FrontierRetirement::sees(const ViewPose& pose, const Eigen::Vector3d& p, co
   return lineOfSight(pose.position_W, p, 0.5 * config_.cluster_size_m, not_occupied);
 }
 
-int FrontierRetirement::viewPoints(const Eigen::Vector3d& c, const CollisionQuery& not_occupied,
-                                   int stop_at) const {
+std::vector<Eigen::Vector3d> FrontierRetirement::viewPointPositions(const Eigen::Vector3d& c) const {
+  std::vector<Eigen::Vector3d> out;
   const double half = 0.5 * camera_.vfov_rad() - config_.fov_margin_rad;
   const double z_lo = bounds_.min_m.z() + clearance_radius_m_, z_hi = bounds_.max_m.z() - clearance_radius_m_;
-  if (half <= 0 || z_lo > z_hi) return 0;
+  if (half <= 0 || z_lo > z_hi) return out;
   const double z0 = std::clamp(c.z(), z_lo, z_hi);
   const double range = config_.view_range_m;
-  int n = 0;
   for (int k = 0; k < kHeights; ++k) {
     const int step = (k + 1) / 2 * (k % 2 == 1 ? -1 : 1);  // 0, -1, +1, -2, +2
     const double zc = z0 + step * kHeightStepM;
@@ -86,15 +85,73 @@ int FrontierRetirement::viewPoints(const Eigen::Vector3d& c, const CollisionQuer
     for (double h = h_min; h <= h_max + 1e-9; h += kRadiusStepM)
       for (int a = 0; a < kAzimuths; ++a) {
         const double az = 2.0 * M_PI * a / kAzimuths;
-        const Eigen::Vector3d p(c.x() + h * std::cos(az), c.y() + h * std::sin(az), zc);
-        // Two voxels short: a grazing line meets the voxels of the surface the frontier borders next to it.
-        if (!bounds_.contains(p) || !not_occupied(p, clearance_radius_m_) ||
-            !lineOfSight(p, c, 2.0 * resolution_m_, not_occupied))
-          continue;
-        if (++n == stop_at) return n;
+        out.emplace_back(c.x() + h * std::cos(az), c.y() + h * std::sin(az), zc);
       }
   }
+  return out;
+}
+
+bool FrontierRetirement::possibleViewPoint(const Eigen::Vector3d& p, const Eigen::Vector3d& c,
+                                           const CollisionQuery& not_occupied) const {
+  // Two voxels short: a grazing line meets the voxels of the surface the frontier borders next to it.
+  return bounds_.contains(p) && not_occupied(p, clearance_radius_m_) &&
+         lineOfSight(p, c, 2.0 * resolution_m_, not_occupied);
+}
+
+int FrontierRetirement::viewPoints(const Eigen::Vector3d& c, const CollisionQuery& not_occupied,
+                                   int stop_at) const {
+  int n = 0;
+  for (const Eigen::Vector3d& p : viewPointPositions(c))
+    if (possibleViewPoint(p, c, not_occupied) && ++n == stop_at) return n;
   return n;
+}
+
+std::vector<bool> FrontierRetirement::possibleViewPoints(const Eigen::Vector3d& c,
+                                                         const CollisionQuery& not_occupied) const {
+  const std::vector<Eigen::Vector3d> ps = viewPointPositions(c);
+  std::vector<bool> out(ps.size());
+  for (std::size_t i = 0; i < ps.size(); ++i) out[i] = possibleViewPoint(ps[i], c, not_occupied);
+  return out;
+}
+
+FrontierRetirement::Recount FrontierRetirement::recount(const Eigen::Vector3d& c, const std::vector<bool>& before,
+                                                        const CollisionQuery& not_occupied) const {
+  // Now = kept + gained, where kept counts the view points possible before
+  // that still are, gained those impossible before that are now. More than
+  // before (k) <=> gained > k - kept <=> lost = k - kept < gained. The
+  // impossible ones are judged first (usually fewer and quicker: a blocked
+  // line of sight stops early), then the possible ones only until the
+  // comparison is settled.
+  const std::vector<Eigen::Vector3d> ps = viewPointPositions(c);
+  int gained = 0, k = 0;
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    if (before[i])
+      ++k;
+    else
+      gained += possibleViewPoint(ps[i], c, not_occupied);
+  }
+  Recount out;
+  if (gained > k) {
+    out.any = out.more = true;
+    return out;
+  }
+  int kept = 0, lost = 0;
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    if (!before[i]) continue;
+    if (possibleViewPoint(ps[i], c, not_occupied)) {
+      ++kept;
+      out.any = true;
+      if (gained > k - kept) {  // already more than before
+        out.more = true;
+        return out;
+      }
+      if (gained == 0) return out;  // none gained: never more; one kept: some
+    } else if (++lost >= gained && gained > 0) {
+      return out;  // at most k - gained kept: never more, and `gained` > 0 are possible
+    }
+  }
+  out.any = out.any || gained > 0;
+  return out;
 }
 
 FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Vector3d>& frontiers_W,
@@ -133,7 +190,10 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
     c.voxels_at_view = -1;
     if (!c.by_evidence && c.failed_views >= config_.max_failed_views) {
       c.by_evidence = true;
-      c.viewpoints_at_retirement = viewPoints(c.centre_W, not_occupied);
+      c.possible_at_retirement = possibleViewPoints(c.centre_W, not_occupied);
+      c.viewpoints_at_retirement =
+          static_cast<int>(std::count(c.possible_at_retirement.begin(), c.possible_at_retirement.end(), true));
+      c.centre_at_retirement_W = c.centre_W;
       c.judged_at = iteration_;
     }
   }
@@ -143,11 +203,26 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
     Cluster& c = clusters_[m.first];
     if (c.judged_at >= 0 && iteration_ - c.judged_at < config_.recheck_iterations) continue;
     c.judged_at = iteration_;
-    c.viewpoints = viewPoints(c.centre_W, not_occupied, c.by_evidence ? 0 : 1);
-    c.by_geometry = c.viewpoints == 0;
-    if (c.by_evidence && c.viewpoints > c.viewpoints_at_retirement) {
+    if (!c.by_evidence) {
+      c.by_geometry = viewPoints(c.centre_W, not_occupied, 1) == 0;
+      continue;
+    }
+    // Retired by evidence: are more view points possible than at retirement?
+    // Where the centre has not moved, the view points are the same ones and
+    // those possible at retirement settle it without judging them all.
+    Recount now;
+    if (c.centre_W == c.centre_at_retirement_W) {
+      now = recount(c.centre_W, c.possible_at_retirement, not_occupied);
+    } else {
+      const int n = viewPoints(c.centre_W, not_occupied);
+      now.any = n > 0;
+      now.more = n > c.viewpoints_at_retirement;
+    }
+    c.by_geometry = !now.any;
+    if (now.more) {
       c.by_evidence = false;  // new free space around it: worth another look
       c.failed_views = 0;
+      c.possible_at_retirement.clear();
     }
   }
   for (const auto& m : members) {

@@ -90,6 +90,8 @@ struct IterationResult {
   std::vector<Eigen::Vector3d> retired_frontiers_W;  ///< frontier voxels no reachable view can observe
   std::size_t retired_clusters_geometry = 0, retired_clusters_evidence = 0, frontier_clusters = 0;
   double sampling_s = 0.0, path_planning_s = 0.0, gains_s = 0.0, yaw_s = 0.0, total_s = 0.0;  ///< wall times
+  /// Wall time of frontier retirement: judging this iteration's frontiers and recording the winner's views, s.
+  double retirement_s = 0.0;
 };
 
 class ExplorationPlanner {

@@ -118,15 +118,33 @@ class FrontierRetirement {
   struct Cluster {
     int voxels = 0;               ///< frontier voxels now
     int failed_views = 0;
-    int viewpoints = -1;          ///< possible view points at the last judgement (-1 never judged)
-    int viewpoints_at_retirement = 0;
+    int viewpoints_at_retirement = 0;  ///< possible view points when retired by evidence
+    /// Per view point (viewPointPositions order around centre_at_retirement_W): possible at retirement.
+    std::vector<bool> possible_at_retirement;
+    Eigen::Vector3d centre_at_retirement_W = Eigen::Vector3d::Zero();
     long judged_at = -1;          ///< iteration of the last geometry judgement
     bool by_geometry = false;
     bool by_evidence = false;
     int voxels_at_view = -1;      ///< voxel count when a view of it was recorded (-1 none)
     Eigen::Vector3d centre_W = Eigen::Vector3d::Zero();  ///< mean of its frontier voxels, m
   };
+  /// Whether more view points are possible now than before, and any at all.
+  struct Recount {
+    bool any = false;
+    bool more = false;
+  };
   std::uint64_t key(const Eigen::Vector3d& p_W) const;
+  /// The view points tried around a cluster at c_W, in a fixed order (heights, distances, azimuths), m.
+  std::vector<Eigen::Vector3d> viewPointPositions(const Eigen::Vector3d& c_W) const;
+  /// p_W is a possible camera centre that sees c_W.
+  bool possibleViewPoint(const Eigen::Vector3d& p_W, const Eigen::Vector3d& c_W,
+                         const CollisionQuery& not_occupied) const;
+  /// Per view point of viewPointPositions(c_W): possible.
+  std::vector<bool> possibleViewPoints(const Eigen::Vector3d& c_W, const CollisionQuery& not_occupied) const;
+  /// The same answer as comparing viewPoints(c_W) with the count of `before`
+  /// (the possible view points around the same c_W earlier), judging only
+  /// as many view points as the comparison needs.
+  Recount recount(const Eigen::Vector3d& c_W, const std::vector<bool>& before, const CollisionQuery& not_occupied) const;
   /// No occupied voxel on the segment from `from_W` up to short_m (m) before `to_W`.
   bool lineOfSight(const Eigen::Vector3d& from_W, const Eigen::Vector3d& to_W, double short_m,
                    const CollisionQuery& not_occupied) const;
