@@ -195,12 +195,27 @@ Integrator::NodeClass Integrator::classify(const BlockStore& store, const Frame&
   const Eigen::Vector3d c0 = fr.R_CW * lo_W + fr.t_CW;
   const Eigen::Vector3d ax = fr.R_CW.col(0) * ext.x(), ay = fr.R_CW.col(1) * ext.y(), az = fr.R_CW.col(2) * ext.z();
   double zmin = 1e300, zmax = -1e300, umin = 1e300, umax = -1e300, vmin = 1e300, vmax = -1e300;
+  // Largest value over the corners of each side of the frustum as the voxel
+  // update sees it (updateCellVoxels: a voxel centre p with p.z > 0 gets a
+  // pixel iff all four are >= 0, e.g. left: u >= -0.5 - half_vox_px / p.z
+  // <=> fx p.x + (cx + 0.5) p.z + half_vox_px >= 0). Linear in p, so a box
+  // whose corners are all below zero on one side holds no voxel that gets a
+  // pixel (nor a measured endpoint): skipping it changes nothing. This also
+  // bounds the boxes that cross the camera plane, which the footprint below
+  // cannot.
+  const double hv = 0.5 * store.res * std::min(fr.fx, fr.fy);
+  const double u_hi = fr.W - 0.5, v_hi = fr.H - 0.5;
+  double side_max[4] = {-1e300, -1e300, -1e300, -1e300};
   bool crosses = false;
   for (int c = 0; c < 8; ++c) {
     const Eigen::Vector3d p = c0 + ((c & 1) ? ax : Eigen::Vector3d::Zero()) + ((c & 2) ? ay : Eigen::Vector3d::Zero()) +
                               ((c & 4) ? az : Eigen::Vector3d::Zero());
     zmin = std::min(zmin, p.z());
     zmax = std::max(zmax, p.z());
+    side_max[0] = std::max(side_max[0], fr.fx * p.x() + (fr.cx + 0.5) * p.z() + hv);
+    side_max[1] = std::max(side_max[1], (u_hi - fr.cx) * p.z() - fr.fx * p.x() + hv);
+    side_max[2] = std::max(side_max[2], fr.fy * p.y() + (fr.cy + 0.5) * p.z() + hv);
+    side_max[3] = std::max(side_max[3], (v_hi - fr.cy) * p.z() - fr.fy * p.y() + hv);
     if (p.z() <= 1e-3) {
       crosses = true;
       continue;
@@ -212,6 +227,11 @@ Integrator::NodeClass Integrator::classify(const BlockStore& store, const Frame&
     vmax = std::max(vmax, v);
   }
   if (zmax <= 1e-3) return NodeClass::kSkip;     // wholly behind the camera
+  // Wholly outside one side of the frustum, by more than a voxel's worth
+  // (the voxel update computes in float: the margin covers its rounding).
+  const double tol = store.res * (fr.fx + fr.fy);
+  for (double g : side_max)
+    if (g < -tol) return NodeClass::kSkip;
   if (crosses) return NodeClass::kDescend;        // contains or touches the camera plane: cannot bound the footprint
   const double lim = 1e7;
   const int u0 = static_cast<int>(std::floor(std::max(-lim, umin) + 0.5));
