@@ -128,19 +128,22 @@ Summary BlockStore::cellSummary(int cell) {
     return Summary{v, v, 1, 0};
   }
   const std::int16_t* L = logOdds(b);
-  int mn = INT16_MAX, mx = INT16_MIN, nfree = 0, nocc = 0;
-  bool unk = false;
+  // Branch-free, so that it vectorises: kUnknown (INT16_MIN) is below every
+  // known value, so it can take part in the max as it is, and in the min as
+  // INT16_MAX; it counts as negative, so the free count subtracts it.
+  std::int16_t mn = INT16_MAX, mx = INT16_MIN;
+  int nneg = 0, nocc = 0, nunk = 0;
   for (int i = 0; i < bs3; ++i) {
-    const int v = L[i];
-    if (v == kUnknown) {
-      unk = true;
-      continue;
-    }
-    mn = std::min(mn, v);
+    const std::int16_t v = L[i];
+    const bool u = v == kUnknown;
+    mn = std::min(mn, u ? static_cast<std::int16_t>(INT16_MAX) : v);
     mx = std::max(mx, v);
-    nfree += v < 0;
+    nneg += v < 0;
     nocc += v >= 0;
+    nunk += u;
   }
+  const int nfree = nneg - nunk;
+  const bool unk = nunk > 0;
   block_nfree[b] = static_cast<std::uint32_t>(nfree);
   block_nocc[b] = static_cast<std::uint32_t>(nocc);
   const bool known = mn <= mx;

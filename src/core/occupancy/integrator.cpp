@@ -148,6 +148,10 @@ void Integrator::markEndpoints(BlockStore& store, const PinholeCamera& camera, c
   // Each pixel's endpoint voxel (cell, voxel in cell; cell -1: none), rows
   // spread over the pool; then blocks and bits in pixel order on this thread.
   endpoint_.resize(static_cast<std::size_t>(W) * H);
+  // Ray x per column, as each pixel computed it (a double division per pixel before).
+  ray_x_.resize(static_cast<std::size_t>(W));
+  for (int u = 0; u < W; ++u) ray_x_[u] = static_cast<float>((u - camera.cx) / camera.fx);
+  const float* ray_x = ray_x_.data();
   const int rows = 16;
   pool_->run(static_cast<std::size_t>((H + rows - 1) / rows), [&](std::size_t chunk) {
     const int v_end = std::min(H, static_cast<int>(chunk + 1) * rows);
@@ -158,7 +162,7 @@ void Integrator::markEndpoints(BlockStore& store, const PinholeCamera& camera, c
         e.cell = -1;
         const float d = depth[v * W + u];
         if (d <= 0.f) continue;
-        const float xc = static_cast<float>((u - camera.cx) / camera.fx);
+        const float xc = ray_x[u];
         const Eigen::Vector3f q = Rv * Eigen::Vector3f(xc * d, yc * d, d) + t;  // voxel units
         if (!(q.x() >= 0.f && q.y() >= 0.f && q.z() >= 0.f && q.x() < nv.x() && q.y() < nv.y() && q.z() < nv.z()))
           continue;
@@ -346,7 +350,7 @@ void Integrator::summarise(BlockStore& store, const std::vector<int>& cells, std
 
 std::size_t Integrator::memoryBytes() const {
   std::size_t m = sizeof(*this) + pyr_.memoryBytes() + hit_.capacity() * sizeof(std::uint64_t) +
-                  endpoint_.capacity() * sizeof(Endpoint) +
+                  endpoint_.capacity() * sizeof(Endpoint) + ray_x_.capacity() * sizeof(float) +
                   hit_cells_.capacity() * sizeof(int) + (cell_stamp_.capacity() + hit_stamp_.capacity()) * sizeof(std::uint32_t) +
                   tasks_.capacity() * sizeof(Task);
   for (const TaskOut& o : outs_)

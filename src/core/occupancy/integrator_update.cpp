@@ -3,6 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#elif defined(__ARM_NEON) && defined(__aarch64__)
+#include <arm_neon.h>
+#endif
 
 #include "semantic_exploration/core/occupancy/integrator.hpp"
 
@@ -32,6 +37,26 @@ inline Vf floats(Vi a) {
 /// m ? a : b per lane (m: all ones or zero).
 inline Vf select(Vi m, Vf a, Vf b) { return floats((m & bits(a)) | (~m & bits(b))); }
 
+/// Square root per lane (correctly rounded, like std::sqrt).
+inline Vf sqrtLanes(Vf a) {
+#if defined(__SSE2__)
+  __m128 r;
+  std::memcpy(&r, &a, sizeof(r));
+  r = _mm_sqrt_ps(r);
+  std::memcpy(&a, &r, sizeof(r));
+  return a;
+#elif defined(__ARM_NEON) && defined(__aarch64__)
+  float32x4_t r;
+  std::memcpy(&r, &a, sizeof(r));
+  r = vsqrtq_f32(r);
+  std::memcpy(&a, &r, sizeof(r));
+  return a;
+#else
+  for (int k = 0; k < kLanes; ++k) a[k] = std::sqrt(a[k]);
+  return a;
+#endif
+}
+
 /// Camera constants of the voxel projection.
 struct Projector {
   float fx, fy, cx, cy;
@@ -39,14 +64,15 @@ struct Projector {
   float half_vox_px;  ///< half a voxel at 1 m, pixels
 };
 
-// Camera-frame centres and pixels of the voxels of rows r0 .. r0 + 3 of a
-// cell (row r = y + bs z). Lane j holds row r0 + j; entry x * kLanes + j of
-// each output is voxel x of that row. PU, PV: the pixel whose depth the
-// voxel uses, PV -1 if none (behind the camera, or outside the image and its
-// border margin). p0 = centre of voxel (0,0,0), e* = camera-frame voxel steps.
+// Camera-frame depth, pixel and distance of the voxels of rows r0 .. r0 + 3
+// of a cell (row r = y + bs z). Lane j holds row r0 + j; entry x * kLanes + j
+// of each output is voxel x of that row. PZ: depth, m. PU, PV: the pixel
+// whose depth the voxel uses, PV -1 if none (behind the camera, or outside
+// the image and its border margin). PD (if not null): toMm(distance to the
+// camera). p0 = centre of voxel (0,0,0), e* = camera-frame voxel steps.
 inline void projectSlab(const Projector& pr, const Eigen::Vector3f& p0, const Eigen::Vector3f& ex,
-                        const Eigen::Vector3f& ey, const Eigen::Vector3f& ez, int bs, int bshift, int r0, float* PX,
-                        float* PY, float* PZ, std::int32_t* PU, std::int32_t* PV) {
+                        const Eigen::Vector3f& ey, const Eigen::Vector3f& ez, int bs, int bshift, int r0, float* PZ,
+                        std::int32_t* PU, std::int32_t* PV, std::int32_t* PD) {
   const Vi r = Vi{0, 1, 2, 3} + r0;
   const Vf yf = __builtin_convertvector(r & (bs - 1), Vf), zf = __builtin_convertvector(r >> bshift, Vf);
   // The scalar code's p = c0 + ey * y + ez * z, then p += ex per voxel.
@@ -70,11 +96,15 @@ inline void projectSlab(const Projector& pr, const Eigen::Vector3f& p0, const Ei
     const Vi u = __builtin_convertvector(floats(bits(uf) & in) + 0.5f, Vi);
     const Vi v = __builtin_convertvector(floats(bits(vf) & in) + 0.5f, Vi);
     const Vi v_or_none = (v & in) | ~in;  // -1 where not in
-    std::memcpy(PX + x * kLanes, &px, sizeof(px));
-    std::memcpy(PY + x * kLanes, &py, sizeof(py));
     std::memcpy(PZ + x * kLanes, &pz, sizeof(pz));
     std::memcpy(PU + x * kLanes, &u, sizeof(u));
     std::memcpy(PV + x * kLanes, &v_or_none, sizeof(v_or_none));
+    if (PD) {  // toMm(p.norm()) per lane, summed in the order of Eigen's unrolled 3-vector squaredNorm
+      const Vf dmm = sqrtLanes(px * px + (py * py + pz * pz)) * 1000.f + 0.5f;
+      const Vf cap = zero + 65534.f;
+      const Vi dm = __builtin_convertvector(select(cap < dmm, cap, dmm), Vi);
+      std::memcpy(PD + x * kLanes, &dm, sizeof(dm));
+    }
     px += ex.x();
     py += ex.y();
     pz += ex.z();
@@ -192,10 +222,10 @@ void Integrator::updateCellVoxels(BlockStore& store, const Frame& fr, TaskOut& o
   // order as one voxel at a time), then the update visits the slab's voxels
   // in index order (bs >= 2, so bs^2 rows are whole slabs).
   const int rows = bs * bs;
-  alignas(32) float PX[kLanes * kMaxSlabX], PY[kLanes * kMaxSlabX], PZ[kLanes * kMaxSlabX];
-  alignas(32) std::int32_t PU[kLanes * kMaxSlabX], PV[kLanes * kMaxSlabX];
+  alignas(32) float PZ[kLanes * kMaxSlabX];
+  alignas(32) std::int32_t PU[kLanes * kMaxSlabX], PV[kLanes * kMaxSlabX], PD[kLanes * kMaxSlabX];
   for (int r0 = 0; r0 < rows; r0 += kLanes) {
-    projectSlab(pr, c0, ex, ey, ez, bs, store.bshift, r0, PX, PY, PZ, PU, PV);
+    projectSlab(pr, c0, ex, ey, ez, bs, store.bshift, r0, PZ, PU, PV, track_dist ? PD : nullptr);
     const int lanes = std::min(kLanes, rows - r0);
     for (int j = 0; j < lanes; ++j) {
       int i = (r0 + j) * bs;
@@ -219,7 +249,7 @@ void Integrator::updateCellVoxels(BlockStore& store, const Frame& fr, TaskOut& o
             std::uint8_t* c = C + 4 * i;
             const int w = c[3];
             const std::uint8_t* in = fr.rgb + 3 * pix;
-            for (int ch = 0; ch < 3; ++ch) c[ch] = static_cast<std::uint8_t>((c[ch] * w + in[ch] + (w + 1) / 2) / (w + 1));
+            for (int ch = 0; ch < 3; ++ch) c[ch] = blendColour(c[ch], w, in[ch]);
             c[3] = static_cast<std::uint8_t>(std::min(255, w + 1));
           }
         } else {
@@ -231,7 +261,7 @@ void Integrator::updateCellVoxels(BlockStore& store, const Frame& fr, TaskOut& o
           changed = true;
         }
         if (track_dist && Dm) {
-          const std::uint16_t dm = toMm(Eigen::Vector3f(PX[t], PY[t], pz).norm());
+          const std::uint16_t dm = static_cast<std::uint16_t>(PD[t]);  // toMm(p.norm())
           if (dm < Dm[i]) Dm[i] = dm;
         }
       }
