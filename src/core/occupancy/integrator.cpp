@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "lanes.hpp"
+
 namespace semexp {
 namespace occupancy {
 
@@ -142,6 +144,7 @@ void Integrator::markEndpoints(BlockStore& store, const PinholeCamera& camera, c
   const Eigen::Vector3f t = ((T_WC.translation() - store.origin) / store.res).cast<float>();
   const Eigen::Matrix3f Rv = R / static_cast<float>(store.res);
   const Eigen::Vector3i nv = store.nb * bs;
+  const Eigen::Vector3f nvf = nv.cast<float>();
   const int m = bs - 1;
   const int W = camera.width, H = camera.height;
   const float* depth = pyr_.depth();
@@ -157,7 +160,30 @@ void Integrator::markEndpoints(BlockStore& store, const PinholeCamera& camera, c
     const int v_end = std::min(H, static_cast<int>(chunk + 1) * rows);
     for (int v = static_cast<int>(chunk) * rows; v < v_end; ++v) {
       const float yc = static_cast<float>((v - camera.cy) / camera.fy);
-      for (int u = 0; u < W; ++u) {
+      int u = 0;
+      // Four pixels at a time: q = Rv (xc d, yc d, d) + t with Eigen's
+      // operation order (each row a0 + (a1 + a2), then + t), so the same
+      // voxels as one pixel at a time.
+      for (; u + lanes::kLanes <= W; u += lanes::kLanes) {
+        lanes::Vf d, xc;
+        std::memcpy(&d, depth + v * W + u, sizeof(d));
+        std::memcpy(&xc, ray_x + u, sizeof(xc));
+        const lanes::Vf X = xc * d, Y = yc * d;
+        const lanes::Vf qx = (Rv(0, 0) * X + (Rv(0, 1) * Y + Rv(0, 2) * d)) + t.x();
+        const lanes::Vf qy = (Rv(1, 0) * X + (Rv(1, 1) * Y + Rv(1, 2) * d)) + t.y();
+        const lanes::Vf qz = (Rv(2, 0) * X + (Rv(2, 1) * Y + Rv(2, 2) * d)) + t.z();
+        const lanes::Vi ok = (d > 0.f) & (qx >= 0.f) & (qy >= 0.f) & (qz >= 0.f) & (qx < nvf.x()) &
+                             (qy < nvf.y()) & (qz < nvf.z());
+        const lanes::Vi x = __builtin_convertvector(lanes::floats(lanes::bits(qx) & ok), lanes::Vi);
+        const lanes::Vi y = __builtin_convertvector(lanes::floats(lanes::bits(qy) & ok), lanes::Vi);
+        const lanes::Vi z = __builtin_convertvector(lanes::floats(lanes::bits(qz) & ok), lanes::Vi);
+        for (int k = 0; k < lanes::kLanes; ++k) {
+          Endpoint& e = endpoint_[static_cast<std::size_t>(v) * W + u + k];
+          e.cell = ok[k] ? store.cellIndex(x[k] >> bshift, y[k] >> bshift, z[k] >> bshift) : -1;
+          e.voxel = store.voxelIndex(x[k] & m, y[k] & m, z[k] & m);
+        }
+      }
+      for (; u < W; ++u) {
         Endpoint& e = endpoint_[static_cast<std::size_t>(v) * W + u];
         e.cell = -1;
         const float d = depth[v * W + u];
