@@ -199,8 +199,15 @@ void Integrator::markEndpoints(BlockStore& store, const PinholeCamera& camera, c
     }
   });
   hit_cells_.clear();
+  // Neighbouring pixels mostly share a cell: the last cell's bits are reused.
+  int last_cell = -1;
+  std::uint64_t* last_bits = nullptr;
   for (const Endpoint& e : endpoint_) {
     if (e.cell < 0) continue;
+    if (e.cell == last_cell) {
+      last_bits[e.voxel >> 6] |= std::uint64_t{1} << (e.voxel & 63);
+      continue;
+    }
     int b = store.cell_block[e.cell];
     if (b < 0) {
       b = store.allocateBlock(e.cell);
@@ -211,7 +218,9 @@ void Integrator::markEndpoints(BlockStore& store, const PinholeCamera& camera, c
       hit_stamp_[e.cell] = stamp_;
       hit_cells_.push_back(e.cell);
     }
-    hits(store, b)[e.voxel >> 6] |= std::uint64_t{1} << (e.voxel & 63);
+    last_cell = e.cell;
+    last_bits = hits(store, b);  // hit_ only grows in fit(), after an allocation, before this
+    last_bits[e.voxel >> 6] |= std::uint64_t{1} << (e.voxel & 63);
   }
 }
 
