@@ -16,9 +16,9 @@
 // Usage: bench_background_map [--data DIR] [--frames N] [--ours-only] [--save-map PREFIX] [--out FILE]
 //   --frames: house frames (0 skips the house); --ours-only skips OctoMap (profiling).
 //   --save-map: writes PREFIX.<sequence>.t1.map / .t2.map (the saved maps after
-//   the one- and two-thread runs) and PREFIX.<sequence>.t1.updates (every
-//   frame's update message), outside the timed code, so that two builds can
-//   be compared byte for byte (cmp).
+//   the one- and two-thread runs, equal to the byte) and PREFIX.<sequence>.t1.updates
+//   (every frame's update message), outside the timed code, so that two builds
+//   can be compared byte for byte (cmp).
 //   DIR defaults to ../shared/data/box-room-tum relative to the repository.
 #include <octomap/OcTree.h>
 
@@ -203,6 +203,7 @@ void run(const std::string& name, const std::vector<Frame>& frames, const semexp
       ours2.push_back(msSince(t0));
       ours2_cpu.push_back(processCpuMs() - c0);
       map2.updateFrontiers();
+      if (!g_save_prefix.empty()) map2.takeUpdate();  // as the one-thread run, so the saved maps compare equal
     }
     if (!g_save_prefix.empty()) map2.save(g_save_prefix + "." + name + ".t2.map");
   }
