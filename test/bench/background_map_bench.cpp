@@ -13,8 +13,12 @@
 //
 // Integration runs on one thread and on two (integration_threads), same map.
 //
-// Usage: bench_background_map [--data DIR] [--frames N] [--ours-only] [--out FILE]
+// Usage: bench_background_map [--data DIR] [--frames N] [--ours-only] [--save-map PREFIX] [--out FILE]
 //   --frames: house frames (0 skips the house); --ours-only skips OctoMap (profiling).
+//   --save-map: writes PREFIX.<sequence>.t1.map / .t2.map (the saved maps after
+//   the one- and two-thread runs, equal to the byte) and PREFIX.<sequence>.t1.updates
+//   (every frame's update message), outside the timed code, so that two builds
+//   can be compared byte for byte (cmp).
 //   DIR defaults to ../shared/data/box-room-tum relative to the repository.
 #include <octomap/OcTree.h>
 
@@ -164,6 +168,19 @@ double processCpuMs() {
 }
 
 bool g_ours_only = false;  // --ours-only: skip OctoMap (for profiling our side)
+std::string g_save_prefix;  // --save-map PREFIX: save the maps and update messages (empty: off)
+
+// Appends one update message's fields to `f` as raw bytes.
+void appendUpdate(std::ofstream& f, const semexp::MapBlocksData& u) {
+  auto put = [&f](const void* p, std::size_t n) { f.write(static_cast<const char*>(p), static_cast<std::streamsize>(n)); };
+  put(&u.sequence, sizeof(u.sequence));
+  const std::uint64_t n[4] = {u.coords.size(), u.payload.size(), u.uniform_coords.size(), u.uniform_values.size()};
+  put(n, sizeof(n));
+  put(u.coords.data(), u.coords.size() * sizeof(std::int32_t));
+  put(u.payload.data(), u.payload.size());
+  put(u.uniform_coords.data(), u.uniform_coords.size() * sizeof(std::int32_t));
+  put(u.uniform_values.data(), u.uniform_values.size());
+}
 
 void run(const std::string& name, const std::vector<Frame>& frames, const semexp::PinholeCamera& cam,
          const semexp::Bounds& bounds, semexp_bench::Reporter& rep) {
@@ -186,8 +203,12 @@ void run(const std::string& name, const std::vector<Frame>& frames, const semexp
       ours2.push_back(msSince(t0));
       ours2_cpu.push_back(processCpuMs() - c0);
       map2.updateFrontiers();
+      if (!g_save_prefix.empty()) map2.takeUpdate();  // as the one-thread run, so the saved maps compare equal
     }
+    if (!g_save_prefix.empty()) map2.save(g_save_prefix + "." + name + ".t2.map");
   }
+  std::ofstream updates;
+  if (!g_save_prefix.empty()) updates.open(g_save_prefix + "." + name + ".t1.updates", std::ios::binary);
   for (const Frame& f : frames) {
     auto t0 = Clock::now();
     double c0 = threadCpuMs();
@@ -199,7 +220,9 @@ void run(const std::string& name, const std::vector<Frame>& frames, const semexp
     map.updateFrontiers();
     fr.push_back(msSince(t0));
     fr_cpu.push_back(threadCpuMs() - c0);
+    if (updates.is_open()) appendUpdate(updates, map.takeUpdate());
   }
+  if (!g_save_prefix.empty()) map.save(g_save_prefix + "." + name + ".t1.map");
   // OctoMap on the same frames, after ours (interleaving the two would let
   // each evict the other's working set from the caches).
   for (const Frame& f : frames) {
@@ -294,6 +317,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i + 1 < argc; ++i) {
     if (std::strcmp(argv[i], "--data") == 0) data = argv[i + 1];
     if (std::strcmp(argv[i], "--frames") == 0) house_frames = std::atoi(argv[i + 1]);
+    if (std::strcmp(argv[i], "--save-map") == 0) g_save_prefix = argv[i + 1];
   }
   semexp::PinholeCamera cam;  // 320 x 240, f = 262.5, 10 m
   semexp::Bounds bounds;      // default 20 x 20 x 4 m

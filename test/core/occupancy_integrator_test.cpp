@@ -189,3 +189,19 @@ TEST(WorkerPool, WorkerCpuSecondsCountsThePoolThreadsOnly) {
   EXPECT_GE(workerCpuOfTwoTasks(pool, false), 0.040);  // the worker spun 40 ms
   EXPECT_LT(workerCpuOfTwoTasks(pool, true), 0.020);   // the caller spun; the worker only waited
 }
+
+TEST(Integrator, BlendColourIsTheRoundedRunningMean) {
+  // Hand-computed: weight 0 takes the new value; (200 * 3 + 100 + 2) / 4 = 175;
+  // (255 * 255 + 0 + 128) / 256 = 254; (10 * 1 + 11 + 1) / 2 = 11.
+  EXPECT_EQ(semexp::occupancy::blendColour(37, 0, 90), 90);
+  EXPECT_EQ(semexp::occupancy::blendColour(200, 3, 100), 175);
+  EXPECT_EQ(semexp::occupancy::blendColour(255, 255, 0), 254);
+  EXPECT_EQ(semexp::occupancy::blendColour(10, 1, 11), 11);
+  // The table reciprocal equals the integer division everywhere.
+  int wrong = 0;
+  for (int w = 0; w < 256; ++w)
+    for (int c = 0; c < 256; ++c)
+      for (int in = 0; in < 256; ++in)
+        wrong += semexp::occupancy::blendColour(c, w, in) != (c * w + in + (w + 1) / 2) / (w + 1);
+  EXPECT_EQ(wrong, 0);
+}

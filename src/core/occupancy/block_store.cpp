@@ -128,19 +128,22 @@ Summary BlockStore::cellSummary(int cell) {
     return Summary{v, v, 1, 0};
   }
   const std::int16_t* L = logOdds(b);
-  int mn = INT16_MAX, mx = INT16_MIN, nfree = 0, nocc = 0;
-  bool unk = false;
+  // Branch-free, so that it vectorises. kUnknown (INT16_MIN) is below every
+  // known value: it takes part in the max as it is, and in the min as v - 1
+  // wrapped around to INT16_MAX (known values are above INT16_MIN, so v - 1
+  // does not wrap for them). It counts as negative: the free count subtracts it.
+  std::int16_t mn1 = INT16_MAX, mx = INT16_MIN;
+  int nneg = 0, nunk = 0;
   for (int i = 0; i < bs3; ++i) {
-    const int v = L[i];
-    if (v == kUnknown) {
-      unk = true;
-      continue;
-    }
-    mn = std::min(mn, v);
+    const std::int16_t v = L[i];
+    mn1 = std::min(mn1, static_cast<std::int16_t>(static_cast<std::uint16_t>(v) - 1u));
     mx = std::max(mx, v);
-    nfree += v < 0;
-    nocc += v >= 0;
+    nneg += v < 0;
+    nunk += v == kUnknown;
   }
+  const int nfree = nneg - nunk, nocc = bs3 - nneg;
+  const bool unk = nunk > 0;
+  const int mn = nunk == bs3 ? INT16_MAX : mn1 + 1;
   block_nfree[b] = static_cast<std::uint32_t>(nfree);
   block_nocc[b] = static_cast<std::uint32_t>(nocc);
   const bool known = mn <= mx;

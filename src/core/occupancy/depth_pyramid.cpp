@@ -2,7 +2,10 @@
 #include "semantic_exploration/core/occupancy/depth_pyramid.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <limits>
+
+#include "lanes.hpp"
 
 namespace semexp {
 namespace occupancy {
@@ -12,7 +15,28 @@ std::size_t DepthPyramid::build(const float* depth_m, int W, int H, float dmin, 
   depth_.resize(static_cast<std::size_t>(W) * H);
   free_.resize(depth_.size());
   std::size_t invalid = 0;
-  for (std::size_t i = 0; i < depth_.size(); ++i) {
+  std::size_t i = 0;
+  {
+    // Four pixels at a time, the same operations as the loop below.
+    using lanes::Vf;
+    using lanes::Vi;
+    Vi invalid4 = {};
+    const Vf zero = {}, frontv = zero + front;
+    for (; i + lanes::kLanes <= depth_.size(); i += lanes::kLanes) {
+      Vf d;
+      std::memcpy(&d, depth_m + i, sizeof(d));
+      const Vi ok = (d > 0.f) & (d >= dmin) & (d <= dmax);
+      const Vf q = quad * d * d;
+      const Vf f = d - lanes::select(front < q, q, frontv);  // d - std::max(front, q)
+      const Vf fr = lanes::select(0.f < f, f, zero);         // std::max(0.f, f)
+      const Vf dv = lanes::floats(lanes::bits(d) & ok), fv = lanes::floats(lanes::bits(fr) & ok);
+      std::memcpy(depth_.data() + i, &dv, sizeof(dv));
+      std::memcpy(free_.data() + i, &fv, sizeof(fv));
+      invalid4 += ok + 1;  // ok is -1 or 0
+    }
+    for (int k = 0; k < lanes::kLanes; ++k) invalid += static_cast<std::size_t>(invalid4[k]);
+  }
+  for (; i < depth_.size(); ++i) {
     const float d = depth_m[i];
     const bool ok = d > 0.f && d >= dmin && d <= dmax;  // false for NaN; inf > dmax
     depth_[i] = ok ? d : 0.f;
@@ -33,8 +57,22 @@ std::size_t DepthPyramid::build(const float* depth_m, int W, int H, float dmin, 
     max_[j].assign(static_cast<std::size_t>(nd.x()) * nd.y(), 0.f);
     const float* pmn = j == 1 ? free_.data() : min_[j - 1].data();
     const float* pmx = j == 1 ? depth_.data() : max_[j - 1].data();
+    // Nodes whose four children exist (all but the last column / row of an odd level).
+    const int full_u = pd.x() / 2, full_v = pd.y() / 2;
+    for (int v = 0; v < full_v; ++v) {
+      const float* mn0 = pmn + 2 * v * pd.x();
+      const float* mn1 = mn0 + pd.x();
+      const float* mx0 = pmx + 2 * v * pd.x();
+      const float* mx1 = mx0 + pd.x();
+      float* omn = min_[j].data() + v * nd.x();
+      float* omx = max_[j].data() + v * nd.x();
+      for (int u = 0; u < full_u; ++u) {
+        omn[u] = std::min(std::min(mn0[2 * u], mn0[2 * u + 1]), std::min(mn1[2 * u], mn1[2 * u + 1]));
+        omx[u] = std::max(std::max(mx0[2 * u], mx0[2 * u + 1]), std::max(mx1[2 * u], mx1[2 * u + 1]));
+      }
+    }
     for (int v = 0; v < nd.y(); ++v)
-      for (int u = 0; u < nd.x(); ++u) {
+      for (int u = v < full_v ? full_u : 0; u < nd.x(); ++u) {
         float mn = std::numeric_limits<float>::infinity(), mx = 0.f;
         for (int dv = 0; dv < 2; ++dv)
           for (int du = 0; du < 2; ++du) {

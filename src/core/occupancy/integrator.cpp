@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "lanes.hpp"
+
 namespace semexp {
 namespace occupancy {
 
@@ -142,23 +144,51 @@ void Integrator::markEndpoints(BlockStore& store, const PinholeCamera& camera, c
   const Eigen::Vector3f t = ((T_WC.translation() - store.origin) / store.res).cast<float>();
   const Eigen::Matrix3f Rv = R / static_cast<float>(store.res);
   const Eigen::Vector3i nv = store.nb * bs;
+  const Eigen::Vector3f nvf = nv.cast<float>();
   const int m = bs - 1;
   const int W = camera.width, H = camera.height;
   const float* depth = pyr_.depth();
   // Each pixel's endpoint voxel (cell, voxel in cell; cell -1: none), rows
   // spread over the pool; then blocks and bits in pixel order on this thread.
   endpoint_.resize(static_cast<std::size_t>(W) * H);
+  // Ray x per column, as each pixel computed it (a double division per pixel before).
+  ray_x_.resize(static_cast<std::size_t>(W));
+  for (int u = 0; u < W; ++u) ray_x_[u] = static_cast<float>((u - camera.cx) / camera.fx);
+  const float* ray_x = ray_x_.data();
   const int rows = 16;
   pool_->run(static_cast<std::size_t>((H + rows - 1) / rows), [&](std::size_t chunk) {
     const int v_end = std::min(H, static_cast<int>(chunk + 1) * rows);
     for (int v = static_cast<int>(chunk) * rows; v < v_end; ++v) {
       const float yc = static_cast<float>((v - camera.cy) / camera.fy);
-      for (int u = 0; u < W; ++u) {
+      int u = 0;
+      // Four pixels at a time: q = Rv (xc d, yc d, d) + t with Eigen's
+      // operation order (each row a0 + (a1 + a2), then + t), so the same
+      // voxels as one pixel at a time.
+      for (; u + lanes::kLanes <= W; u += lanes::kLanes) {
+        lanes::Vf d, xc;
+        std::memcpy(&d, depth + v * W + u, sizeof(d));
+        std::memcpy(&xc, ray_x + u, sizeof(xc));
+        const lanes::Vf X = xc * d, Y = yc * d;
+        const lanes::Vf qx = (Rv(0, 0) * X + (Rv(0, 1) * Y + Rv(0, 2) * d)) + t.x();
+        const lanes::Vf qy = (Rv(1, 0) * X + (Rv(1, 1) * Y + Rv(1, 2) * d)) + t.y();
+        const lanes::Vf qz = (Rv(2, 0) * X + (Rv(2, 1) * Y + Rv(2, 2) * d)) + t.z();
+        const lanes::Vi ok = (d > 0.f) & (qx >= 0.f) & (qy >= 0.f) & (qz >= 0.f) & (qx < nvf.x()) &
+                             (qy < nvf.y()) & (qz < nvf.z());
+        const lanes::Vi x = __builtin_convertvector(lanes::floats(lanes::bits(qx) & ok), lanes::Vi);
+        const lanes::Vi y = __builtin_convertvector(lanes::floats(lanes::bits(qy) & ok), lanes::Vi);
+        const lanes::Vi z = __builtin_convertvector(lanes::floats(lanes::bits(qz) & ok), lanes::Vi);
+        for (int k = 0; k < lanes::kLanes; ++k) {
+          Endpoint& e = endpoint_[static_cast<std::size_t>(v) * W + u + k];
+          e.cell = ok[k] ? store.cellIndex(x[k] >> bshift, y[k] >> bshift, z[k] >> bshift) : -1;
+          e.voxel = store.voxelIndex(x[k] & m, y[k] & m, z[k] & m);
+        }
+      }
+      for (; u < W; ++u) {
         Endpoint& e = endpoint_[static_cast<std::size_t>(v) * W + u];
         e.cell = -1;
         const float d = depth[v * W + u];
         if (d <= 0.f) continue;
-        const float xc = static_cast<float>((u - camera.cx) / camera.fx);
+        const float xc = ray_x[u];
         const Eigen::Vector3f q = Rv * Eigen::Vector3f(xc * d, yc * d, d) + t;  // voxel units
         if (!(q.x() >= 0.f && q.y() >= 0.f && q.z() >= 0.f && q.x() < nv.x() && q.y() < nv.y() && q.z() < nv.z()))
           continue;
@@ -169,8 +199,15 @@ void Integrator::markEndpoints(BlockStore& store, const PinholeCamera& camera, c
     }
   });
   hit_cells_.clear();
+  // Neighbouring pixels mostly share a cell: the last cell's bits are reused.
+  int last_cell = -1;
+  std::uint64_t* last_bits = nullptr;
   for (const Endpoint& e : endpoint_) {
     if (e.cell < 0) continue;
+    if (e.cell == last_cell) {
+      last_bits[e.voxel >> 6] |= std::uint64_t{1} << (e.voxel & 63);
+      continue;
+    }
     int b = store.cell_block[e.cell];
     if (b < 0) {
       b = store.allocateBlock(e.cell);
@@ -181,7 +218,9 @@ void Integrator::markEndpoints(BlockStore& store, const PinholeCamera& camera, c
       hit_stamp_[e.cell] = stamp_;
       hit_cells_.push_back(e.cell);
     }
-    hits(store, b)[e.voxel >> 6] |= std::uint64_t{1} << (e.voxel & 63);
+    last_cell = e.cell;
+    last_bits = hits(store, b);  // hit_ only grows in fit(), after an allocation, before this
+    last_bits[e.voxel >> 6] |= std::uint64_t{1} << (e.voxel & 63);
   }
 }
 
@@ -195,12 +234,27 @@ Integrator::NodeClass Integrator::classify(const BlockStore& store, const Frame&
   const Eigen::Vector3d c0 = fr.R_CW * lo_W + fr.t_CW;
   const Eigen::Vector3d ax = fr.R_CW.col(0) * ext.x(), ay = fr.R_CW.col(1) * ext.y(), az = fr.R_CW.col(2) * ext.z();
   double zmin = 1e300, zmax = -1e300, umin = 1e300, umax = -1e300, vmin = 1e300, vmax = -1e300;
+  // Largest value over the corners of each side of the frustum as the voxel
+  // update sees it (updateCellVoxels: a voxel centre p with p.z > 0 gets a
+  // pixel iff all four are >= 0, e.g. left: u >= -0.5 - half_vox_px / p.z
+  // <=> fx p.x + (cx + 0.5) p.z + half_vox_px >= 0). Linear in p, so a box
+  // whose corners are all below zero on one side holds no voxel that gets a
+  // pixel (nor a measured endpoint): skipping it changes nothing. This also
+  // bounds the boxes that cross the camera plane, which the footprint below
+  // cannot.
+  const double hv = 0.5 * store.res * std::min(fr.fx, fr.fy);
+  const double u_hi = fr.W - 0.5, v_hi = fr.H - 0.5;
+  double side_max[4] = {-1e300, -1e300, -1e300, -1e300};
   bool crosses = false;
   for (int c = 0; c < 8; ++c) {
     const Eigen::Vector3d p = c0 + ((c & 1) ? ax : Eigen::Vector3d::Zero()) + ((c & 2) ? ay : Eigen::Vector3d::Zero()) +
                               ((c & 4) ? az : Eigen::Vector3d::Zero());
     zmin = std::min(zmin, p.z());
     zmax = std::max(zmax, p.z());
+    side_max[0] = std::max(side_max[0], fr.fx * p.x() + (fr.cx + 0.5) * p.z() + hv);
+    side_max[1] = std::max(side_max[1], (u_hi - fr.cx) * p.z() - fr.fx * p.x() + hv);
+    side_max[2] = std::max(side_max[2], fr.fy * p.y() + (fr.cy + 0.5) * p.z() + hv);
+    side_max[3] = std::max(side_max[3], (v_hi - fr.cy) * p.z() - fr.fy * p.y() + hv);
     if (p.z() <= 1e-3) {
       crosses = true;
       continue;
@@ -212,6 +266,11 @@ Integrator::NodeClass Integrator::classify(const BlockStore& store, const Frame&
     vmax = std::max(vmax, v);
   }
   if (zmax <= 1e-3) return NodeClass::kSkip;     // wholly behind the camera
+  // Wholly outside one side of the frustum, by more than a voxel's worth
+  // (the voxel update computes in float: the margin covers its rounding).
+  const double tol = store.res * (fr.fx + fr.fy);
+  for (double g : side_max)
+    if (g < -tol) return NodeClass::kSkip;
   if (crosses) return NodeClass::kDescend;        // contains or touches the camera plane: cannot bound the footprint
   const double lim = 1e7;
   const int u0 = static_cast<int>(std::floor(std::max(-lim, umin) + 0.5));
@@ -326,7 +385,7 @@ void Integrator::summarise(BlockStore& store, const std::vector<int>& cells, std
 
 std::size_t Integrator::memoryBytes() const {
   std::size_t m = sizeof(*this) + pyr_.memoryBytes() + hit_.capacity() * sizeof(std::uint64_t) +
-                  endpoint_.capacity() * sizeof(Endpoint) +
+                  endpoint_.capacity() * sizeof(Endpoint) + ray_x_.capacity() * sizeof(float) +
                   hit_cells_.capacity() * sizeof(int) + (cell_stamp_.capacity() + hit_stamp_.capacity()) * sizeof(std::uint32_t) +
                   tasks_.capacity() * sizeof(Task);
   for (const TaskOut& o : outs_)

@@ -14,6 +14,7 @@
 /// thread count.
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -35,6 +36,25 @@ struct IntegrationStats {
 };
 
 namespace occupancy {
+
+namespace detail {
+/// ceil(2^32 / d) for d = 1 .. 256, index d - 1.
+constexpr std::array<std::uint64_t, 256> colourReciprocals() {
+  std::array<std::uint64_t, 256> m{};
+  for (std::uint64_t d = 1; d <= 256; ++d) m[d - 1] = ((std::uint64_t{1} << 32) + d - 1) / d;
+  return m;
+}
+inline constexpr std::array<std::uint64_t, 256> kColourReciprocal = colourReciprocals();
+}  // namespace detail
+
+/// One colour channel's running mean after one more observation:
+/// (c w + in + (w + 1) / 2) / (w + 1), rounded down, for c, in and the
+/// weight w in [0, 255]. The division is a multiply by a table reciprocal and
+/// a shift, exact here: the numerator n < 2^16 and n (w + 1) < 2^32.
+inline std::uint8_t blendColour(int c, int w, int in) {
+  const std::uint64_t n = static_cast<std::uint64_t>(c * w + in + (w + 1) / 2);
+  return static_cast<std::uint8_t>((n * detail::kColourReciprocal[static_cast<std::size_t>(w)]) >> 32);
+}
 
 class Integrator {
  public:
@@ -124,6 +144,7 @@ class Integrator {
   std::vector<std::uint64_t> hit_;         ///< per block slot: bits of voxels holding a measured endpoint this frame
   std::vector<int> hit_cells_;             ///< cells with endpoint bits this frame
   std::vector<Endpoint> endpoint_;         ///< per pixel, this frame
+  std::vector<float> ray_x_;               ///< per image column: x of its ray at unit depth, this frame
   std::vector<std::uint32_t> cell_stamp_;  ///< frame stamp per cell (each changed cell listed once)
   std::vector<std::uint32_t> hit_stamp_;   ///< frame stamp per cell (each endpoint cell listed once)
   std::uint32_t stamp_ = 0;
