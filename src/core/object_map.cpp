@@ -9,6 +9,12 @@
 
 namespace semexp {
 
+namespace {
+/// A new object's detection may have at most this share of its pixels beyond the integrated depth (noise at the
+/// boundary), else it waits for a nearer view.
+constexpr double kMaxNewObjectShareBeyondRange = 0.05;
+}  // namespace
+
 double objectDistanceGain(double d_node_m, double d_exp_m, double d_desired_m, double d_max_m) {
   d_node_m = std::min(d_node_m, d_max_m);  // "never observed closer than range" counts as d_max
   if (d_node_m <= d_desired_m || d_node_m <= d_exp_m) return 0.0;
@@ -232,20 +238,29 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
     kv.second.setTo(0, other);
     MappedObject& obj = *objects_.at(kv.first);
     const bool is_new = std::find(result.created.begin(), result.created.end(), kv.first) != result.created.end();
-    int new_pixels = 0;
-    if (is_new)
+    int new_pixels = 0, beyond_range = 0;
+    if (is_new) {
+      const float max_depth = static_cast<float>(obj.tsdf.params().maxIntegratedDepth_m());
       for (int v = 0; v < depth_m.rows; ++v) {
         const float* d = depth_m.ptr<float>(v);
         const std::uint8_t* m = kv.second.ptr<std::uint8_t>(v);
-        for (int u = 0; u < depth_m.cols; ++u)
-          new_pixels += m[u] && m[u] != TsdfMap::kMaskUnknown && d[u] > 0.f && d[u] >= camera.d_min_m &&
-                        d[u] <= camera.d_max_m;
+        for (int u = 0; u < depth_m.cols; ++u) {
+          const bool valid = m[u] && m[u] != TsdfMap::kMaskUnknown && d[u] > 0.f && d[u] >= camera.d_min_m &&
+                             d[u] <= camera.d_max_m;
+          new_pixels += valid;
+          beyond_range += valid && d[u] > max_depth;
+        }
       }
-    if (!is_new || new_pixels >= config_.min_new_object_pixels)
+    }
+    // A detection reaching past the depth the TSDF integrates (its noise band would pass the truncation) would
+    // make an object of its near part only, which later whole views no longer match: it waits for a nearer view.
+    const bool whole = beyond_range <= kMaxNewObjectShareBeyondRange * new_pixels;
+    if (!is_new || (new_pixels >= config_.min_new_object_pixels && whole))
       obj.tsdf.integrate(camera, T_WC, depth_m, rgb, kv.second, true);
-    if (is_new && (new_pixels < config_.min_new_object_pixels || !obj.tsdf.hasSurface())) {
-      // Too little of the detection was left (a rim round known objects, or no depth), or not enough to hold
-      // one surface voxel: no object (such a piece would never be rendered, updated or merged again).
+    if (is_new && (new_pixels < config_.min_new_object_pixels || !whole || !obj.tsdf.hasSurface())) {
+      // Too little of the detection was left (a rim round known objects, or no depth), part of it lay beyond the
+      // integrated depth, or not enough to hold one surface voxel: no object (such a piece would never be
+      // rendered, updated or merged again).
       objects_.erase(kv.first);
       ids_.releaseUnpublished(kv.first);  // created and erased in this frame: nobody saw the id
       result.created.erase(std::find(result.created.begin(), result.created.end(), kv.first));

@@ -11,6 +11,7 @@
 
 #include "semantic_exploration/core/object_map.hpp"
 #include "semexp_test/cameras.hpp"
+#include "semexp_test/object_scenes.hpp"
 #include "semexp_test/rendering.hpp"
 
 using namespace semexp;
@@ -287,6 +288,32 @@ TEST(ObjectMap, NewDetectionWithFewPixelsBesideKnownObjectsMakesNoObject) {
   const TsdfSummary s = map.object(r.created[0])->tsdf.summarize(1.0);
   EXPECT_GT(s.voxel_count, 10u);
   EXPECT_NEAR(s.centroid_W.x(), 0.75, 0.03);  // on the wall's front face
+}
+
+// The chair TSDF integrates depths up to sqrt(0.08 m / 0.006 1/m) = 3.65 m (the default noise band). A chair
+// whose near side is 3.38 m and far side 3.82 m away reaches past that: its near part alone would make an object
+// that whole views later fail to match, so no object is made. From 2.5 m the whole chair is integrated.
+TEST(ObjectMap, NewObjectWaitsForADetectionWithinTheIntegratedDepth) {
+  const PinholeCamera cam;
+  ObjectMapConfig c = config();
+  ASSERT_DOUBLE_EQ(c.behind_surface_quadratic_per_m, 0.006);
+  const Eigen::Isometry3d T_WC = levelCameraPose(Eigen::Vector3d(0.0, 0.0, 0.6), 0.0);
+  for (const double x : {3.6, 2.5}) {
+    ObjectMap map(c, ClassTable());
+    const BoxUnion chair = semexp_test::chair(x, 0.0);
+    cv::Mat depth, labels;
+    renderShapes(cam, T_WC, {&chair}, depth, labels);
+    const FrameIntegration r = map.integrateFrame(cam, T_WC, depth, cv::Mat(), labels, {{1, 0u, kChair}});
+    EXPECT_EQ(map.objects().size(), x < 3.0 ? 1u : 0u) << "chair at x = " << x;
+    EXPECT_EQ(r.created.size(), x < 3.0 ? 1u : 0u);
+  }
+  c.behind_surface_quadratic_per_m = 0.0;  // no noise band: every depth is integrated
+  ObjectMap map(c, ClassTable());
+  const BoxUnion chair = semexp_test::chair(3.6, 0.0);
+  cv::Mat depth, labels;
+  renderShapes(cam, T_WC, {&chair}, depth, labels);
+  map.integrateFrame(cam, T_WC, depth, cv::Mat(), labels, {{1, 0u, kChair}});
+  EXPECT_EQ(map.objects().size(), 1u);
 }
 
 TEST(ObjectMap, GainImagesFollowEquationOne) {

@@ -142,6 +142,12 @@ struct TsdfParams {
   static constexpr int kMaxVoxelIndex = 1 << 19;
   /// Largest |world coordinate| whose voxels the map can hold, m.
   double maxCoordinate_m() const { return resolution_m * (kMaxVoxelIndex - 1); }
+  /// Largest depth integrated, m: sqrt(truncation_m / behind_surface_quadratic_per_m)
+  /// (infinite without the noise band); deeper pixels are skipped.
+  double maxIntegratedDepth_m() const {
+    return behind_surface_quadratic_per_m > 0.0 ? std::sqrt(truncation_m / behind_surface_quadratic_per_m)
+                                                : std::numeric_limits<double>::infinity();
+  }
 };
 
 /// First foreground surface crossing along a ray.
