@@ -1,11 +1,12 @@
 // The pieces that keep bled masks out of object maps: depth edges within a
 // mask, the gap between two masks' surfaces, mask pixels of unknown
 // membership in the TSDF update, less foreground evidence at a mask's border,
-// and dropping the part of a map beyond a plane.
+// dropping the part of a map beyond a plane, and stray mesh fragments.
 
 #include <gtest/gtest.h>
 
 #include "semantic_exploration/core/object_masks.hpp"
+#include "semantic_exploration/core/object_mesh.hpp"
 #include "semantic_exploration/core/tsdf.hpp"
 #include "semexp_test/cameras.hpp"
 #include "semexp_test/rendering.hpp"
@@ -164,6 +165,40 @@ TEST(ObjectMasks, BorderMaskValuesRaiseTheForegroundByTheirEvidence) {
     EXPECT_NEAR(vx->weight(), 1.f, 1e-3f);
     EXPECT_NEAR(vx->foreground(), TsdfMap::maskEvidence(v), 0.5 / 254) << "mask value " << int{v};
   }
+}
+
+// A triangle of edge `size` with its first corner at `at`, appended to `mesh`.
+void addTriangle(Mesh& mesh, const Eigen::Vector3f& at, float size) {
+  const auto i = static_cast<std::uint32_t>(mesh.vertices_W.size());
+  mesh.vertices_W.insert(mesh.vertices_W.end(), {at, at + Eigen::Vector3f(size, 0, 0), at + Eigen::Vector3f(0, size, 0)});
+  mesh.colours.insert(mesh.colours.end(), 3, {{10, 20, 30}});
+  mesh.triangles.push_back({i, i + 1, i + 2});
+}
+
+TEST(ObjectMasks, MeshFragmentsFarFromTheObjectAreDropped) {
+  // The body: two triangles sharing an edge (4 vertices). A piece 0.2 m from it (kept, 0.3 m gap), a piece
+  // 0.25 m beyond that one (kept through it), and one 1 m away (dropped).
+  Mesh mesh;
+  mesh.vertices_W = {{0, 0, 0}, {0.1f, 0, 0}, {0, 0.1f, 0}, {0.1f, 0.1f, 0}};
+  mesh.colours.assign(4, {{1, 2, 3}});
+  mesh.triangles = {{0, 1, 2}, {1, 3, 2}};
+  addTriangle(mesh, Eigen::Vector3f(0.3f, 0, 0), 0.01f);   // 0.2 m from (0.1, 0, 0)
+  addTriangle(mesh, Eigen::Vector3f(0.56f, 0, 0), 0.01f);  // 0.25 m from the piece before
+  addTriangle(mesh, Eigen::Vector3f(1.1f, 0.1f, 0), 0.01f);  // 1 m from the body, 0.53 m from the last kept
+  Mesh copy = mesh;
+  EXPECT_EQ(dropMeshFragments(mesh, 0.3), 3u);
+  ASSERT_EQ(mesh.vertices_W.size(), 10u);
+  ASSERT_EQ(mesh.colours.size(), 10u);
+  ASSERT_EQ(mesh.triangles.size(), 4u);
+  for (const auto& v : mesh.vertices_W) EXPECT_LT(v.x(), 0.6f);
+  for (const auto& t : mesh.triangles)
+    for (const std::uint32_t i : t) EXPECT_LT(i, 10u);
+  EXPECT_EQ(mesh.triangles[3], (std::array<std::uint32_t, 3>{7, 8, 9}));
+  // A gap of 0.22 m keeps the body and the first piece only; 0 keeps everything.
+  Mesh narrower = copy;
+  EXPECT_EQ(dropMeshFragments(narrower, 0.22), 6u);
+  EXPECT_EQ(dropMeshFragments(copy, 0.0), 0u);
+  EXPECT_EQ(copy.vertices_W.size(), 13u);
 }
 
 TEST(ObjectMasks, ForegroundBeyondAPlaneIsDropped) {
