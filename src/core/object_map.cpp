@@ -233,9 +233,11 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
     if (const auto sp = split_from.find(kv.first); sp != split_from.end())
       other.setTo(0, rendered == static_cast<int>(sp->second.id));
     cv::dilate(other, other, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
+    const cv::Mat detected = kv.second.clone();
     // Edges first: the pixels of the other object are the near side of the edges its bled rim lies behind.
     markDepthEdges(kv.second, depth_m, camera, config_.depthEdgeParams(), TsdfMap::kMaskUnknown);
     kv.second.setTo(0, other);
+    markMaskBorder(kv.second, detected, config_.foreground_border_px);
     MappedObject& obj = *objects_.at(kv.first);
     const bool is_new = std::find(result.created.begin(), result.created.end(), kv.first) != result.created.end();
     int new_pixels = 0, beyond_range = 0;

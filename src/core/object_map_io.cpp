@@ -1,5 +1,6 @@
 #include "semantic_exploration/core/atomic_file.hpp"
 #include "semantic_exploration/core/object_map.hpp"
+#include "semantic_exploration/core/object_mesh.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -31,6 +32,12 @@ std::string vec(const Eigen::Vector3d& v) {
 
 }  // namespace
 
+Mesh ObjectMap::mesh(const MappedObject& object) const {
+  Mesh m = object.tsdf.extractMesh();
+  dropMeshFragments(m, config_.mesh_fragment_gap_m);
+  return m;
+}
+
 std::vector<std::string> ObjectMap::save(const std::string& directory, double d_obj_m, std::string* error) const {
   std::vector<std::string> files;
   namespace fs = std::filesystem;
@@ -48,7 +55,7 @@ std::vector<std::string> ObjectMap::save(const std::string& directory, double d_
     const std::string name = "object_" + std::to_string(o.id) + "_" + o.class_name + ".ply";
     const std::string path = (dir / name).string();
     std::string why;
-    if (!writePly(o.tsdf.extractMesh(), path, &why)) {
+    if (!writePly(mesh(o), path, &why)) {
       if (error) *error = why;
       return files;
     }

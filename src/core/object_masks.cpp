@@ -55,6 +55,35 @@ int markDepthEdges(cv::Mat& mask, const cv::Mat& depth_m, const PinholeCamera& c
   return marked;
 }
 
+int markMaskBorder(cv::Mat& mask, const cv::Mat& detected, int border_px) {
+  if (mask.type() != CV_8UC1 || detected.type() != CV_8UC1 || mask.size() != detected.size())
+    throw std::invalid_argument("markMaskBorder: mask and detected mask must be 8UC1 of one size");
+  if (border_px < 0 || border_px > 126) throw std::invalid_argument("markMaskBorder: border_px must be in [0, 126]");
+  if (border_px == 0 || mask.empty()) return 0;
+  const cv::Rect box = cv::boundingRect(mask == 255);
+  if (box.empty()) return 0;
+  // The distance to the detected mask's outside, on the mask's box grown by the border (plus one pixel that
+  // may be outside); past the image edge the detected mask is continued (replicated).
+  const int grow = border_px + 1;
+  cv::Mat padded;
+  cv::copyMakeBorder(detected, padded, grow, grow, grow, grow, cv::BORDER_REPLICATE);
+  const cv::Rect roi(box.x, box.y, box.width + 2 * grow, box.height + 2 * grow);
+  cv::Mat inside = padded(roi) != 0, distance;
+  cv::distanceTransform(inside, distance, cv::DIST_C, 3);
+  int marked = 0;
+  for (int v = 0; v < box.height; ++v) {
+    std::uint8_t* mr = mask.ptr<std::uint8_t>(box.y + v) + box.x;
+    const float* dr = distance.ptr<float>(v + grow) + grow;
+    for (int u = 0; u < box.width; ++u) {
+      const int k = static_cast<int>(std::lround(dr[u]));
+      if (mr[u] != 255 || k > border_px || k < 1) continue;
+      mr[u] = static_cast<std::uint8_t>(128 + std::lround(127.0 * k / (border_px + 1)));
+      ++marked;
+    }
+  }
+  return marked;
+}
+
 namespace {
 
 std::vector<Eigen::Vector3f> maskPoints_C(const cv::Mat& mask, const cv::Mat& depth_m, const PinholeCamera& camera) {

@@ -134,6 +134,8 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
   rebuildIndex();
 
   // 2. Projective update of every voxel of the blocks in front of the camera.
+  float evidence[256];
+  for (int m = 0; m < 256; ++m) evidence[m] = maskEvidence(static_cast<std::uint8_t>(m));
   const float block_radius = 0.87f * B * res;
   std::size_t updated = 0;
   for (auto& kv : blocks_) {
@@ -180,7 +182,7 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
               }
               vx.lowerMinDistance(dist);
             }
-            if (update_foreground) vx.setForeground((vx.foreground() * w + w_obs) / w_new);
+            if (update_foreground) vx.setForeground((vx.foreground() * w + w_obs * evidence[in_mask]) / w_new);
             ++updated;
           } else if (update_foreground && w > 0.f && std::abs(sdf) < trunc) {
             // A surface outside this detection's mask passes through the voxel: likely not the object.

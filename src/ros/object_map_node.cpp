@@ -189,7 +189,7 @@ void ObjectMapNode::publishObjects(const ros::Time& stamp) {
     label.scale.z = 0.12;                           // text height, m
     label.color = classColour(o.class_id);
     markers.markers.push_back(label);
-    const semexp::Mesh mesh = o.tsdf.extractMesh();
+    const semexp::Mesh mesh = map_->mesh(o);
     visualization_msgs::Marker m = marker("object_meshes", o.id, visualization_msgs::Marker::TRIANGLE_LIST);
     m.action = mesh.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
     m.color.r = m.color.g = m.color.b = m.color.a = 1.0;

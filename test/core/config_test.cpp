@@ -140,6 +140,9 @@ TEST(Config, OtherBadValues) {
   MatchingConfig m;
   m.iou_threshold = 0;
   EXPECT_EQ(rejected([&] { m.validate(); }), "matching/iou_threshold");
+  ObjectMapConfig om;
+  om.foreground_border_px = 65;
+  EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/foreground_border_px");
   Bounds b;
   b.max_m.z() = b.min_m.z();
   EXPECT_EQ(rejected([&] { b.validate(); }), "bounds/max_m");

@@ -1,10 +1,12 @@
 // The pieces that keep bled masks out of object maps: depth edges within a
 // mask, the gap between two masks' surfaces, mask pixels of unknown
-// membership in the TSDF update, and dropping the part of a map beyond a plane.
+// membership in the TSDF update, less foreground evidence at a mask's border,
+// dropping the part of a map beyond a plane, and stray mesh fragments.
 
 #include <gtest/gtest.h>
 
 #include "semantic_exploration/core/object_masks.hpp"
+#include "semantic_exploration/core/object_mesh.hpp"
 #include "semantic_exploration/core/tsdf.hpp"
 #include "semexp_test/cameras.hpp"
 #include "semexp_test/rendering.hpp"
@@ -105,6 +107,98 @@ TEST(ObjectMasks, UnknownMaskPixelsNeitherFillNorCarve) {
   EXPECT_EQ(map.summarize(1.0).voxel_count, surface);
   map.integrate(cam, T_WC, depth, cv::Mat(), cv::Mat::zeros(cam.height, cam.width, CV_8UC1), true);
   EXPECT_EQ(map.summarize(1.0).voxel_count, 0u);
+}
+
+TEST(ObjectMasks, BorderPixelsGetLessForegroundEvidence) {
+  // A 20 x 20 px detection, 3 px border: chessboard rings k = 1, 2, 3 get 128 + round(127 k / 4) = 160, 192,
+  // 223 (evidence 0.626, 0.752, 0.878); the 14 x 14 px inside keeps 255.
+  cv::Mat detected = cv::Mat::zeros(30, 40, CV_8UC1);
+  detected(cv::Rect(10, 5, 20, 20)).setTo(255);
+  cv::Mat mask = detected.clone();
+  mask.at<std::uint8_t>(15, 20) = 0;         // taken from the mask (another object's pixel): stays out
+  mask.at<std::uint8_t>(15, 21) = kUnknown;  // behind a depth edge: stays unknown
+  EXPECT_EQ(markMaskBorder(mask, detected, 3), 76 + 68 + 60);
+  EXPECT_EQ(cv::countNonZero(mask == 160), 76);
+  EXPECT_EQ(cv::countNonZero(mask == 192), 68);
+  EXPECT_EQ(cv::countNonZero(mask == 223), 60);
+  EXPECT_EQ(cv::countNonZero(mask == 255), 14 * 14 - 2);
+  EXPECT_EQ(mask.at<std::uint8_t>(15, 20), 0);
+  EXPECT_EQ(mask.at<std::uint8_t>(15, 21), kUnknown);
+  EXPECT_EQ(mask.at<std::uint8_t>(15, 19), 255);  // the pixel taken out is no border: distances are the detection's
+  EXPECT_NEAR(TsdfMap::maskEvidence(160), 0.5 + 0.5 * 32 / 127.0, 1e-6);
+  EXPECT_EQ(TsdfMap::maskEvidence(255), 1.f);
+  EXPECT_EQ(TsdfMap::maskEvidence(1), 1.f);
+
+  // A detection cut by the image's left edge did not bleed there: column 0 is no border, the right side is.
+  detected.setTo(0);
+  detected(cv::Rect(0, 5, 10, 20)).setTo(255);
+  mask = detected.clone();
+  markMaskBorder(mask, detected, 3);
+  EXPECT_EQ(mask.at<std::uint8_t>(15, 0), 255);
+  EXPECT_EQ(mask.at<std::uint8_t>(15, 9), 160);
+  EXPECT_EQ(mask.at<std::uint8_t>(15, 7), 223);
+  EXPECT_EQ(mask.at<std::uint8_t>(5, 0), 160);  // the top row is a border
+
+  // Off with 0 px; bad input throws.
+  cv::Mat same = detected.clone();
+  EXPECT_EQ(markMaskBorder(same, detected, 0), 0);
+  EXPECT_EQ(cv::countNonZero(same != detected), 0);
+  EXPECT_THROW(markMaskBorder(same, detected, 127), std::invalid_argument);
+  EXPECT_THROW(markMaskBorder(same, cv::Mat::zeros(10, 10, CV_8UC1), 3), std::invalid_argument);
+}
+
+TEST(ObjectMasks, BorderMaskValuesRaiseTheForegroundByTheirEvidence) {
+  PinholeCamera cam;
+  const auto T_WC = lookAt(Eigen::Vector3d(-1.0, 0.0, 1.0), kSphere.centre);
+  cv::Mat depth, labels;
+  renderShapes(cam, T_WC, {&kSphere}, depth, labels);
+  // The voxel on the sphere's near pole (-0.25, 0, 1), first seen through a mask of value v: its foreground is
+  // v's evidence (a first observation of weight 1 against weight 0), 1 for 255 and for the legacy 1.
+  const Eigen::Vector3i pole(-13, 0, 50);  // centre (-0.25, 0.01, 1.01): on the surface (0.4 mm outside)
+  for (const std::uint8_t v : {std::uint8_t{160}, std::uint8_t{200}, std::uint8_t{255}, std::uint8_t{1}}) {
+    TsdfMap map(params());
+    cv::Mat mask = cv::Mat::zeros(cam.height, cam.width, CV_8UC1);
+    mask.setTo(v, labels == 1);
+    map.integrate(cam, T_WC, depth, cv::Mat(), mask, true);
+    const TsdfVoxel* vx = map.voxel(pole);
+    ASSERT_NE(vx, nullptr);
+    EXPECT_NEAR(vx->weight(), 1.f, 1e-3f);
+    EXPECT_NEAR(vx->foreground(), TsdfMap::maskEvidence(v), 0.5 / 254) << "mask value " << int{v};
+  }
+}
+
+// A triangle of edge `size` with its first corner at `at`, appended to `mesh`.
+void addTriangle(Mesh& mesh, const Eigen::Vector3f& at, float size) {
+  const auto i = static_cast<std::uint32_t>(mesh.vertices_W.size());
+  mesh.vertices_W.insert(mesh.vertices_W.end(), {at, at + Eigen::Vector3f(size, 0, 0), at + Eigen::Vector3f(0, size, 0)});
+  mesh.colours.insert(mesh.colours.end(), 3, {{10, 20, 30}});
+  mesh.triangles.push_back({i, i + 1, i + 2});
+}
+
+TEST(ObjectMasks, MeshFragmentsFarFromTheObjectAreDropped) {
+  // The body: two triangles sharing an edge (4 vertices). A piece 0.2 m from it (kept, 0.3 m gap), a piece
+  // 0.25 m beyond that one (kept through it), and one 1 m away (dropped).
+  Mesh mesh;
+  mesh.vertices_W = {{0, 0, 0}, {0.1f, 0, 0}, {0, 0.1f, 0}, {0.1f, 0.1f, 0}};
+  mesh.colours.assign(4, {{1, 2, 3}});
+  mesh.triangles = {{0, 1, 2}, {1, 3, 2}};
+  addTriangle(mesh, Eigen::Vector3f(0.3f, 0, 0), 0.01f);   // 0.2 m from (0.1, 0, 0)
+  addTriangle(mesh, Eigen::Vector3f(0.56f, 0, 0), 0.01f);  // 0.25 m from the piece before
+  addTriangle(mesh, Eigen::Vector3f(1.1f, 0.1f, 0), 0.01f);  // 1 m from the body, 0.53 m from the last kept
+  Mesh copy = mesh;
+  EXPECT_EQ(dropMeshFragments(mesh, 0.3), 3u);
+  ASSERT_EQ(mesh.vertices_W.size(), 10u);
+  ASSERT_EQ(mesh.colours.size(), 10u);
+  ASSERT_EQ(mesh.triangles.size(), 4u);
+  for (const auto& v : mesh.vertices_W) EXPECT_LT(v.x(), 0.6f);
+  for (const auto& t : mesh.triangles)
+    for (const std::uint32_t i : t) EXPECT_LT(i, 10u);
+  EXPECT_EQ(mesh.triangles[3], (std::array<std::uint32_t, 3>{7, 8, 9}));
+  // A gap of 0.22 m keeps the body and the first piece only; 0 keeps everything.
+  Mesh narrower = copy;
+  EXPECT_EQ(dropMeshFragments(narrower, 0.22), 6u);
+  EXPECT_EQ(dropMeshFragments(copy, 0.0), 0u);
+  EXPECT_EQ(copy.vertices_W.size(), 13u);
 }
 
 TEST(ObjectMasks, ForegroundBeyondAPlaneIsDropped) {

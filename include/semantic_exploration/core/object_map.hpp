@@ -136,6 +136,10 @@ class ObjectMap {
                     const std::vector<float>& max_depth_m, double d_obj_m, double d_max_m, std::vector<cv::Mat>& gains,
                     std::vector<cv::Mat>& hit_depth_m) const;
 
+  /// The object's mesh as saved and published: TsdfMap::extractMesh without
+  /// the pieces farther than mesh_fragment_gap_m from its main surface.
+  Mesh mesh(const MappedObject& object) const;
+
   /// Writes object_<id>_<class>.ply per object and objects.json (the
   /// summaries) into `directory` (created if missing). Returns the written
   /// paths; on failure returns what was written so far and sets `error`.

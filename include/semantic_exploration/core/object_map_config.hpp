@@ -55,6 +55,22 @@ struct ObjectMapConfig {
   /// own. Parts of one object that a detector split into two masks touch. m; 0 = off.
   double split_gap_m = 0.05;
 
+  /// A detection's mask pixel k <= foreground_border_px pixels inside its
+  /// border raises the foreground probability by less: its evidence is
+  /// 0.5 + 0.5 k / (foreground_border_px + 1) instead of 1 (markMaskBorder).
+  /// A mask that bleeds in some detections only (onto the floor round the
+  /// legs, the edge of a table: surfaces at the object's depth, which
+  /// depth edges do not catch) then leaves the bled ring under foreground 0.5
+  /// while the object's own border, inside the mask in every detection,
+  /// stays above it. px, at least the width a mask bleeds by; 0 = off.
+  int foreground_border_px = 8;
+
+  /// Meshes (saved and published) keep the largest connected piece of an
+  /// object's surface and the pieces within this distance of it (see
+  /// dropMeshFragments); farther pieces are strays that bled masks or noise
+  /// left (a few vertices a metre or more from the chair). The TSDF keeps them. m; 0 = off.
+  double mesh_fragment_gap_m = 0.3;
+
   DepthEdgeParams depthEdgeParams() const {
     return {mask_depth_edge_m, mask_depth_edge_rel, mask_depth_edge_window_px};
   }
@@ -81,6 +97,9 @@ struct ObjectMapConfig {
     require(std::isfinite(mask_depth_edge_m) && mask_depth_edge_m > 0, ns + "mask_depth_edge_m", "must be > 0 m");
     require(std::isfinite(mask_depth_edge_rel) && mask_depth_edge_rel >= 0, ns + "mask_depth_edge_rel", "must be >= 0");
     require(std::isfinite(split_gap_m) && split_gap_m >= 0, ns + "split_gap_m", "must be >= 0 m");
+    require(std::isfinite(mesh_fragment_gap_m) && mesh_fragment_gap_m >= 0, ns + "mesh_fragment_gap_m", "must be >= 0 m");
+    require(foreground_border_px >= 0 && foreground_border_px <= 64, ns + "foreground_border_px",
+            "must be in [0, 64] px");
     require(mask_depth_edge_window_px >= 0 && mask_depth_edge_window_px <= 64, ns + "mask_depth_edge_window_px",
             "must be in [0, 64] px");
   }

@@ -33,6 +33,17 @@ struct DepthEdgeParams {
 int markDepthEdges(cv::Mat& mask, const cv::Mat& depth_m, const PinholeCamera& camera, const DepthEdgeParams& params,
                    std::uint8_t unknown_value);
 
+/// Lowers the foreground evidence of a detection's border, where masks bleed
+/// (TsdfMap::integrate's mask values): a pixel of `mask` of value 255 that
+/// lies k <= border_px pixels (chessboard distance, 1 = on the border) inside
+/// `detected` gets 128 + round(127 k / (border_px + 1)), the foreground
+/// evidence 0.5 + 0.5 k / (border_px + 1). Outside the image counts as inside
+/// (a mask cut by the image border did not bleed there). 0 px = off.
+/// @param detected CV_8UC1, the detection's mask as the detector gave it (non-zero inside)
+/// @return pixels changed
+/// @throws std::invalid_argument if the images differ in size or type, or border_px is not in [0, 126]
+int markMaskBorder(cv::Mat& mask, const cv::Mat& detected, int border_px);
+
 /// How the surfaces two masks see lie apart (camera frame).
 struct MaskSeparation {
   /// Along the line joining the centroids of the masks' 3D points, the gap

@@ -200,6 +200,9 @@ class TsdfMapT {
 
   /// Mask value of a pixel that neither fills nor carves the object (see integrate).
   static constexpr std::uint8_t kMaskUnknown = 128;
+  /// Foreground evidence of an inside mask value m (see integrate): 0.5 + 0.5 (m - 128) / 127 for m in
+  /// (128, 255], so 255 is full evidence and values just above 128 nearly none; 1 for m in [1, 128).
+  static float maskEvidence(std::uint8_t m) { return m > kMaskUnknown ? 0.5f + 0.5f * (m - 128) / 127.f : 1.f; }
 
   /// Integrates one depth image through a binary mask.
   /// @param depth_m   CV_32FC1 depth along the optical axis, m; 0, NaN, inf and
@@ -207,7 +210,10 @@ class TsdfMapT {
   /// @param rgb       CV_8UC3 rgb colour of the same size, or empty (no colour)
   /// @param mask      CV_8UC1, non-zero where the pixel belongs to this object;
   ///                  kMaskUnknown where it is not known (the pixel neither
-  ///                  updates voxels nor lowers their foreground probability)
+  ///                  updates voxels nor lowers their foreground probability);
+  ///                  values in (kMaskUnknown, 255) are inside with less
+  ///                  foreground evidence (maskEvidence; a detection's border,
+  ///                  where masks bleed)
   /// @param update_foreground  true for a detection (foreground probability
   ///                  rises inside the mask and falls where the measured
   ///                  surface outside the mask passes through known voxels);
