@@ -46,7 +46,7 @@ std::size_t dropMeshFragments(Mesh& mesh, double gap_m) {
     pieces[it->second].push_back(i);
   }
   if (pieces.size() == 1) return 0;
-  std::sort(pieces.begin(), pieces.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
+  std::stable_sort(pieces.begin(), pieces.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
   // Kept vertices hashed in cells of gap_m: a vertex within gap_m of one lies in the 27 cells round its own.
   const float inv_cell = static_cast<float>(1.0 / gap_m);
   const float gap2 = static_cast<float>(gap_m * gap_m);

@@ -104,3 +104,12 @@ TEST(BlockStore, SummariesAndTheirPropagation) {
   EXPECT_EQ(s.levels[2].at(0, 0, 0).min_l, -2000);
   EXPECT_EQ(s.levels[2].at(0, 0, 0).max_l, 500);
 }
+
+TEST(BlockStore, BlockSizeOutsideTheIntegratorsBuffersIsRefused) {
+  Bounds bounds;
+  bounds.min_m = Eigen::Vector3d::Zero();
+  bounds.max_m = Eigen::Vector3d::Constant(1.0);
+  EXPECT_THROW(BlockStore(0.04, 128, bounds, false), std::invalid_argument);
+  EXPECT_THROW(BlockStore(0.04, 6, bounds, false), std::invalid_argument);
+  EXPECT_NO_THROW(BlockStore(0.04, 64, bounds, false));
+}

@@ -2,6 +2,8 @@
 #include "semantic_exploration/core/occupancy/block_store.hpp"
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 namespace semexp {
 namespace occupancy {
@@ -12,6 +14,10 @@ constexpr Summary kUnknownSummary{INT16_MAX, INT16_MIN, 0, 1};
 
 BlockStore::BlockStore(double resolution_m, int block_size, const Bounds& bounds, bool with_colour)
     : res(resolution_m), bs(block_size), colour(with_colour) {
+  // The integrator's per-slab buffers hold rows of at most 64 voxels (BackgroundMapConfig::validate says the
+  // same for configured maps; this also covers stores built without it).
+  if (bs < 2 || bs > 64 || (bs & (bs - 1)) != 0)
+    throw std::invalid_argument("BlockStore: block_size must be a power of two in [2, 64], got " + std::to_string(bs));
   bshift = 0;
   while ((1 << bshift) < bs) ++bshift;
   bs3 = bs * bs * bs;

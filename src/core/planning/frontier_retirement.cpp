@@ -147,7 +147,8 @@ FrontierRetirement::Recount FrontierRetirement::recount(const Eigen::Vector3d& c
       }
       if (gained == 0) return out;  // none gained: never more; one kept: some
     } else if (++lost >= gained && gained > 0) {
-      return out;  // at most k - gained kept: never more, and `gained` > 0 are possible
+      out.any = true;  // at most k - gained kept: never more, and `gained` > 0 are possible
+      return out;
     }
   }
   out.any = out.any || gained > 0;
