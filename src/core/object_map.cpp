@@ -26,6 +26,21 @@ ObjectMap::ObjectMap(const ObjectMapConfig& config, const ClassTable& classes) :
   classes_.validate();
 }
 
+std::string ObjectMap::checkIntegratedDepth(double d_bg_m) const {
+  for (const std::string& name : classes_.of_interest) {
+    TsdfParams p;
+    p.resolution_m = classes_.resolution(classes_.id(name));
+    p.truncation_m = config_.truncation_voxels * p.resolution_m;
+    p.behind_surface_quadratic_per_m = config_.behind_surface_quadratic_per_m;
+    if (p.maxIntegratedDepth_m() < d_bg_m)
+      return "the " + name + " map (" + std::to_string(p.resolution_m) + " m voxels, truncation " +
+             std::to_string(p.truncation_m) + " m) integrates depths only up to " +
+             std::to_string(p.maxIntegratedDepth_m()) + " m, less than exploration/d_bg_m = " + std::to_string(d_bg_m) +
+             " m, so objects seen from d_bg would never be made; lower it or raise object_map/truncation_voxels";
+  }
+  return "";
+}
+
 std::string ObjectMap::checkBounds(const Bounds& bounds, double range_m) const {
   const double extent_m = std::max(bounds.min_m.cwiseAbs().maxCoeff(), bounds.max_m.cwiseAbs().maxCoeff()) + range_m;
   for (const std::string& name : classes_.of_interest) {

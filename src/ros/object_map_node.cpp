@@ -63,6 +63,8 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
   // The maps must hold what a camera inside the bounds sees (it is refused outside them).
   if (const std::string why = map_->checkBounds(bounds_, camera_.d_max_m); !why.empty())
     throw semexp::ConfigError("bounds/max_m", why);
+  if (const std::string why = map_->checkIntegratedDepth(exploration_.d_bg_m); !why.empty())
+    throw semexp::ConfigError("object_map/behind_surface_quadratic_per_m", why);
 
   objects_pub_ = pnh.advertise<semantic_exploration::ObjectArray>("objects", 1, true);
   meshes_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("meshes", 1, true);

@@ -316,6 +316,20 @@ TEST(ObjectMap, NewObjectWaitsForADetectionWithinTheIntegratedDepth) {
   EXPECT_EQ(map.objects().size(), 1u);
 }
 
+// sqrt(truncation / q): 2 cm chairs (8 cm truncation) reach 3.65 m >= d_bg = 3 m; 1 cm chairs only 2.58 m.
+TEST(ObjectMap, IntegratedDepthMustReachTheBackgroundDistance) {
+  ClassTable classes;
+  EXPECT_EQ(ObjectMap(config(), classes).checkIntegratedDepth(3.0), "");
+  classes.resolution_m["chair"] = 0.01;
+  const std::string why = ObjectMap(config(), classes).checkIntegratedDepth(3.0);
+  EXPECT_NE(why.find("chair"), std::string::npos) << why;
+  EXPECT_NE(why.find("2.58"), std::string::npos) << why;
+  EXPECT_EQ(ObjectMap(config(), classes).checkIntegratedDepth(2.5), "");
+  ObjectMapConfig no_band = config();
+  no_band.behind_surface_quadratic_per_m = 0.0;
+  EXPECT_EQ(ObjectMap(no_band, classes).checkIntegratedDepth(3.0), "");
+}
+
 TEST(ObjectMap, GainImagesFollowEquationOne) {
   PinholeCamera cam;
   const ObjectMap map = twoObjects(cam);  // surfaces seen from ~0.65-0.75 m

@@ -83,6 +83,10 @@ class ObjectMap {
   /// resolution), else why not. Camera poses outside the bounds must then be
   /// refused by the caller.
   std::string checkBounds(const Bounds& bounds, double range_m) const;
+  /// Empty if every class of interest is integrated out to d_bg_m (m) at least, the distance the background
+  /// is observed from so that objects are found; else why not (the noise band's depth limit,
+  /// TsdfParams::maxIntegratedDepth_m, falls with the class resolution).
+  std::string checkIntegratedDepth(double d_bg_m) const;
 
   /// New empty object of class `class_id` at the class's resolution; 0 if
   /// the class is unknown or no 16-bit id is free (see ObjectIdPool).
