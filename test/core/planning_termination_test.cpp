@@ -326,3 +326,38 @@ TEST(FrontierRetirement, TheRecheckOfAnEvidenceRetiredClusterAgreesWithAFreshCou
   EXPECT_EQ(s.active_W.size(), 25u);
   EXPECT_EQ(s.retired_by_geometry + s.retired_by_evidence, 0u);
 }
+
+// The recheck's early exit "lost at least as many old view points as it gained new ones" must still say that
+// view points exist. Retired with 33 (the +x wall above), then: an obstacle 0.02 m round the first view point
+// in order (0.3 m out at azimuth 0, the cluster's height) takes it and its +-30 deg neighbours at 0.3 m, whose
+// clearance spheres (0.165 m) come within 0.155 m of it: 3 lost; a hole in the wall round the view point 0.8 m
+// out at +60 deg (its sphere reached x 0.815 > 0.75) gives 1 new one: 33 - 3 + 1 = 31. Not more than at
+// retirement, so the cluster stays retired, and by evidence: view points exist.
+TEST(FrontierRetirement, ARecheckThatLosesTheFirstOldViewPointStillCountsTheNewOnes) {
+  FrontierRetirementConfig cfg;
+  cfg.view_range_m = 1.0;
+  cfg.max_failed_views = 1;
+  cfg.recheck_iterations = 1;
+  FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
+  const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.5);
+  const auto voxels = patch(centre);
+  const CollisionQuery plus_x = slabs({{0.75, 0.85}});
+  const Eigen::Vector3d first = centre + Eigen::Vector3d(0.3, 0.0, 0.0);
+  const Eigen::Vector3d gained = centre + 0.8 * Eigen::Vector3d(std::cos(M_PI / 3), std::sin(M_PI / 3), 0.0);
+  const CollisionQuery changed = [&](const Eigen::Vector3d& p, double r) {
+    if ((p - first).norm() < r + 0.02) return false;
+    const bool in_hole = std::abs(p.y() - gained.y()) < 0.2 && std::abs(p.z() - gained.z()) < 0.2;
+    return in_hole || plus_x(p, r);
+  };
+  EXPECT_EQ(fr.viewPoints(centre, plus_x), 33);
+  EXPECT_EQ(fr.viewPoints(centre, changed), 31);
+
+  fr.update(voxels, plus_x);
+  fr.recordViews({}, plus_x, {centre});
+  FrontierRetirement::Split s = fr.update(voxels, plus_x);  // retired with 33
+  EXPECT_EQ(s.retired_by_evidence, 1u);
+  s = fr.update(voxels, changed);
+  EXPECT_EQ(s.active_W.size(), 0u);
+  EXPECT_EQ(s.retired_by_evidence, 1u);
+  EXPECT_EQ(s.retired_by_geometry, 0u);
+}
