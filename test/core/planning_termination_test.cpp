@@ -279,6 +279,21 @@ CollisionQuery slabs(std::vector<std::pair<double, double>> walls) {
 
 }  // namespace
 
+namespace {
+
+// The recheck tests' cluster and settings: 1 m view range, retired after one failed view, rechecked every
+// iteration.
+const Eigen::Vector3d kRecheckCentre(kAxis.x(), kAxis.y(), 1.5);
+FrontierRetirement recheckScene() {
+  FrontierRetirementConfig cfg;
+  cfg.view_range_m = 1.0;
+  cfg.max_failed_views = 1;
+  cfg.recheck_iterations = 1;
+  return FrontierRetirement(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
+}
+
+}  // namespace
+
 TEST(FrontierRetirement, TheRecheckOfAnEvidenceRetiredClusterAgreesWithAFreshCount) {
   // view_range_m 1 m around a cluster at (0.25, 0.25, 1.5): at its height
   // standoffs 0.3 and 0.8 m, at +-0.3 m 0.3 / tan(21.7 deg) = 0.75 m (the
@@ -288,12 +303,8 @@ TEST(FrontierRetirement, TheRecheckOfAnEvidenceRetiredClusterAgreesWithAFreshCou
   // 0.3 m: 48 - 3 x 5 = 33. Retired with 33, the recheck (which judges only
   // as many view points as the comparison needs) must decide as the full
   // count does: back to active only with more than 33.
-  FrontierRetirementConfig cfg;
-  cfg.view_range_m = 1.0;
-  cfg.max_failed_views = 1;
-  cfg.recheck_iterations = 1;
-  FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
-  const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.5);
+  FrontierRetirement fr = recheckScene();
+  const Eigen::Vector3d centre = kRecheckCentre;
   const auto voxels = patch(centre);
   const CollisionQuery plus_x = slabs({{0.75, 0.85}}), minus_x = slabs({{-0.35, -0.25}});
   const CollisionQuery both = slabs({{0.75, 0.85}, {-0.35, -0.25}});
@@ -334,12 +345,8 @@ TEST(FrontierRetirement, TheRecheckOfAnEvidenceRetiredClusterAgreesWithAFreshCou
 // out at +60 deg (its sphere reached x 0.815 > 0.75) gives 1 new one: 33 - 3 + 1 = 31. Not more than at
 // retirement, so the cluster stays retired, and by evidence: view points exist.
 TEST(FrontierRetirement, ARecheckThatLosesTheFirstOldViewPointStillCountsTheNewOnes) {
-  FrontierRetirementConfig cfg;
-  cfg.view_range_m = 1.0;
-  cfg.max_failed_views = 1;
-  cfg.recheck_iterations = 1;
-  FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
-  const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.5);
+  FrontierRetirement fr = recheckScene();
+  const Eigen::Vector3d centre = kRecheckCentre;
   const auto voxels = patch(centre);
   const CollisionQuery plus_x = slabs({{0.75, 0.85}});
   const Eigen::Vector3d first = centre + Eigen::Vector3d(0.3, 0.0, 0.0);
