@@ -26,12 +26,20 @@ ObjectMap::ObjectMap(const ObjectMapConfig& config, const ClassTable& classes) :
   classes_.validate();
 }
 
+TsdfParams ObjectMap::tsdfParams(int class_id) const {
+  TsdfParams p;
+  p.resolution_m = classes_.resolution(class_id);
+  p.truncation_m = config_.truncation_voxels * p.resolution_m;
+  p.behind_surface_m = config_.behind_surface_voxels * p.resolution_m;
+  p.behind_surface_quadratic_per_m = config_.behind_surface_quadratic_per_m;
+  p.block_size = config_.block_size;
+  p.max_weight = config_.max_weight;
+  return p;
+}
+
 std::string ObjectMap::checkIntegratedDepth(double d_bg_m) const {
   for (const std::string& name : classes_.of_interest) {
-    TsdfParams p;
-    p.resolution_m = classes_.resolution(classes_.id(name));
-    p.truncation_m = config_.truncation_voxels * p.resolution_m;
-    p.behind_surface_quadratic_per_m = config_.behind_surface_quadratic_per_m;
+    const TsdfParams p = tsdfParams(classes_.id(name));
     if (p.maxIntegratedDepth_m() < d_bg_m)
       return "the " + name + " map (" + std::to_string(p.resolution_m) + " m voxels, truncation " +
              std::to_string(p.truncation_m) + " m) integrates depths only up to " +
@@ -44,8 +52,7 @@ std::string ObjectMap::checkIntegratedDepth(double d_bg_m) const {
 std::string ObjectMap::checkBounds(const Bounds& bounds, double range_m) const {
   const double extent_m = std::max(bounds.min_m.cwiseAbs().maxCoeff(), bounds.max_m.cwiseAbs().maxCoeff()) + range_m;
   for (const std::string& name : classes_.of_interest) {
-    TsdfParams p;
-    p.resolution_m = classes_.resolution(classes_.id(name));
+    const TsdfParams p = tsdfParams(classes_.id(name));
     if (extent_m >= p.maxCoordinate_m())
       return "the bounds reach " + std::to_string(extent_m) + " m from the origin (with " + std::to_string(range_m) +
              " m of sensor range); the " + name + " map at " + std::to_string(p.resolution_m) +
@@ -59,14 +66,7 @@ std::uint32_t ObjectMap::createObject(int class_id) {
   if (name.empty()) return 0;
   const std::uint32_t id = ids_.acquire(version_);
   if (id == 0) return 0;
-  TsdfParams p;
-  p.resolution_m = classes_.resolution(class_id);
-  p.truncation_m = config_.truncation_voxels * p.resolution_m;
-  p.behind_surface_m = config_.behind_surface_voxels * p.resolution_m;
-  p.behind_surface_quadratic_per_m = config_.behind_surface_quadratic_per_m;
-  p.block_size = config_.block_size;
-  p.max_weight = config_.max_weight;
-  objects_.emplace(id, std::make_unique<MappedObject>(id, class_id, name, p));
+  objects_.emplace(id, std::make_unique<MappedObject>(id, class_id, name, tsdfParams(class_id)));
   return id;
 }
 

@@ -95,12 +95,9 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
   const float trunc = truncation_m_;
   const float behind_fixed = static_cast<float>(std::min(params_.behind_surface_m, params_.truncation_m));
   const float q = static_cast<float>(params_.behind_surface_quadratic_per_m);
-  // The band behind a depth d (m), or -1 where the noise outgrows the truncation band (not integrated).
-  auto behindAt = [&](float d) {
-    if (q <= 0.f) return behind_fixed;
-    const float b = q * d * d;
-    return b > trunc ? -1.f : std::max(behind_fixed, b);
-  };
+  const float max_depth = static_cast<float>(params_.maxIntegratedDepth_m());
+  // The band behind a depth d (m), or -1 beyond the integrated depth, where the noise outgrows the truncation.
+  auto behindAt = [&](float d) { return d > max_depth ? -1.f : std::max(behind_fixed, q * d * d); };
   const float max_w = static_cast<float>(params_.max_weight);
   const Eigen::Isometry3f T_WCf = T_WC.cast<float>();
   const Eigen::Isometry3f T_CWf = T_WCf.inverse();

@@ -153,6 +153,8 @@ class ObjectMap {
   static std::vector<std::uint32_t> visibleIds(const cv::Mat& object_ids);
 
  private:
+  /// The TSDF geometry of a new object of class_id (the class's resolution, the config's truncation and bands).
+  TsdfParams tsdfParams(int class_id) const;
   ObjectMapConfig config_;
   ClassTable classes_;
   std::map<std::uint32_t, std::unique_ptr<MappedObject>> objects_;
