@@ -292,7 +292,10 @@ def parse_args(argv=None):
                     help="generated house size, m (default 10 8 3)")
     ap.add_argument("--classes", nargs="+", default=["chair"], help="classes of interest")
     ap.add_argument("--out", default=os.path.join("results", "run-" + time.strftime("%Y%m%d-%H%M%S")))
-    ap.add_argument("--wall-limit-s", type=float, default=600.0, help="stop after this wall time, s")
+    ap.add_argument("--wall-limit-s", type=float, default=None,
+                    help="stop after this wall time, s: a guard against a stuck run, not the mission's end "
+                         "(default 3 x --sim-limit-s, at least 1800 s: lockstep simulation runs slower than "
+                         "real time on a loaded 2-core machine)")
     ap.add_argument("--sim-limit-s", type=float, default=600.0, help="stop after this sim time, s")
     ap.add_argument("--real-time-factor", type=float, default=0.0, help="0 = as fast as lockstep allows")
     ap.add_argument("--no-lockstep", action="store_true")
@@ -320,7 +323,10 @@ def parse_args(argv=None):
                     help="skip scoring the saved meshes and map against ground truth (minutes on a loaded machine)")
     ap.add_argument("--sim-overrides", default="", help="YAML for the simulator loaded after config/sim.yaml "
                     "(e.g. faults: tf_gap_s, detector_scale, frame_drop_fraction)")
-    return ap.parse_args(argv)
+    args = ap.parse_args(argv)
+    if args.wall_limit_s is None:
+        args.wall_limit_s = max(1800.0, 3.0 * args.sim_limit_s)
+    return args
 
 
 def main(argv=None):

@@ -27,7 +27,8 @@ BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
       exploration_(loadExploration(params())),
       node_config_(loadBackgroundMapNode(params())),
       map_(std::make_unique<semexp::OccupancyMap>(config_, bounds_)),
-      evidence_(std::make_unique<semexp::FrontierEvidence>(loadFrontierEvidence(params()))) {
+      evidence_(std::make_unique<semexp::FrontierEvidence>(loadFrontierEvidence(params()))),
+      surface_share_period_(node_config_.surface_share_period_s) {
 
   occupied_pub_ = pnh.advertise<sensor_msgs::PointCloud2>(
       "occupied", 1, [this](const ros::SingleSubscriberPublisher& sub) { occupiedConnected(sub); },
@@ -151,6 +152,12 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
   last_header_ = msg->header;
   last_header_.frame_id = frames_.world;
   if (map_->pendingUpdateCount() > 0) update_pub_.publish(toMapBlocksMsg(map_->takeUpdate(), msg->header.stamp, frames_.world));
+  // The termination's background share: one pass over the occupied blocks (~100 ms on the default house's
+  // map), paced by image stamps; the planner reads it once per iteration.
+  if (surface_share_period_.due(msg->header.stamp)) {
+    surface_ = map_->surfaceObservedWithin(exploration_.d_bg_m);
+    surface_measured_ = true;
+  }
   publishStats(msg->header);
   frontiers_dirty_ = occupied_dirty_ = true;
   publishClouds(msg->header.stamp);
@@ -200,9 +207,6 @@ void BackgroundMapNode::publishClouds(const ros::Time& stamp) {
     frontiers_pub_.publish(toPointCloud(active, stamp, frames_.world));
     retired_pub_.publish(toPointCloud(retired, stamp, frames_.world));
     last_frontier_pub_ = now;
-    // The termination's background share, at the frontier cloud's pace (one pass over the occupied blocks).
-    surface_ = map_->surfaceObservedWithin(exploration_.d_bg_m);
-    surface_measured_ = true;
     frontiers_dirty_ = false;
   }
   if (occupied_dirty_ && due(last_occupied_pub_, config_.publish_period_s)) {

@@ -346,6 +346,13 @@ uint64_t FrameGapCounter::add(const ros::Time& stamp) {
   return k > 1 ? static_cast<uint64_t>(k - 1) : 0;
 }
 
+bool StampPeriod::due(const ros::Time& stamp) {
+  if (started_ && stamp >= last_ && (stamp - last_).toSec() < period_s_) return false;
+  started_ = true;
+  last_ = stamp;
+  return true;
+}
+
 void countFrameGaps(FrameGapCounter& gaps, DropCounter& drops, const ros::Time& stamp, const std::string& stream) {
   if (const uint64_t missing = gaps.add(stamp))
     drops.drop("frame_gap", std::to_string(missing) + " " + stream + " frame(s) missing before " +

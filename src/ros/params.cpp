@@ -106,6 +106,7 @@ BackgroundMapNodeConfig loadBackgroundMapNode(const ParamReader& p) {
   BackgroundMapNodeConfig c;
   const std::string n = "background_map/";
   p.getAtLeast(n + "frontier_period_s", c.frontier_period_s, 0.0, "s");
+  p.getAtLeast(n + "surface_share_period_s", c.surface_share_period_s, 0.0, "s");
   p.getAtLeast(n + "colour_wait_s", c.colour_wait_s, 0.0, "s");
   p.getAtLeast(n + "start_free_radius_m", c.start_free_radius_m, 0.0, "m");
   return c;

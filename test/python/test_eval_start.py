@@ -87,3 +87,13 @@ def test_a_start_next_to_a_wall_is_reported(habitat_scene, tmp_path):
     (tmp_path / "objects" / "objects.json").write_text(json.dumps({"objects": []}))
     res = run_mission.evaluate(out, gt, ["chair"], {"object_map": {"success": True, "dir": str(tmp_path / "objects")}})
     assert "start [0.05, 1.0, 1.0] is not at least 0.125 m from every surface" in res["error"]
+
+
+def test_wall_limit_guards_a_stuck_run_without_ending_a_slow_one(tmp_path):
+    # make run on a loaded 2-core machine simulates slower than real time: a 600 s wall limit ended it at
+    # 540 s of sim time. The default is 3 x the sim limit, at least 30 min; an explicit value is kept.
+    out = str(tmp_path / "run")
+    assert run_mission.parse_args(["--out", out]).wall_limit_s == 1800.0
+    assert run_mission.parse_args(["--out", out, "--sim-limit-s", "1000"]).wall_limit_s == 3000.0
+    assert run_mission.parse_args(["--out", out, "--sim-limit-s", "60"]).wall_limit_s == 1800.0
+    assert run_mission.parse_args(["--out", out, "--wall-limit-s", "50"]).wall_limit_s == 50.0

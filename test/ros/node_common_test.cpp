@@ -2,13 +2,15 @@
 // constant-rate stream, from the stamps that arrive), DropCounter without a
 // running node (counts only, nothing published), and TfGapGuard refusing a
 // pose tf2 would interpolate across a gap in the pose stream. Also the 16UC1
-// reader, the node name the frame reports carry, and the per-frame CPU budget.
+// reader, the node name the frame reports carry, the per-frame CPU budget, and
+// StampPeriod pacing work by message stamps.
 #include <gtest/gtest.h>
 #include <tf2_ros/buffer.h>
 
 #include <chrono>
 #include <cstring>
 #include <thread>
+#include <vector>
 
 #include "semantic_exploration/ros/camera_node.hpp"
 #include "semantic_exploration/ros/frame_timing.hpp"
@@ -55,6 +57,27 @@ TEST(FrameGapCounter, ThePeriodSurvivesManyDrops) {
     if (k % 3 != 2) missing += g.add(at(1.0 + 0.1 * k));
   EXPECT_EQ(missing, 19u);  // frames 2, 5, ..., 56 (59 lies after the last stamp)
   EXPECT_NEAR(g.period_s(), 0.1, 1e-6);
+}
+
+TEST(StampPeriod, IsDueOncePerPeriodOfStampsAndAgainAfterTimeWentBack) {
+  semexp_ros::StampPeriod p(2.0);
+  std::vector<double> due;
+  // A 10 Hz stream from 10.0 s to 15.0 s, a replay from 10.0 s, then three stamps of 10.5 s.
+  std::vector<double> stamps;
+  for (int k = 0; k <= 50; ++k) stamps.push_back(10.0 + 0.1 * k);
+  for (double t : {10.0, 10.5, 12.0, 10.5, 10.5}) stamps.push_back(t);
+  for (double t : stamps)
+    if (p.due(at(t))) due.push_back(t);
+  // 10.0, then the first stamp >= 12.0 and >= 14.0; 10.0 is older than 14.0 (time went back), 12.0 is 2 s
+  // after it, 10.5 older than 12.0 again, and the repeated 10.5 is not due (0 s < 2 s).
+  const std::vector<double> expected = {10.0, 12.0, 14.0, 10.0, 12.0, 10.5};
+  ASSERT_EQ(due.size(), expected.size());
+  for (std::size_t i = 0; i < due.size(); ++i) EXPECT_NEAR(due[i], expected[i], 1e-9) << i;
+}
+
+TEST(StampPeriod, PeriodZeroIsDueForEveryStamp) {
+  semexp_ros::StampPeriod p(0.0);
+  for (double t : {1.0, 1.0, 1.1, 0.5}) EXPECT_TRUE(p.due(at(t))) << t;
 }
 
 TEST(DropCounter, CountsPerReasonWithoutANode) {

@@ -160,6 +160,7 @@ TEST(Params, DetectorSectionLoadsAndChecksTheClassMap) {
 TEST(Params, NodeConfigsLoadAndNameTheParameterAtFault) {
   XmlRpcValue root;
   root["background_map"]["frontier_period_s"] = 0.25;
+  root["background_map"]["surface_share_period_s"] = 1.5;
   root["background_map"]["colour_wait_s"] = 0.1;
   root["background_map"]["start_free_radius_m"] = 0.75;
   root["depth_history"]["marker_period_s"] = 2.0;
@@ -167,11 +168,16 @@ TEST(Params, NodeConfigsLoadAndNameTheParameterAtFault) {
   const ParamReader p(root);
   const auto bg = semexp_ros::loadBackgroundMapNode(p);
   EXPECT_DOUBLE_EQ(bg.frontier_period_s, 0.25);
+  EXPECT_DOUBLE_EQ(bg.surface_share_period_s, 1.5);
   EXPECT_DOUBLE_EQ(bg.colour_wait_s, 0.1);
   EXPECT_DOUBLE_EQ(bg.start_free_radius_m, 0.75);
   EXPECT_DOUBLE_EQ(semexp_ros::loadDepthHistoryNode(p, semexp::DepthHistoryConfig()).marker_period_s, 2.0);
   EXPECT_DOUBLE_EQ(semexp_ros::loadImageSync(p).max_interval_s, 0.03);
 
+  root["background_map"]["surface_share_period_s"] = -1.0;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadBackgroundMapNode(ParamReader(root)); }),
+            "background_map/surface_share_period_s");
+  root["background_map"]["surface_share_period_s"] = 2.0;
   root["background_map"]["start_free_radius_m"] = -0.1;
   EXPECT_EQ(rejected([&] { semexp_ros::loadBackgroundMapNode(ParamReader(root)); }),
             "background_map/start_free_radius_m");

@@ -222,6 +222,22 @@ class FrameGapCounter {
   double period_s_ = 0.0;
 };
 
+/// Says when work paced by message stamps (sim or sensor time, not wall
+/// time) falls due: the first stamp, then once `period_s` has passed since the
+/// last due stamp. A stamp older than that one (a bag replayed from its start,
+/// a restarted simulator) is due at once. Period 0: every stamp is due.
+class StampPeriod {
+ public:
+  explicit StampPeriod(double period_s) : period_s_(period_s) {}
+  /// Whether `stamp` is due; a due stamp becomes the new reference.
+  bool due(const ros::Time& stamp);
+
+ private:
+  double period_s_;
+  ros::Time last_;
+  bool started_ = false;
+};
+
 /// Feeds `stamp` to `gaps` and counts the frames found missing before it as
 /// "frame_gap" drops of `stream` (e.g. "depth"), with one throttled log line.
 void countFrameGaps(FrameGapCounter& gaps, DropCounter& drops, const ros::Time& stamp, const std::string& stream);

@@ -61,6 +61,9 @@ struct PlannerNodeConfig {
 /// Settings of the background_map node itself (not of the core map).
 struct BackgroundMapNodeConfig {
   double frontier_period_s = 0.5;    ///< `background_map/frontier_period_s`: minimum period between ~frontiers clouds, s
+  /// `background_map/surface_share_period_s`: minimum period between measurements of the surface share seen from
+  /// <= d_bg (MapStats), s of the depth images' stamps; 0 = every frame.
+  double surface_share_period_s = 2.0;
   double colour_wait_s = 0.05;       ///< `background_map/colour_wait_s`: how long a depth frame waits for its colour image, wall s
   double start_free_radius_m = 0.5;  ///< `background_map/start_free_radius_m`: unknown space this close to the first camera pose is free, m
 };
@@ -181,7 +184,7 @@ SetpointStreamerConfig loadSetpointStreamer(const ParamReader& p);  ///< `setpoi
 /// `display_cut/max_z_m`: the display_cut node shows the map up to this height in world, m.
 double loadDisplayCut(const ParamReader& p);
 
-/// `background_map/{frontier_period_s,colour_wait_s,start_free_radius_m}`
+/// `background_map/{frontier_period_s,surface_share_period_s,colour_wait_s,start_free_radius_m}`
 BackgroundMapNodeConfig loadBackgroundMapNode(const ParamReader& p);
 /// `depth_history/marker_period_s`; also checks that `history`'s image size
 /// is the planner's raycast size (`planner/raycast_{width,height}`) when a

@@ -130,7 +130,7 @@ class RunLog:
 
     def background_observed_share(self):
         """Share of the background map's own observed surface (its occupied voxels) seen from
-        <= d_bg (MapStats.surface_observed_share, measured with each frontier cloud); "" before
+        <= d_bg (MapStats.surface_observed_share, measured every surface_share_period_s); "" before
         the map has measured it (-1) or without stats. Over the reconstruction, not the ground
         truth, as the paper's Fig. 8 seems to be (its object share drops for occluded artefacts)."""
         share = self.stats.surface_observed_share if self.stats is not None else -1.0
