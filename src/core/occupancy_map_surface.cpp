@@ -68,17 +68,41 @@ OccupancyMap::SurfaceObservation OccupancyMap::surfaceObservedWithin(double d_m)
     const std::int16_t* L = store_.logOdds(b);
     const std::uint16_t* D =
         store_.block_surf[b] >= 0 ? store_.dist(store_.block_surf[b]) : nullptr;
-    const int s1 = store_.bs, s2 = store_.bs * store_.bs;
+    const int stride[3] = {1, store_.bs, store_.bs * store_.bs};
+    // exposed() for voxel i of this block, the same answer in fewer reads: the steps that stay inside the block
+    // read it directly, only those past its faces go through the grid, and the gap (a square root) is only
+    // worked out when a direct neighbour is unknown (most are free or occupied: the walk ends at step 1).
+    const auto value = [&](int i, const int xyz[3], int a, int sign, int s) {
+      const int inside = sign > 0 ? m - xyz[a] : xyz[a];  // steps before the walk leaves the block
+      if (s <= inside) return L[i + sign * s * stride[a]];
+      int g[3] = {gx0 + xyz[0], gy0 + xyz[1], gz0 + xyz[2]};
+      g[a] += sign * s;
+      return store_.voxelValue(g[0], g[1], g[2]);
+    };
+    const auto exposedInBlock = [&](int i, const int xyz[3]) {
+      bool unknown_next = false;
+      for (int a = 0; a < 3; ++a)
+        for (int sign = -1; sign <= 1; sign += 2) {
+          const std::int16_t v = value(i, xyz, a, sign, 1);
+          if (isFree(v)) return true;
+          unknown_next |= v == kUnknown;
+        }
+      const int gap_steps = unknown_next && D ? gapSteps(D[i]) : 0;
+      for (int a = 0; a < 3 && gap_steps > 0; ++a)
+        for (int sign = -1; sign <= 1; sign += 2) {
+          if (value(i, xyz, a, sign, 1) != kUnknown) continue;
+          for (int s = 2; s <= gap_steps + 1; ++s) {
+            const std::int16_t v = value(i, xyz, a, sign, s);
+            if (isFree(v)) return true;
+            if (v != kUnknown) break;  // occupied: the walk left the gap
+          }
+        }
+      return false;
+    };
     for (int i = 0; i < store_.bs3; ++i) {
       if (L[i] == kUnknown || L[i] < 0) continue;
-      const int x = i & m, y = (i >> store_.bshift) & m, z = i >> (2 * store_.bshift);
-      const bool inner = x > 0 && x < m && y > 0 && y < m && z > 0 && z < m;
-      const int steps = D ? gapSteps(D[i]) : 0;
-      // Inside the block the direct neighbours are read from it; the grid walk only where that cannot decide.
-      const bool ex = (inner && (isFree(L[i + 1]) || isFree(L[i - 1]) || isFree(L[i + s1]) || isFree(L[i - s1]) ||
-                                 isFree(L[i + s2]) || isFree(L[i - s2]))) ||
-                      ((!inner || steps > 0) && exposed(gx0 + x, gy0 + y, gz0 + z, steps));
-      if (!ex) continue;
+      const int xyz[3] = {i & m, (i >> store_.bshift) & m, i >> (2 * store_.bshift)};
+      if (!exposedInBlock(i, xyz)) continue;
       ++out.occupied_voxels;
       if (D && within(D[i])) ++out.within_voxels;
     }
