@@ -3,6 +3,7 @@
 // known distances.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "semexp_test/box_room.hpp"
@@ -29,42 +30,23 @@ Bounds twoWallBounds() {
   return b;
 }
 
-// Surface voxels (occupied, with a free 6-neighbour) counted through the public queries: (all, on the +x wall,
-// within d_m).
+// The default free margin (q = 0.006, 3 sigma of the simulator's depth noise) and a band of occupied voxels
+// this deep behind each depth.
+BackgroundMapConfig marginConfig(double surface_band_m) {
+  BackgroundMapConfig cfg;
+  cfg.surface_band_m = surface_band_m;
+  cfg.free_margin_quadratic_per_m = 0.006;
+  return cfg;
+}
+
+// Surface voxels counted through the public queries: (all, on the +x wall, within d_m). The rule of
+// surfaceObservedWithin: a voxel is surface when free space lies next to it or, with a free margin q > 0, along
+// an axis beyond unknown voxels only, at most min(32, ceil(sqrt(3) q d^2 / r)) of them, d being the distance
+// the voxel was observed from. gap_q 0: a free 6-neighbour only.
 struct Counts {
   std::size_t all = 0, near_wall = 0, within = 0;
 };
-Counts bruteForce(const OccupancyMap& map, double d_m) {
-  Counts c;
-  const double r = map.resolution();
-  const auto isFree = [&](const Eigen::Vector3d& q) { return map.state(q) == VoxelState::kFree; };
-  map.forEachOccupied([&](const Eigen::Vector3d& centre, double size_m, const std::uint8_t*) {
-    const int n = static_cast<int>(std::lround(size_m / r));
-    const Eigen::Vector3d corner = centre - Eigen::Vector3d::Constant(0.5 * size_m);
-    for (int k = 0; k < n; ++k)
-      for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-          const Eigen::Vector3d p = corner + r * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5);
-          bool exposed = false;
-          for (int a = 0; a < 3 && !exposed; ++a)
-            for (int sg = -1; sg <= 1 && !exposed; sg += 2) {
-              Eigen::Vector3d q = p;
-              q[a] += sg * r;
-              exposed = isFree(q);
-            }
-          if (!exposed) continue;
-          ++c.all;
-          if (p.x() > 0) ++c.near_wall;
-          if (map.minObservedDistance(p) <= d_m + 5e-4) ++c.within;  // distances are kept in whole mm
-        }
-  });
-  return c;
-}
-
-// The same rule as surfaceObservedWithin with the free margin's gap, through the public queries: a voxel is
-// surface when free space lies next to it or along an axis beyond unknown voxels only, at most
-// min(32, ceil(sqrt(3) q d^2 / r)) of them, d being the distance the voxel was observed from.
-Counts bruteForceAcrossTheGap(const OccupancyMap& map, double q, double d_m) {
+Counts bruteForce(const OccupancyMap& map, double d_m, double gap_q = 0.0) {
   Counts c;
   const double r = map.resolution();
   map.forEachOccupied([&](const Eigen::Vector3d& centre, double size_m, const std::uint8_t*) {
@@ -75,21 +57,22 @@ Counts bruteForceAcrossTheGap(const OccupancyMap& map, double q, double d_m) {
         for (int i = 0; i < n; ++i) {
           const Eigen::Vector3d p = corner + r * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5);
           const double d = map.minObservedDistance(p);
-          const int steps = std::isfinite(d) ? std::min(32, static_cast<int>(std::ceil(std::sqrt(3.0) * q * d * d / r))) : 0;
+          const int steps =
+              std::isfinite(d) ? std::min(32, static_cast<int>(std::ceil(std::sqrt(3.0) * gap_q * d * d / r))) : 0;
           bool exposed = false;
           for (int a = 0; a < 3 && !exposed; ++a)
             for (int sg = -1; sg <= 1 && !exposed; sg += 2)
               for (int st = 1; st <= steps + 1; ++st) {
-                Eigen::Vector3d qp = p;
-                qp[a] += sg * st * r;
-                const VoxelState v = map.state(qp);
+                Eigen::Vector3d q = p;
+                q[a] += sg * st * r;
+                const VoxelState v = map.state(q);
                 exposed = v == VoxelState::kFree;
                 if (v != VoxelState::kUnknown) break;
               }
           if (!exposed) continue;
           ++c.all;
           if (p.x() > 0) ++c.near_wall;
-          if (d <= d_m + 5e-4) ++c.within;
+          if (d <= d_m + 5e-4) ++c.within;  // distances are kept in whole mm
         }
   });
   return c;
@@ -194,9 +177,7 @@ TEST(SurfaceObservation, AFreeMarginGapDoesNotHideAFarWall) {
 // The walk across the gap goes through unknown voxels only: with a thick occupied band and the margin on, the
 // voxels behind the exposed layer (occupied in front, unknown behind the wall) still do not count.
 TEST(SurfaceObservation, TheGapWalkStopsAtOccupiedVoxels) {
-  BackgroundMapConfig cfg;
-  cfg.surface_band_m = 0.12;
-  cfg.free_margin_quadratic_per_m = 0.006;
+  const BackgroundMapConfig cfg = marginConfig(0.12);
   PinholeCamera cam;
   const BoxRoom scene = twoWalls();
   OccupancyMap map(cfg, twoWallBounds());
@@ -216,9 +197,7 @@ TEST(SurfaceObservation, TheGapWalkStopsAtOccupiedVoxels) {
 // a block's own voxels directly); both must give exactly the voxels a walk through the public queries finds,
 // on walls seen from 2 m and from 4 m through the margin's gap (9.7 cm at 4 m, across 8-voxel block faces).
 TEST(SurfaceObservation, TheGapWalkCountsExactlyWhatAWalkThroughTheQueriesFinds) {
-  BackgroundMapConfig cfg;
-  cfg.surface_band_m = 0.06;
-  cfg.free_margin_quadratic_per_m = 0.006;
+  const BackgroundMapConfig cfg = marginConfig(0.06);
   PinholeCamera cam;
   const BoxRoom scene = twoWalls();
   OccupancyMap map(cfg, twoWallBounds());
@@ -226,7 +205,7 @@ TEST(SurfaceObservation, TheGapWalkCountsExactlyWhatAWalkThroughTheQueriesFinds)
     const Eigen::Isometry3d T = lookPose({0.0, 0.3, 0.1}, yaw, 0.1);
     map.integrate(scene.render(cam, T).data(), nullptr, cam, T);
   }
-  const Counts ref = bruteForceAcrossTheGap(map, cfg.free_margin_quadratic_per_m, 3.0);
+  const Counts ref = bruteForce(map, 3.0, cfg.free_margin_quadratic_per_m);
   const Counts one_step = bruteForce(map, 3.0);
   ASSERT_GT(ref.all, 2000u);
   ASSERT_GT(ref.all - ref.near_wall, 1000u);
