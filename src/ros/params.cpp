@@ -107,6 +107,8 @@ BackgroundMapNodeConfig loadBackgroundMapNode(const ParamReader& p) {
   const std::string n = "background_map/";
   p.getAtLeast(n + "frontier_period_s", c.frontier_period_s, 0.0, "s");
   p.getAtLeast(n + "surface_share_period_s", c.surface_share_period_s, 0.0, "s");
+  // Longer would leave the termination's background condition on a share older than several iterations.
+  semexp::require(c.surface_share_period_s <= 60.0, n + "surface_share_period_s", "must be <= 60 s");
   p.getAtLeast(n + "colour_wait_s", c.colour_wait_s, 0.0, "s");
   p.getAtLeast(n + "start_free_radius_m", c.start_free_radius_m, 0.0, "m");
   return c;

@@ -177,6 +177,9 @@ TEST(Params, NodeConfigsLoadAndNameTheParameterAtFault) {
   root["background_map"]["surface_share_period_s"] = -1.0;
   EXPECT_EQ(rejected([&] { semexp_ros::loadBackgroundMapNode(ParamReader(root)); }),
             "background_map/surface_share_period_s");
+  root["background_map"]["surface_share_period_s"] = 61.0;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadBackgroundMapNode(ParamReader(root)); }),
+            "background_map/surface_share_period_s");
   root["background_map"]["surface_share_period_s"] = 2.0;
   root["background_map"]["start_free_radius_m"] = -0.1;
   EXPECT_EQ(rejected([&] { semexp_ros::loadBackgroundMapNode(ParamReader(root)); }),
