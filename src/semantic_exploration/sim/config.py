@@ -208,6 +208,7 @@ class SimConfig:
     lockstep_startup_timeout_s: float = 30.0  # wall s to wait for a depth subscriber before the first frame
     lockstep_planner: bool = False   # lockstep only: call planner/plan_once with sim time stopped (planner_lockstep.py)
     lockstep_planner_retry_s: float = 1.0    # sim s between plan_once calls that gave no path
+    lockstep_setpoints: bool = True  # lockstep and ~follow setpoints: stop sim time until each due setpoint arrived
     start_pose: Optional[List[float]] = None  # [x, y, z, yaw] (m, rad); None = scene's start
     bounds_min_m: Optional[List[float]] = None  # accepted path region; None = scene bounds
     bounds_max_m: Optional[List[float]] = None
@@ -233,6 +234,7 @@ class SimConfig:
         _req(isinstance(self.lockstep_planner, bool), "lockstep_planner", "must be true or false")
         _req(_finite(self.lockstep_planner_retry_s) and self.lockstep_planner_retry_s > 0, "lockstep_planner_retry_s",
              "must be > 0 s")
+        _req(isinstance(self.lockstep_setpoints, bool), "lockstep_setpoints", "must be true or false")
         if self.start_pose is not None:
             _req(isinstance(self.start_pose, list) and len(self.start_pose) == 4 and all(map(_finite, self.start_pose)),
                  "start_pose", "must be [x, y, z, yaw] (m, rad) or empty")

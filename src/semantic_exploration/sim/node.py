@@ -24,7 +24,9 @@ seconds; the world->body transform is published at every frame stamp (before
 the images) and at tf_rate_hz. In lockstep mode, sim time stops before each
 new frame until every node named in lockstep_nodes has reported the previous
 frame's stamp on frame_integrated (or lockstep_timeout_s wall seconds pass,
-which is logged).
+which is logged). With ~follow setpoints and lockstep_setpoints, it also stops
+where setpoint_streamer's next setpoint is due until it has arrived
+(setpoint_lockstep.py).
 
 Start-up: before the first frame the node waits (up to lockstep_startup_timeout_s
 in lockstep mode) until every subscriber the master lists for its camera, tf and
@@ -63,6 +65,7 @@ from .drops import DropCounter
 from .faults import FaultInjector
 from .frame_lockstep import FrameLockstep
 from .planner_lockstep import PlannerLockstep
+from .setpoint_lockstep import SetpointLockstep
 from .scene import SceneError, export_ground_truth
 from .setpoints import SetpointRefused, check_in_bounds, check_setpoint
 from .mav import PathFollower, SetpointMotion
@@ -142,6 +145,9 @@ class MavSimNode:
             rospy.logfatal("mav_sim: ~follow must be \"path\" or \"setpoints\" (is %r)", self.follow)
             raise ConfigError("follow: must be \"path\" or \"setpoints\"")
         self._setpoint_motion = SetpointMotion(2 * PathFollower.SETPOINT_HOLD_S)  # the setpoints' velocity
+        self._setpoint_lockstep = SetpointLockstep(
+            c.lockstep_timeout_s, 2 * PathFollower.SETPOINT_HOLD_S, rospy.is_shutdown, lambda text: rospy.logwarn(
+                "mav_sim: " + text)) if c.lockstep and c.lockstep_setpoints and self.follow == "setpoints" else None
         if self.follow == "setpoints":
             # Raw, as planner/path: bytes that are no PoseStamped would make rospy drop the connection.
             rospy.Subscriber("setpoint_position/local", rospy.AnyMsg, self._on_setpoint, queue_size=5)
@@ -220,14 +226,18 @@ class MavSimNode:
         except Exception as e:  # genpy raises several types for a malformed buffer
             raise SetpointRefused("setpoint_unreadable", "of %d bytes: cannot deserialise it (%s: %s)"
                                   % (len(raw._buff), type(e).__name__, e))
-        sim = self.sim
-        p, q = msg.pose.position, msg.pose.orientation
-        wp = check_setpoint(msg.header.frame_id, self.cfg.frames.world, (p.x, p.y, p.z), (q.x, q.y, q.z, q.w),
-                            sim.bounds if sim is not None else None)
-        t = msg.header.stamp.to_sec()
-        velocity, yaw_rate, accel, yaw_accel = self._setpoint_motion.update(t, wp)
-        with self._lock:
-            self._pending_setpoint = (wp, velocity, yaw_rate, t, accel, yaw_accel, sim)  # checked against `sim`
+        try:
+            sim = self.sim
+            p, q = msg.pose.position, msg.pose.orientation
+            wp = check_setpoint(msg.header.frame_id, self.cfg.frames.world, (p.x, p.y, p.z), (q.x, q.y, q.z, q.w),
+                                sim.bounds if sim is not None else None)
+            t = msg.header.stamp.to_sec()
+            velocity, yaw_rate, accel, yaw_accel = self._setpoint_motion.update(t, wp)
+            with self._lock:
+                self._pending_setpoint = (wp, velocity, yaw_rate, t, accel, yaw_accel, sim)  # checked against `sim`
+        finally:  # a refused setpoint arrived too (the previous one stays): the waiting loop goes on
+            if self._setpoint_lockstep is not None:  # after the swap-in above: the loop finds it there
+                self._setpoint_lockstep.on_setpoint(msg.header.stamp.to_nsec())
 
     def _on_hide(self, msg: UInt32MultiArray) -> None:
         self._hidden = [int(i) for i in msg.data]
@@ -391,6 +401,9 @@ class MavSimNode:
                                       len(path), *path[-1])
                     else:
                         rospy.loginfo("mav_sim: empty path: stopping")
+            if self._setpoint_lockstep is not None and self._setpoint_lockstep.due(t_ns):
+                self._setpoint_lockstep.wait(t_ns)
+                continue  # the setpoint (if any) is swapped in at the top, at its own stamp
             if t_ns >= next_frame:
                 first = last_frame is None
                 if c.lockstep:
