@@ -154,10 +154,7 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
   if (map_->pendingUpdateCount() > 0) update_pub_.publish(toMapBlocksMsg(map_->takeUpdate(), msg->header.stamp, frames_.world));
   // The termination's background share: one pass over the occupied blocks (70-120 ms on the default house's
   // map at 600 s), paced by image stamps; the planner reads it once per iteration.
-  if (surface_share_period_.due(msg->header.stamp)) {
-    surface_ = map_->surfaceObservedWithin(exploration_.d_bg_m);
-    surface_measured_ = true;
-  }
+  if (surface_share_period_.due(msg->header.stamp)) surface_ = map_->surfaceObservedWithin(exploration_.d_bg_m);
   publishStats(msg->header);
   frontiers_dirty_ = occupied_dirty_ = true;
   publishClouds(msg->header.stamp);
@@ -174,7 +171,7 @@ void BackgroundMapNode::publishStats(const std_msgs::Header& header) {
   s.frontier_count = static_cast<std::uint32_t>(map_->frontierCount());
   s.retired_frontier_count = static_cast<std::uint32_t>(evidence_->retiredCount());
   s.surface_voxels = surface_.occupied_voxels;
-  s.surface_observed_share = surface_measured_ ? surface_.share() : -1.0;
+  s.surface_observed_share = surface_share_period_.started() ? surface_.share() : -1.0;
   s.block_count = static_cast<std::uint32_t>(map_->blockCount());
   s.memory_bytes = map_->memoryBytes();
   s.integration_time_ms = last_integration_ms_;

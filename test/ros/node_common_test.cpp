@@ -61,6 +61,7 @@ TEST(FrameGapCounter, ThePeriodSurvivesManyDrops) {
 
 TEST(StampPeriod, IsDueOncePerPeriodOfStampsAndAgainAfterTimeWentBack) {
   semexp_ros::StampPeriod p(2.0);
+  EXPECT_FALSE(p.started());  // nothing due yet: background_map publishes no surface share then
   std::vector<double> due;
   // A 10 Hz stream from 10.0 s to 15.0 s, a replay from 10.0 s, then three stamps of 10.5 s.
   std::vector<double> stamps;
@@ -71,6 +72,7 @@ TEST(StampPeriod, IsDueOncePerPeriodOfStampsAndAgainAfterTimeWentBack) {
   // 10.0, then the first stamp >= 12.0 and >= 14.0; 10.0 is older than 14.0 (time went back), 12.0 is 2 s
   // after it, 10.5 older than 12.0 again, and the repeated 10.5 is not due (0 s < 2 s).
   const std::vector<double> expected = {10.0, 12.0, 14.0, 10.0, 12.0, 10.5};
+  EXPECT_TRUE(p.started());
   ASSERT_EQ(due.size(), expected.size());
   for (std::size_t i = 0; i < due.size(); ++i) EXPECT_NEAR(due[i], expected[i], 1e-9) << i;
 }

@@ -77,7 +77,6 @@ class BackgroundMapNode : public CameraNode {
   std::uint64_t invalid_depth_pixels_ = 0;
   float last_integration_ms_ = 0.f, last_frontier_ms_ = 0.f;
   semexp::OccupancyMap::SurfaceObservation surface_;  ///< surface seen from <= d_bg, at the last measurement
-  bool surface_measured_ = false;                     ///< surface_ was computed at least once
   StampPeriod surface_share_period_;                   ///< paces surface_ (surface_share_period_s)
   bool frontiers_dirty_ = false;  ///< the map changed since the last ~frontiers cloud
   bool occupied_dirty_ = false;   ///< ... since the last ~occupied cloud (sent or skipped)

@@ -231,6 +231,8 @@ class StampPeriod {
   explicit StampPeriod(double period_s) : period_s_(period_s) {}
   /// Whether `stamp` is due; a due stamp becomes the new reference.
   bool due(const ros::Time& stamp);
+  /// Whether any stamp was due yet (the paced work was done at least once).
+  bool started() const { return started_; }
 
  private:
   double period_s_;
