@@ -32,6 +32,7 @@ TsdfParams ObjectMap::tsdfParams(int class_id) const {
   p.truncation_m = config_.truncation_voxels * p.resolution_m;
   p.behind_surface_m = config_.behind_surface_voxels * p.resolution_m;
   p.behind_surface_quadratic_per_m = config_.behind_surface_quadratic_per_m;
+  p.full_weight_depth_m = config_.full_weight_depth_m;
   p.block_size = config_.block_size;
   p.max_weight = config_.max_weight;
   return p;

@@ -163,7 +163,8 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
             // Behind the surface the measurement says less (the voxel may be
             // free space hidden by an edge): weight drops linearly from 1 one
             // voxel behind to 0 at -behind_surface_m.
-            const float w_obs = sdf >= -res ? 1.f : (behind + sdf) / (behind - res + 1e-6f);
+            const float w_obs =
+                params_.depthWeight(d) * (sdf >= -res ? 1.f : (behind + sdf) / (behind - res + 1e-6f));
             if (w_obs <= 0.f) continue;
             const float w_new = w + w_obs;
             const float s = std::min(sdf, trunc);
@@ -183,7 +184,7 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
             ++updated;
           } else if (update_foreground && w > 0.f && std::abs(sdf) < trunc) {
             // A surface outside this detection's mask passes through the voxel: likely not the object.
-            vx.setForeground(vx.foreground() * w / (w + 1.f));
+            vx.setForeground(vx.foreground() * w / (w + params_.depthWeight(d)));
           }
         }
   }

@@ -123,6 +123,7 @@ semexp::ObjectMapConfig loadObjectMap(const ParamReader& p) {
   p.get(n + "publish_period_s", c.publish_period_s);
   p.get(n + "behind_surface_voxels", c.behind_surface_voxels);
   p.get(n + "behind_surface_quadratic_per_m", c.behind_surface_quadratic_per_m);
+  p.get(n + "full_weight_depth_m", c.full_weight_depth_m);
   p.get(n + "render_depth_tolerance_m", c.render_depth_tolerance_m);
   p.get(n + "render_depth_tolerance_rel", c.render_depth_tolerance_rel);
   p.get(n + "merge_fraction", c.merge_fraction);

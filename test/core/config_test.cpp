@@ -143,6 +143,9 @@ TEST(Config, OtherBadValues) {
   ObjectMapConfig om;
   om.foreground_border_px = 65;
   EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/foreground_border_px");
+  om = ObjectMapConfig();
+  om.full_weight_depth_m = -0.5;
+  EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/full_weight_depth_m");
   Bounds b;
   b.max_m.z() = b.min_m.z();
   EXPECT_EQ(rejected([&] { b.validate(); }), "bounds/max_m");

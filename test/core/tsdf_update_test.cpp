@@ -121,6 +121,49 @@ TEST(TsdfUpdate, BandBehindTheSurfaceFollowsTheDepthNoise) {
   EXPECT_GT(updated, 0u);
 }
 
+// A wall 3 m ahead of the origin seen once from 1 m with the true depth and once from 3 m with its depth read
+// 3 cm too near. The voxel centred 1 cm in front of the wall, near the optical axis, gets SDF 0.01 m from the
+// near view and -0.02 m from the far one (both within one voxel of the surface: full behind-surface weight).
+// Every observation counting 1: the mean, -0.005 m. With full_weight_depth_m = 1 m the near view (depth
+// 1 m) counts 1 and the far one (1/2.97)^2 = 0.11337: (0.01 - 0.02 * 0.11337) / 1.11337 = 0.006945 m, and
+// the voxel's weight is 1.11337.
+TEST(TsdfUpdate, NearViewsOutweighFarOnesBeyondTheFullWeightDepth) {
+  const PinholeCamera cam = tinyCamera();
+  const Box wall(Eigen::Vector3d(3.0, -2.0, -2.0), Eigen::Vector3d(3.5, 2.0, 2.0));
+  auto fuse = [&](double full_weight_depth_m, float* weight) {
+    TsdfParams p = params();
+    p.full_weight_depth_m = full_weight_depth_m;
+    TsdfMapFloat map(p);
+    const std::pair<double, float> views[] = {{2.0, 0.0f}, {0.0, -0.03f}};  // camera x (m), depth error (m)
+    for (const auto& [x, error] : views) {
+      const Eigen::Isometry3d T_WC = lookAlong(Eigen::Vector3d(x, 0, 0), Eigen::Vector3d::UnitX());
+      cv::Mat depth, labels;
+      renderShapes(cam, T_WC, {&wall}, depth, labels);
+      depth.setTo(cv::Scalar(3.0 - x + error), depth > 0);
+      map.integrate(cam, T_WC, depth, cv::Mat(), labels > 0, true);
+    }
+    float sdf = NAN;
+    map.forEachVoxel([&](const Eigen::Vector3i& idx, const TsdfVoxelFloat& vx) {
+      if (map.voxelCentre(idx).isApprox(Eigen::Vector3f(2.99f, 0.01f, 0.01f), 1e-4f)) {
+        sdf = vx.sdf(p.truncation_m);
+        *weight = vx.weight();
+      }
+    });
+    return sdf;
+  };
+  float w = 0.f;
+  EXPECT_NEAR(fuse(0.0, &w), -0.005, 1e-4);
+  EXPECT_NEAR(w, 2.0, 1e-3);  // the far view lands a hair past one voxel behind: weight 0.9999
+  EXPECT_NEAR(fuse(1.0, &w), 0.006945, 1e-4);
+  EXPECT_NEAR(w, 1.11337, 1e-3);
+
+  TsdfParams p;
+  p.full_weight_depth_m = 1.0;
+  EXPECT_EQ(p.depthWeight(0.5f), 1.f);
+  EXPECT_FLOAT_EQ(p.depthWeight(2.0f), 0.25f);
+  EXPECT_FLOAT_EQ(p.depthWeight(5.0f), 1.f / 16.f);  // (1/5)^2 = 0.04 is under the fixed-point quantum
+}
+
 TEST(TsdfUpdate, RayCastHitsTheSurface) {
   PinholeCamera cam;
   TsdfMap map(params());

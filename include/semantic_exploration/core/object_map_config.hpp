@@ -23,6 +23,12 @@ struct ObjectMapConfig {
   /// the truncation are not integrated (TsdfParams::behind_surface_quadratic_per_m).
   /// 0 = a fixed band.
   double behind_surface_quadratic_per_m = 0.006;
+  /// Observations from depths up to this count fully in the TSDF and the
+  /// foreground probability; a deeper depth d counts (full_weight_depth_m / d)^2,
+  /// at least 1/16 (TsdfParams::full_weight_depth_m). The depth noise grows
+  /// as d^2, so a view from 3 m would otherwise pull a surface as hard as
+  /// one from 1 m. m; 0 = every observation counts 1 (the paper's update).
+  double full_weight_depth_m = 0.0;
   /// A rendered object surface farther than the measured depth d plus
   /// render_depth_tolerance_m + render_depth_tolerance_rel * d is hidden
   /// (the relative part follows the depth noise, which grows with distance).
@@ -87,6 +93,8 @@ struct ObjectMapConfig {
             ns + "behind_surface_voxels", "must be in [1, truncation_voxels]");
     require(std::isfinite(behind_surface_quadratic_per_m) && behind_surface_quadratic_per_m >= 0,
             ns + "behind_surface_quadratic_per_m", "must be >= 0 1/m");
+    require(std::isfinite(full_weight_depth_m) && full_weight_depth_m >= 0, ns + "full_weight_depth_m",
+            "must be >= 0 m");
     require(std::isfinite(render_depth_tolerance_m) && render_depth_tolerance_m >= 0, ns + "render_depth_tolerance_m",
             "must be >= 0 m");
     require(std::isfinite(merge_fraction) && merge_fraction > 0.5 && merge_fraction <= 1, ns + "merge_fraction",

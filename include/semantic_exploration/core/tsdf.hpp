@@ -134,8 +134,13 @@ struct TsdfParams {
   /// whose q d^2 exceeds truncation_m are not integrated at all: the band
   /// cannot hold their noise. 0 = a fixed band of behind_surface_m.
   double behind_surface_quadratic_per_m = 0.0;
+  /// Observations from depths up to this count with weight 1; a deeper
+  /// depth d counts (full_weight_depth_m / d)^2, but at least 1/16 (the
+  /// fixed-point weight quantum), so that near views outweigh the noisier
+  /// far ones (sigma grows with d^2). m; 0 = every observation counts 1.
+  double full_weight_depth_m = 0.0;
   int block_size = 8;          ///< voxels per block edge (power of two)
-  double max_weight = 100.0;   ///< weight cap (one unit per observation at the surface)
+  double max_weight = 100.0;   ///< weight cap (one unit per full-weight observation at the surface)
 
   /// Global voxel indices must stay within +-kMaxVoxelIndex on every axis:
   /// meshing keys voxel edges with 20 bits per axis (10.5 km at 2 cm).
@@ -144,6 +149,13 @@ struct TsdfParams {
   double maxCoordinate_m() const { return resolution_m * (kMaxVoxelIndex - 1); }
   /// Largest depth integrated, m: sqrt(truncation_m / behind_surface_quadratic_per_m)
   /// (infinite without the noise band); deeper pixels are skipped.
+  /// Weight of an observation at depth d_m (see full_weight_depth_m), in [1/16, 1].
+  float depthWeight(float d_m) const {
+    const float full = static_cast<float>(full_weight_depth_m);
+    if (full <= 0.f || d_m <= full) return 1.f;
+    const float r = full / d_m;
+    return std::max(r * r, 1.f / 16.f);
+  }
   double maxIntegratedDepth_m() const {
     return behind_surface_quadratic_per_m > 0.0 ? std::sqrt(truncation_m / behind_surface_quadratic_per_m)
                                                 : std::numeric_limits<double>::infinity();
