@@ -123,17 +123,28 @@ TEST(TsdfUpdate, BandBehindTheSurfaceFollowsTheDepthNoise) {
 
 // A wall 3 m ahead of the origin seen once from 1 m with the true depth and once from 3 m with its depth read
 // 3 cm too near. The voxel centred 1 cm in front of the wall, near the optical axis, gets SDF 0.01 m from the
-// near view and -0.02 m from the far one (both within one voxel of the surface: full behind-surface weight).
+// near view and -0.02 m from the far one (a hair past one voxel behind: behind-surface weight 0.99994).
 // Every observation counting 1: the mean, -0.005 m. With full_weight_depth_m = 1 m the near view (depth
-// 1 m) counts 1 and the far one (1/2.97)^2 = 0.11337: (0.01 - 0.02 * 0.11337) / 1.11337 = 0.006945 m, and
-// the voxel's weight is 1.11337.
-TEST(TsdfUpdate, NearViewsOutweighFarOnesBeyondTheFullWeightDepth) {
+// 1 m) counts 1 and the far one (1/2.97)^2 = 0.1134, rounded to the 1/16 step: 0.125, so
+// (0.01 - 0.02 * 0.125) / 1.125 = 0.006667 m, and the voxel's weight is 1.125 (18 steps of 1/16).
+// Seen again from 3 m outside the mask, its foreground probability falls by w / (w + 0.125), not w / (w + 1).
+template <class Map>
+void checkDepthWeighting() {
   const PinholeCamera cam = tinyCamera();
   const Box wall(Eigen::Vector3d(3.0, -2.0, -2.0), Eigen::Vector3d(3.5, 2.0, 2.0));
-  auto fuse = [&](double full_weight_depth_m, float* weight) {
+  struct Result {
+    float sdf = NAN, weight = 0.f, foreground = NAN, foreground_after_outside_view = NAN;
+  };
+  auto fuse = [&](double full_weight_depth_m) {
     TsdfParams p = params();
     p.full_weight_depth_m = full_weight_depth_m;
-    TsdfMapFloat map(p);
+    Map map(p);
+    Result r;
+    auto readVoxel = [&](auto&& use) {
+      map.forEachVoxel([&](const Eigen::Vector3i& idx, const typename Map::Voxel& vx) {
+        if (map.voxelCentre(idx).isApprox(Eigen::Vector3f(2.99f, 0.01f, 0.01f), 1e-4f)) use(vx);
+      });
+    };
     const std::pair<double, float> views[] = {{2.0, 0.0f}, {0.0, -0.03f}};  // camera x (m), depth error (m)
     for (const auto& [x, error] : views) {
       const Eigen::Isometry3d T_WC = lookAlong(Eigen::Vector3d(x, 0, 0), Eigen::Vector3d::UnitX());
@@ -142,26 +153,37 @@ TEST(TsdfUpdate, NearViewsOutweighFarOnesBeyondTheFullWeightDepth) {
       depth.setTo(cv::Scalar(3.0 - x + error), depth > 0);
       map.integrate(cam, T_WC, depth, cv::Mat(), labels > 0, true);
     }
-    float sdf = NAN;
-    map.forEachVoxel([&](const Eigen::Vector3i& idx, const TsdfVoxelFloat& vx) {
-      if (map.voxelCentre(idx).isApprox(Eigen::Vector3f(2.99f, 0.01f, 0.01f), 1e-4f)) {
-        sdf = vx.sdf(p.truncation_m);
-        *weight = vx.weight();
-      }
+    readVoxel([&](const auto& vx) {
+      r.sdf = vx.sdf(static_cast<float>(p.truncation_m));
+      r.weight = vx.weight();
+      r.foreground = vx.foreground();
     });
-    return sdf;
+    const Eigen::Isometry3d T_WC = lookAlong(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+    cv::Mat depth, labels;
+    renderShapes(cam, T_WC, {&wall}, depth, labels);
+    map.integrate(cam, T_WC, depth, cv::Mat(), cv::Mat::zeros(depth.size(), CV_8U), true);  // outside the mask
+    readVoxel([&](const auto& vx) { r.foreground_after_outside_view = vx.foreground(); });
+    return r;
   };
-  float w = 0.f;
-  EXPECT_NEAR(fuse(0.0, &w), -0.005, 1e-4);
-  EXPECT_NEAR(w, 2.0, 1e-3);  // the far view lands a hair past one voxel behind: weight 0.9999
-  EXPECT_NEAR(fuse(1.0, &w), 0.006945, 1e-4);
-  EXPECT_NEAR(w, 1.11337, 1e-3);
+  const Result flat = fuse(0.0), weighted = fuse(1.0);
+  EXPECT_NEAR(flat.sdf, -0.005, 1e-4);
+  EXPECT_NEAR(flat.weight, 2.0, 1.0 / 32.0);
+  EXPECT_NEAR(flat.foreground_after_outside_view / flat.foreground, flat.weight / (flat.weight + 1.0), 2.0 / 254.0);
+  EXPECT_NEAR(weighted.sdf, 0.006667, 1e-4);
+  EXPECT_NEAR(weighted.weight, 1.125, 1e-4);
+  EXPECT_NEAR(weighted.foreground_after_outside_view / weighted.foreground, 1.125 / 1.25, 2.0 / 254.0);
+}
+
+TEST(TsdfUpdate, NearViewsOutweighFarOnesBeyondTheFullWeightDepth) {
+  checkDepthWeighting<TsdfMap>();       // the fixed-point map the object map uses
+  checkDepthWeighting<TsdfMapFloat>();  // the float reference layout
 
   TsdfParams p;
   p.full_weight_depth_m = 1.0;
   EXPECT_EQ(p.depthWeight(0.5f), 1.f);
-  EXPECT_FLOAT_EQ(p.depthWeight(2.0f), 0.25f);
-  EXPECT_FLOAT_EQ(p.depthWeight(5.0f), 1.f / 16.f);  // (1/5)^2 = 0.04 is under the fixed-point quantum
+  EXPECT_EQ(p.depthWeight(2.0f), 0.25f);
+  EXPECT_EQ(p.depthWeight(2.97f), 0.125f);    // (1/2.97)^2 = 0.113 rounds to 2/16
+  EXPECT_EQ(p.depthWeight(5.0f), 1.f / 16.f);  // (1/5)^2 = 0.04 is under one step
 }
 
 TEST(TsdfUpdate, RayCastHitsTheSurface) {

@@ -12,7 +12,7 @@ namespace semexp {
 
 struct ObjectMapConfig {
   double truncation_voxels = 4.0;  ///< TSDF truncation distance in voxels of the object's resolution
-  double max_weight = 100.0;       ///< TSDF weight cap (one unit per observation; <= 4095, 1/16 fixed point)
+  double max_weight = 100.0;       ///< TSDF weight cap (one unit per full-weight observation; <= 4095, 1/16 fixed point)
   int block_size = 8;              ///< voxels per block edge
   double publish_period_s = 1.0;   ///< minimum period between mesh marker updates, s
   /// How far behind the measured surface voxels are still updated, in voxels
@@ -25,9 +25,9 @@ struct ObjectMapConfig {
   double behind_surface_quadratic_per_m = 0.006;
   /// Observations from depths up to this count fully in the TSDF and the
   /// foreground probability; a deeper depth d counts (full_weight_depth_m / d)^2,
-  /// at least 1/16 (TsdfParams::full_weight_depth_m). The depth noise grows
-  /// as d^2, so a view from 3 m would otherwise pull a surface as hard as
-  /// one from 1 m. m; 0 = every observation counts 1 (the paper's update).
+  /// rounded to the 1/16 weight step and at least 1/16 (TsdfParams::full_weight_depth_m).
+  /// The depth noise grows as d^2, so a view from 3 m would otherwise pull a
+  /// surface as hard as one from 1 m. m; 0 = every observation counts 1 (the paper's update).
   double full_weight_depth_m = 0.0;
   /// A rendered object surface farther than the measured depth d plus
   /// render_depth_tolerance_m + render_depth_tolerance_rel * d is hidden

@@ -135,27 +135,32 @@ struct TsdfParams {
   /// cannot hold their noise. 0 = a fixed band of behind_surface_m.
   double behind_surface_quadratic_per_m = 0.0;
   /// Observations from depths up to this count with weight 1; a deeper
-  /// depth d counts (full_weight_depth_m / d)^2, but at least 1/16 (the
-  /// fixed-point weight quantum), so that near views outweigh the noisier
-  /// far ones (sigma grows with d^2). m; 0 = every observation counts 1.
+  /// depth d counts (full_weight_depth_m / d)^2 rounded to the 1/16 step of
+  /// the fixed-point weight and at least 1/16, so that near views outweigh
+  /// the noisier far ones. The square, not the inverse variance (d^-4 for
+  /// sigma = s d^2): with a 1/16 quantum the fourth power reaches its floor
+  /// at twice this depth and so loses the ordering between far views. The
+  /// behind-surface fall-off multiplies it. m; 0 = every observation counts 1.
   double full_weight_depth_m = 0.0;
   int block_size = 8;          ///< voxels per block edge (power of two)
-  double max_weight = 100.0;   ///< weight cap (one unit per full-weight observation at the surface)
+  double max_weight = 100.0;   ///< weight cap (one unit per full-weight observation at the surface, see full_weight_depth_m)
 
   /// Global voxel indices must stay within +-kMaxVoxelIndex on every axis:
   /// meshing keys voxel edges with 20 bits per axis (10.5 km at 2 cm).
   static constexpr int kMaxVoxelIndex = 1 << 19;
   /// Largest |world coordinate| whose voxels the map can hold, m.
   double maxCoordinate_m() const { return resolution_m * (kMaxVoxelIndex - 1); }
-  /// Largest depth integrated, m: sqrt(truncation_m / behind_surface_quadratic_per_m)
-  /// (infinite without the noise band); deeper pixels are skipped.
-  /// Weight of an observation at depth d_m (see full_weight_depth_m), in [1/16, 1].
+  /// Weight of an observation at depth d_m (see full_weight_depth_m): a
+  /// multiple of 1/16 in [1/16, 1], so that the fixed-point voxel stores the
+  /// weight its averages used.
   float depthWeight(float d_m) const {
     const float full = static_cast<float>(full_weight_depth_m);
     if (full <= 0.f || d_m <= full) return 1.f;
     const float r = full / d_m;
-    return std::max(r * r, 1.f / 16.f);
+    return std::max(static_cast<float>(tsdf_fixed::roundNonNegativeToInt(r * r * 16.f)), 1.f) * (1.f / 16.f);
   }
+  /// Largest depth integrated, m: sqrt(truncation_m / behind_surface_quadratic_per_m)
+  /// (infinite without the noise band); deeper pixels are skipped.
   double maxIntegratedDepth_m() const {
     return behind_surface_quadratic_per_m > 0.0 ? std::sqrt(truncation_m / behind_surface_quadratic_per_m)
                                                 : std::numeric_limits<double>::infinity();
@@ -176,7 +181,7 @@ struct TsdfSummary {
   Eigen::Vector3d centroid_W = Eigen::Vector3d::Zero();  ///< m
   std::size_t voxel_count = 0;                           ///< surface voxels
   double observed_fraction = 0.0;  ///< fraction of surface voxels observed from <= d_obj, [0, 1]
-  /// Sum of the weights of all voxels, surface or not (one unit per observation at the surface, each voxel
+  /// Sum of the weights of all voxels, surface or not (one unit per full-weight observation at the surface, each voxel
   /// capped at max_weight): grows with every integration that reaches the object, foreground or not.
   double weight_sum = 0.0;
 };
