@@ -317,6 +317,15 @@ class MavSimNode:
         c = self.cfg
         out = self.sim.render()
         hdr = Header(stamp=_stamp(t_ns), frame_id=c.frames.camera)
+        dets = Detections(header=hdr, instance_image=_image(self.faults.detection_image(out["detection_mask"]),
+                                                            "16UC1", hdr))
+        dets.detections = [Detection(instance_id=d["instance_id"], class_id=d["class_id"],
+                                     class_name=d["class_name"], confidence=d["confidence"])
+                           for d in out["detections"]]
+        # The counts of what this frame injects go out before the frame itself:
+        # a node's drop count (published after it got the frame) never runs ahead
+        # of the simulator's count of the fault behind it in the run's report.
+        self._publish_fault_counts(t_ns)
         info = CameraInfo(header=hdr, **self.sim.renderer.camera_info())
         self.pub_info.publish(info)
         self.pub_info_depth.publish(info)
@@ -325,11 +334,6 @@ class MavSimNode:
         self.pub_rgb.publish(_image(out["rgb"], "rgb8", hdr))
         self.pub_inst.publish(_image(out["instance"], "16UC1", hdr))
         self.pub_cls.publish(_image(out["class"], "16UC1", hdr))
-        dets = Detections(header=hdr, instance_image=_image(self.faults.detection_image(out["detection_mask"]),
-                                                            "16UC1", hdr))
-        dets.detections = [Detection(instance_id=d["instance_id"], class_id=d["class_id"],
-                                     class_name=d["class_name"], confidence=d["confidence"])
-                           for d in out["detections"]]
         self.pub_det.publish(dets)
 
     def _frame_publishers(self):
