@@ -33,6 +33,8 @@ TsdfParams ObjectMap::tsdfParams(int class_id) const {
   p.behind_surface_m = config_.behind_surface_voxels * p.resolution_m;
   p.behind_surface_quadratic_per_m = config_.behind_surface_quadratic_per_m;
   p.full_weight_depth_m = config_.full_weight_depth_m;
+  p.foreground_prior = config_.foreground_prior;
+  p.foreground_prior_weight = config_.foreground_prior_weight;
   p.block_size = config_.block_size;
   p.max_weight = config_.max_weight;
   return p;

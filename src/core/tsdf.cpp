@@ -134,6 +134,8 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
   float evidence[256];
   for (int m = 0; m < 256; ++m) evidence[m] = maskEvidence(static_cast<std::uint8_t>(m));
   const float block_radius = 0.87f * B * res;
+  const float prior = static_cast<float>(params_.foreground_prior);
+  const float prior_w = static_cast<float>(params_.foreground_prior_weight);
   std::size_t updated = 0;
   for (auto& kv : blocks_) {
     const Eigen::Vector3i base = kv.first * B;
@@ -159,6 +161,7 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
           if (behind < 0.f || sdf < -behind) continue;
           V& vx = block[i];
           const float w = vx.weight();
+          if (w <= 0.f) vx.setForeground(prior);  // before its first observation, the voxel holds the prior
           if (in_mask) {
             // Behind the surface the measurement says less (the voxel may be
             // free space hidden by an edge): weight drops linearly from 1 one
@@ -180,11 +183,12 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
               }
               vx.lowerMinDistance(dist);
             }
-            if (update_foreground) vx.setForeground((vx.foreground() * w + w_obs * evidence[in_mask]) / w_new);
+            if (update_foreground)
+              vx.setForeground((vx.foreground() * (w + prior_w) + w_obs * evidence[in_mask]) / (w_new + prior_w));
             ++updated;
           } else if (update_foreground && w > 0.f && std::abs(sdf) < trunc) {
             // A surface outside this detection's mask passes through the voxel: likely not the object.
-            vx.setForeground(vx.foreground() * w / (w + params_.depthWeight(d)));
+            vx.setForeground(vx.foreground() * (w + prior_w) / (w + prior_w + params_.depthWeight(d)));
           }
         }
   }

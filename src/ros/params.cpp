@@ -133,6 +133,8 @@ semexp::ObjectMapConfig loadObjectMap(const ParamReader& p) {
   p.get(n + "mask_depth_edge_window_px", c.mask_depth_edge_window_px);
   p.get(n + "split_gap_m", c.split_gap_m);
   p.get(n + "foreground_border_px", c.foreground_border_px);
+  p.get(n + "foreground_prior", c.foreground_prior);
+  p.get(n + "foreground_prior_weight", c.foreground_prior_weight);
   p.get(n + "mesh_fragment_gap_m", c.mesh_fragment_gap_m);
   c.validate(n);
   return c;

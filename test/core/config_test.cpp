@@ -146,6 +146,15 @@ TEST(Config, OtherBadValues) {
   om = ObjectMapConfig();
   om.full_weight_depth_m = -0.5;
   EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/full_weight_depth_m");
+  om = ObjectMapConfig();
+  om.foreground_prior = 1.2;
+  EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/foreground_prior");
+  om = ObjectMapConfig();
+  om.foreground_prior = 0.3;
+  om.foreground_prior_weight = 2.0;  // 2 * (0.5 - 0.3) = 0.4: one detection lifts a voxel to 0.533
+  EXPECT_NO_THROW(om.validate());
+  om.foreground_prior_weight = 2.5;  // 0.5: one detection leaves it at 0.5, so no new object has a surface
+  EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/foreground_prior_weight");
   Bounds b;
   b.max_m.z() = b.min_m.z();
   EXPECT_EQ(rejected([&] { b.validate(); }), "bounds/max_m");

@@ -86,35 +86,65 @@ TEST(ObjectMapImperfect, MaskBledOntoAWallBehindLeavesTheChairsMeshOnTheChair) {
 // at the chair's own depth: no depth edge keeps it out. Inside the mask in
 // half the detections only, and at the mask's border when it is, the ring must
 // stay under foreground 0.5 (object_map/foreground_border_px).
-TEST(ObjectMapImperfect, MaskBledOntoTheFloorInHalfTheFramesLeavesNoRingInTheMesh) {
+struct FloorBleed {
+  size_t vertices = 0, on_floor = 0, ring = 0;
+  double rmse_m = NAN;
+};
+FloorBleed chairOnFloorBledInHalfTheFrames(const ObjectMapConfig& config) {
   PinholeCamera cam;
   const BoxUnion c = chair(0.0, 0.0);
   const Box floor(Eigen::Vector3d(-3.0, -3.0, -0.1), Eigen::Vector3d(3.0, 3.0, 0.0));
-  ObjectMap map{ObjectMapConfig(), ClassTable()};
+  ObjectMap map{config, ClassTable()};
   const auto poses = arc(kTarget, 2.0, 60.0, 16);
   for (size_t i = 0; i < poses.size(); ++i) {
     cv::Mat depth, labels;
     renderShapes(cam, poses[i], {&c, &floor}, depth, labels);
-    ASSERT_GT(cv::countNonZero(labels == 1), 1500);
+    EXPECT_GT(cv::countNonZero(labels == 1), 1500);
     runFrame(map, cam, poses[i], depth, instances({{bled(labels, 1, i % 2 ? 5 : 0), 1}}, depth.size()), {1}, kChair);
   }
-  ASSERT_EQ(map.objects().size(), 1u);
+  FloorBleed r;
+  EXPECT_EQ(map.objects().size(), 1u);
+  if (map.objects().size() != 1u) return r;
   const Mesh mesh = map.objects().begin()->second->tsdf.extractMesh();
-  ASSERT_GT(mesh.vertices_W.size(), 2000u);
   // Floor vertices more than 3 cm (1.5 voxels) from the chair; the ring: those within 10 cm of it.
-  size_t on_floor = 0, ring = 0;
   for (const auto& v : mesh.vertices_W) {
     const double d = c.sdf(v.cast<double>());
     if (std::abs(floor.sdf(v.cast<double>())) >= 0.02 || d <= 0.03) continue;
-    ++on_floor;
-    ring += d < 0.1;
+    ++r.on_floor;
+    r.ring += d < 0.1;
   }
+  r.vertices = mesh.vertices_W.size();
+  r.rmse_m = rmse(mesh.vertices_W, c);
+  return r;
+}
+
+TEST(ObjectMapImperfect, MaskBledOntoTheFloorInHalfTheFramesLeavesNoRingInTheMesh) {
+  ObjectMapConfig paper;  // the paper's foreground update (no prior)
+  paper.foreground_prior = 0.5;
+  paper.foreground_prior_weight = 0.0;
+  const FloorBleed r = chairOnFloorBledInHalfTheFrames(paper);
+  ASSERT_GT(r.vertices, 2000u);
   // With full evidence at the border (foreground_border_px 0): 215 ring and 421 floor vertices of 2691, 5.4 cm
-  // RMSE; now 41 and 195 of 2444, 4.6 cm. What is left lies under the seat, 10-40 cm from the legs: floor
+  // RMSE; now 39 and 195 of 2444, 4.6 cm. What is left lies under the seat, 10-40 cm from the legs: floor
   // seen through the gap between the legs in a few (bled) frames only, which later frames never contradict.
-  EXPECT_LT(ring, mesh.vertices_W.size() / 50) << "of " << mesh.vertices_W.size() << " vertices";
-  EXPECT_LT(on_floor, mesh.vertices_W.size() / 10) << "of " << mesh.vertices_W.size() << " vertices";
-  EXPECT_LT(rmse(mesh.vertices_W, c), 0.05);
+  EXPECT_LT(r.ring, r.vertices / 50) << "of " << r.vertices << " vertices";
+  EXPECT_LT(r.on_floor, r.vertices / 10) << "of " << r.vertices << " vertices";
+  EXPECT_LT(r.rmse_m, 0.05);
+}
+
+// The floor seen in a few bled detections only: a foreground prior of 0.3
+// with the weight of 2 observations (object_map/foreground_prior) needs more
+// than those to lift it over 0.5. Measured: no floor vertex of 2204, 3.5 mm
+// RMSE (prior weight 1: 38 floor vertices, 2.3 cm).
+TEST(ObjectMapImperfect, ForegroundPriorKeepsFloorSeenInFewBledFramesOutOfTheMesh) {
+  ObjectMapConfig config;
+  config.foreground_prior = 0.3;
+  config.foreground_prior_weight = 2.0;
+  const FloorBleed r = chairOnFloorBledInHalfTheFrames(config);
+  ASSERT_GT(r.vertices, 2000u);
+  EXPECT_LT(r.on_floor, r.vertices / 200) << "of " << r.vertices << " vertices";
+  EXPECT_EQ(r.ring, 0u) << "of " << r.vertices << " vertices";
+  EXPECT_LT(r.rmse_m, 0.01);
 }
 
 TEST(ObjectMapImperfect, DetectionMissedInEverySecondFrameIsOneObject) {

@@ -186,6 +186,64 @@ TEST(TsdfUpdate, NearViewsOutweighFarOnesBeyondTheFullWeightDepth) {
   EXPECT_EQ(p.depthWeight(5.0f), 1.f / 16.f);  // (1/5)^2 = 0.04 is under one step
 }
 
+// Foreground prior 0.3 with weight 2 (object_map/foreground_prior): the voxel centred 1 cm in front of a
+// wall 1 m ahead, seen by a sequence of views, each one full-weight observation (weight 1 at the surface):
+//  - once inside the mask (evidence 1): (0.3 * 2 + 1) / (0 + 2 + 1) = 0.5333; the paper's update: 1;
+//  - then once outside it: 0.5333 * (1 + 2) / (1 + 2 + 1) = 0.4; the paper's: 1 * 1 / 2 = 0.5;
+//  - then inside again (a view outside the mask adds no weight): (0.4 * (1 + 2) + 1) / (1 + 2 + 1) = 0.55;
+//  - once at a mask's border (mask value 179, evidence 0.5 + 0.5 * 51 / 127 = 0.70079): (0.6 + 0.70079) / 3 =
+//    0.43360, under 0.5 (the paper's: 0.70079);
+//  - once as an undetected object (SDF only), then inside: the first sets the prior, (0.3 * 3 + 1) / 4 = 0.475.
+// The fixed-point voxel stores q / 254: each step is within half a step (1/508) of the float one.
+template <class Map>
+void checkForegroundPrior() {
+  const PinholeCamera cam = tinyCamera();
+  const Box wall(Eigen::Vector3d(1.0, -2.0, -2.0), Eigen::Vector3d(1.5, 2.0, 2.0));
+  const Eigen::Isometry3d T_WC = lookAlong(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  cv::Mat depth, labels;
+  renderShapes(cam, T_WC, {&wall}, depth, labels);
+  struct View {
+    std::uint8_t mask;
+    bool detected;
+  };
+  // Foreground after each view of `views`, prior (p0, w0).
+  auto fuse = [&](double p0, double w0, const std::vector<View>& views) {
+    TsdfParams p = params();
+    p.foreground_prior = p0;
+    p.foreground_prior_weight = w0;
+    Map map(p);
+    std::vector<float> fg;
+    for (const View& view : views) {
+      map.integrate(cam, T_WC, depth, cv::Mat(), cv::Mat(depth.size(), CV_8U, cv::Scalar(view.mask)), view.detected);
+      float f = NAN;
+      map.forEachVoxel([&](const Eigen::Vector3i& idx, const typename Map::Voxel& vx) {
+        if (map.voxelCentre(idx).isApprox(Eigen::Vector3f(0.99f, 0.01f, 0.01f), 1e-4f)) f = vx.foreground();
+      });
+      fg.push_back(f);
+    }
+    return fg;
+  };
+  const double tol = 1.0 / 508.0 + 1e-6;
+  const std::vector<float> prior = fuse(0.3, 2.0, {{255, true}, {0, true}, {255, true}});
+  ASSERT_EQ(prior.size(), 3u);
+  EXPECT_NEAR(prior[0], 1.6 / 3.0, tol);
+  EXPECT_NEAR(prior[1], 0.4, 2 * tol);
+  EXPECT_NEAR(prior[2], 0.55, 3 * tol);
+  const std::vector<float> paper = fuse(0.5, 0.0, {{255, true}, {0, true}});
+  EXPECT_NEAR(paper[0], 1.0, tol);
+  EXPECT_NEAR(paper[1], 0.5, 2 * tol);
+  EXPECT_NEAR(fuse(0.3, 2.0, {{179, true}})[0], 0.43360, tol);
+  EXPECT_NEAR(fuse(0.5, 0.0, {{179, true}})[0], 0.70079, tol);
+  const std::vector<float> undetected_first = fuse(0.3, 2.0, {{255, false}, {255, true}});
+  EXPECT_NEAR(undetected_first[0], 0.3, tol);
+  EXPECT_NEAR(undetected_first[1], 0.475, 2 * tol);
+}
+
+TEST(TsdfUpdate, ForegroundPriorNeedsMoreThanOneBorderDetection) {
+  checkForegroundPrior<TsdfMap>();
+  checkForegroundPrior<TsdfMapFloat>();
+}
+
 TEST(TsdfUpdate, RayCastHitsTheSurface) {
   PinholeCamera cam;
   TsdfMap map(params());

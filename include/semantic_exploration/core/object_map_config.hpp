@@ -71,6 +71,18 @@ struct ObjectMapConfig {
   /// stays above it. px, at least the width a mask bleeds by; 0 = off.
   int foreground_border_px = 8;
 
+  /// Foreground probability of a voxel before its first observation and the
+  /// weight that belief keeps in the foreground average, in full-weight
+  /// observations (TsdfParams::foreground_prior). A prior under 0.5 with some
+  /// weight needs several detections to bring a voxel's surface into the mesh:
+  /// a surface a mask bled onto in one or two detections stays out of it.
+  /// foreground_prior_weight * (0.5 - foreground_prior) must stay under 0.5:
+  /// one full-evidence observation then still lifts a new voxel above 0.5
+  /// (a new object needs a surface from its first detection).
+  /// foreground_prior_weight 0 = the paper's update.
+  double foreground_prior = 0.5;         ///< probability, [0, 1]
+  double foreground_prior_weight = 0.0;  ///< observations, [0, max_weight]
+
   /// Meshes (saved and published) keep the largest connected piece of an
   /// object's surface and the pieces within this distance of it (see
   /// dropMeshFragments); farther pieces are strays that bled masks or noise
@@ -108,6 +120,14 @@ struct ObjectMapConfig {
     require(std::isfinite(mesh_fragment_gap_m) && mesh_fragment_gap_m >= 0, ns + "mesh_fragment_gap_m", "must be >= 0 m");
     require(foreground_border_px >= 0 && foreground_border_px <= 64, ns + "foreground_border_px",
             "must be in [0, 64] px");
+    require(std::isfinite(foreground_prior) && foreground_prior >= 0 && foreground_prior <= 1,
+            ns + "foreground_prior", "must be in [0, 1]");
+    require(std::isfinite(foreground_prior_weight) && foreground_prior_weight >= 0 &&
+                foreground_prior_weight <= max_weight,
+            ns + "foreground_prior_weight", "must be in [0, max_weight]");
+    // One detection must raise a voxel above 0.5, else no new object ever holds a surface.
+    require(foreground_prior_weight * (0.5 - foreground_prior) < 0.5, ns + "foreground_prior_weight",
+            "times (0.5 - foreground_prior) must be < 0.5: one detection could not make an object");
     require(mask_depth_edge_window_px >= 0 && mask_depth_edge_window_px <= 64, ns + "mask_depth_edge_window_px",
             "must be in [0, 64] px");
   }

@@ -142,6 +142,15 @@ struct TsdfParams {
   /// at twice this depth and so loses the ordering between far views. The
   /// behind-surface fall-off multiplies it. m; 0 = every observation counts 1.
   double full_weight_depth_m = 0.0;
+  /// Foreground probability a voxel holds before its first observation, and
+  /// the weight (in full-weight observations) that belief keeps in the
+  /// foreground average: p = (prior * (w + prior_weight) + ...) / (w + prior_weight + ...).
+  /// A prior under 0.5 with some weight keeps a voxel seen inside a mask in
+  /// one or two detections only (a surface a mask bled onto, seen through a
+  /// gap) under 0.5 until more detections confirm it. 0 weight = the paper's
+  /// update (the first observation sets the probability).
+  double foreground_prior = 0.5;
+  double foreground_prior_weight = 0.0;
   int block_size = 8;          ///< voxels per block edge (power of two)
   double max_weight = 100.0;   ///< weight cap (one unit per full-weight observation at the surface, see full_weight_depth_m)
 
