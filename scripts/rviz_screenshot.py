@@ -279,10 +279,12 @@ def map_pixels(png):
     return res
 
 
-def settled_screenshot(rviz, png, timeout_s, period_s=1.5):
-    """Screenshots every period_s until the 3D view is drawn and its map
-    pixel count is within 2% of the previous shot's, or timeout_s; returns
-    map_pixels() of the last."""
+def settled_screenshot(rviz, png, timeout_s, period_s=1.5, min_object_pixels=0):
+    """Screenshots every period_s until the 3D view is drawn, its map pixel
+    count is within 2% of the previous shot's and it shows at least
+    min_object_pixels object pixels, or timeout_s; returns map_pixels() of
+    the last. (The simulation runs on meanwhile: a chair first mapped under
+    a desk is hidden by the desk top until the map holds one in the open.)"""
     deadline = time.time() + timeout_s
     prev = None
     while True:
@@ -290,7 +292,8 @@ def settled_screenshot(rviz, png, timeout_s, period_s=1.5):
         rviz.screenshot(png)
         m = map_pixels(png)
         if m["view"] is not None and prev is not None and prev["view"] == m["view"] and \
-                abs(m["map_pixels"] - prev["map_pixels"]) <= 0.02 * max(prev["map_pixels"], 100):
+                abs(m["map_pixels"] - prev["map_pixels"]) <= 0.02 * max(prev["map_pixels"], 100) and \
+                m["object_pixels"] >= min_object_pixels:
             return m
         if time.time() + period_s > deadline:
             return m
@@ -315,11 +318,11 @@ class MapWatch:
         self._sub.unregister()
 
 
-def take(rviz, png, config, watch, timeout_s, wait_topic=OCCUPIED_TOPIC):
+def take(rviz, png, config, watch, timeout_s, wait_topic=OCCUPIED_TOPIC, min_object_pixels=0):
     """Starts rviz with config on rviz's display, waits until it subscribed to
     wait_topic and a map cloud was published after that (so rviz has one),
-    then takes a settled screenshot into png and stops rviz. Returns
-    map_pixels() of the screenshot."""
+    then takes a settled screenshot (see settled_screenshot) into png and
+    stops rviz. Returns map_pixels() of the screenshot."""
     deadline = time.time() + timeout_s
     rviz.start_rviz(config)
     try:
@@ -333,19 +336,20 @@ def take(rviz, png, config, watch, timeout_s, wait_topic=OCCUPIED_TOPIC):
                 raise RuntimeError("no occupied map was published while rviz ran")
             rviz.check_alive()
             time.sleep(0.2)
-        return settled_screenshot(rviz, png, max(3.0, deadline - time.time()))
+        return settled_screenshot(rviz, png, max(3.0, deadline - time.time()), min_object_pixels=min_object_pixels)
     finally:
         rviz.stop_rviz()
 
 
 def screenshot_scene(env, png, bounds_min, bounds_max, log_dir, timeout_s=90.0, control_png=None, uncut_png=None,
-                     hide=None):
+                     hide=None, min_object_pixels=0):
     """The screenshot of a running exploration (the master in env, a rospy
     node in this process): rviz with the project's config, its view fitted to
     [bounds_min, bounds_max] (m), on Xvfb, into png. With control_png, a second
     one with the occupied map display on an unused topic; with uncut_png, one
     of the whole map (UNCUT_TOPICS: the ceiling left in); hide: display topics put
-    on an unused one in every screenshot. Returns
+    on an unused one in every screenshot; min_object_pixels: png (only) is
+    retaken until it shows that many object pixels or timeout_s. Returns
     {png: map_pixels()}; logs go to log_dir."""
     os.makedirs(log_dir, exist_ok=True)
     work = tempfile.mkdtemp(prefix="rviz_screenshot.")
@@ -362,7 +366,8 @@ def screenshot_scene(env, png, bounds_min, bounds_max, log_dir, timeout_s=90.0, 
                 wait = topic or (topics or {}).get(OCCUPIED_TOPIC, OCCUPIED_TOPIC)
                 for attempt in (1, 2):
                     try:
-                        res[path] = take(rviz, path, cfg, watch, timeout_s, wait)
+                        res[path] = take(rviz, path, cfg, watch, timeout_s, wait,
+                                         min_object_pixels if path == png else 0)
                         break
                     except RvizExited as e:
                         if attempt == 2:
@@ -389,6 +394,9 @@ def main(argv=None):
                     help="take the screenshot once the background map has explored this much, m^3")
     ap.add_argument("--min-objects", type=int, default=0,
                     help="and once the object map holds this many objects with a surface")
+    ap.add_argument("--min-object-pixels", type=int, default=0,
+                    help="retake rviz.png until it shows this many object (chair box and label) pixels, "
+                         "or --timeout-s")
     ap.add_argument("--timeout-s", type=float, default=90.0, help="limit for the simulation and for each screenshot, s")
     ap.add_argument("--control", action="store_true",
                     help="also rviz_no_map.png: the same view with the occupied map display on an unused topic")
@@ -426,7 +434,7 @@ def main(argv=None):
         shots = screenshot_scene(env, os.path.join(out, "rviz.png"), gt["bounds_min"], gt["bounds_max"], logs,
                                  args.timeout_s, os.path.join(out, "rviz_no_map.png") if args.control else None,
                                  os.path.join(out, "rviz_uncut.png") if args.uncut else None,
-                                 [CANDIDATES_TOPIC] if args.no_candidates else None)
+                                 [CANDIDATES_TOPIC] if args.no_candidates else None, args.min_object_pixels)
         for png, m in shots.items():
             print("[rviz] %s: 3D view %s, %d of %d pixels show the map (%.1f%%), %d error-coloured pixels, "
                   "%d object pixels" % (png, m["view"], m["map_pixels"], m["view_pixels"], 100 * m["map_fraction"],
