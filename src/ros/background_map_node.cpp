@@ -151,7 +151,11 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
   ++frames_integrated_;
   last_header_ = msg->header;
   last_header_.frame_id = frames_.world;
-  if (map_->pendingUpdateCount() > 0) update_pub_.publish(toMapBlocksMsg(map_->takeUpdate(), msg->header.stamp, frames_.world));
+  if (map_->pendingUpdateCount() > 0) {
+    const semantic_exploration::MapBlocks update = toMapBlocksMsg(map_->takeUpdate(), msg->header.stamp, frames_.world);
+    last_update_sequence_ = update.sequence;
+    update_pub_.publish(update);
+  }
   // The termination's background share: one pass over the occupied blocks (70-120 ms on the default house's
   // map at 600 s), paced by image stamps; the planner reads it once per iteration.
   if (surface_share_period_.due(msg->header.stamp)) surface_ = map_->surfaceObservedWithin(exploration_.d_bg_m);
@@ -177,6 +181,8 @@ void BackgroundMapNode::publishStats(const std_msgs::Header& header) {
   s.integration_time_ms = last_integration_ms_;
   s.frontier_time_ms = last_frontier_ms_;
   s.frames_integrated = frames_integrated_;
+  s.map_update_sequence = last_update_sequence_;
+  s.frontiers_stamp = last_frontiers_stamp_;
   s.dropped_bad_depth = drops_.count("bad_depth");
   s.dropped_size_mismatch = drops_.count("size_mismatch");
   s.dropped_no_tf = drops_.count("no_tf");
@@ -202,6 +208,7 @@ void BackgroundMapNode::publishClouds(const ros::Time& stamp) {
       (evidence_->retired(c) ? retired : active).push_back(c);
     });
     frontiers_pub_.publish(toPointCloud(active, stamp, frames_.world));
+    last_frontiers_stamp_ = stamp;
     retired_pub_.publish(toPointCloud(retired, stamp, frames_.world));
     last_frontier_pub_ = now;
     frontiers_dirty_ = false;

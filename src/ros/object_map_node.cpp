@@ -89,7 +89,14 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
                                   const sensor_msgs::ImageConstPtr& depth_msg,
                                   const sensor_msgs::ImageConstPtr& rgb_msg) {
   const FrameTimer timer;
-  const auto fail = [&](const Refusal& why) { refuse(matched->header, why, timer); };
+  const auto fail = [&](const Refusal& why) {
+    // The (unchanged) objects go out for a refused frame too, stamped with it: a listener that waits for the
+    // objects of a frame it knows was handled (the planner's plan_once in deterministic runs) gets them.
+    if (matched->header.stamp > last_published_stamp_ &&
+        (ros::WallTime::now() - last_publish_).toSec() >= config_.publish_period_s)
+      publishObjects(matched->header.stamp);
+    refuse(matched->header, why, timer);
+  };
   cv::Mat depth_m, rgb, instances;
   if (const Refusal why = readDepth(*depth_msg, depth_m)) return fail(why);
   std::string err = colourToRgb(*rgb_msg, rgb);
@@ -139,6 +146,7 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
 
 void ObjectMapNode::publishObjects(const ros::Time& stamp) {
   last_publish_ = ros::WallTime::now();
+  last_published_stamp_ = std::max(last_published_stamp_, stamp);
   semantic_exploration::ObjectArray arr;
   arr.header.stamp = stamp;
   arr.header.frame_id = frames_.world;

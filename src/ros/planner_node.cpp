@@ -123,11 +123,13 @@ void PlannerNode::frontiersCallback(const sensor_msgs::PointCloud2ConstPtr& msg)
     return;
   }
   have_frontiers_ = true;
+  frontiers_stamp_ = msg->header.stamp;
 }
 
 void PlannerNode::objectsCallback(const semantic_exploration::ObjectArrayConstPtr& msg) {
   std::size_t dropped = 0;
   objects_ = toObjectSummaries(*msg, dropped);
+  objects_stamp_ = msg->header.stamp;
   if (dropped > 0) drops_.drop("bad_object", "object with a non-finite box, centroid or share ignored", dropped);
 }
 
@@ -138,6 +140,9 @@ void PlannerNode::statsCallback(const semantic_exploration::MapStatsConstPtr& ms
     return;
   }
   map_retired_frontiers_ = msg->retired_frontier_count;
+  stats_stamp_ = msg->header.stamp;
+  stats_frontiers_stamp_ = msg->frontiers_stamp;
+  stats_update_sequence_ = msg->map_update_sequence;
 }
 
 // ---------------------------------------------------------------- triggers
@@ -172,16 +177,44 @@ void PlannerNode::timerCallback(const ros::TimerEvent&) {
   iterate(message);  // reports "waiting for the map" itself while the replica is empty
 }
 
-bool PlannerNode::planOnce(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
-  res.success = iterate(res.message);
+bool PlannerNode::planOnce(semantic_exploration::PlanOnce::Request& req,
+                           semantic_exploration::PlanOnce::Response& res) {
+  res.success = res.pending = false;
+  std::string missing = req.frame_stamp.isZero() ? "" : missingInputs(req.frame_stamp);
+  Eigen::Isometry3d T_WB;
+  if (missing.empty() && !req.pose_stamp.isZero()) {
+    const std::string err = poses_->lookup(frames_.world, frames_.body, req.pose_stamp, T_WB);
+    if (!err.empty()) missing = "the MAV pose at " + std::to_string(req.pose_stamp.toSec()) + " s: " + err;
+  }
+  if (!missing.empty()) {
+    res.pending = true;
+    res.message = "not planned: waiting for " + missing;
+    return true;
+  }
+  res.success = iterate(res.message, req.stamp, req.pose_stamp);
   return true;
+}
+
+std::string PlannerNode::missingInputs(const ros::Time& frame) const {
+  const auto at = [](const ros::Time& t) { return std::to_string(t.toSec()) + " s"; };
+  if (stats_stamp_ < frame)
+    return "background_map/stats of the frame at " + at(frame) + " (newest here: " + at(stats_stamp_) + ")";
+  if (replica_.sequence() < stats_update_sequence_)
+    return "background_map/map_update " + std::to_string(stats_update_sequence_) + " (the replica is at " +
+           std::to_string(replica_.sequence()) + ")";
+  if (frontiers_stamp_ < stats_frontiers_stamp_)
+    return "background_map/frontiers of " + at(stats_frontiers_stamp_) + " (newest here: " + at(frontiers_stamp_) + ")";
+  // object_map publishes its objects for every frame it handles (deterministic runs: publish_period_s 0).
+  if (objects_sub_.getNumPublishers() > 0 && objects_stamp_ < frame)
+    return "object_map/objects of the frame at " + at(frame) + " (newest here: " + at(objects_stamp_) + ")";
+  return "";
 }
 
 // ---------------------------------------------------------------- iteration
 
-bool PlannerNode::iterate(std::string& message) {
+bool PlannerNode::iterate(std::string& message, const ros::Time& stamp, const ros::Time& pose_stamp) {
   last_attempt_ = ros::WallTime::now();
-  const ros::Time now = ros::Time::now();
+  const ros::Time now = stamp.isZero() ? ros::Time::now() : stamp;
   const auto wait = [&](const std::string& why) {
     message = why;
     publishStatus(ExplorationStatus::STATE_WAITING, message);
@@ -189,7 +222,7 @@ bool PlannerNode::iterate(std::string& message) {
   };
   if (replica_.empty()) return wait("waiting for the map (the replica is empty)");
   Eigen::Isometry3d T_WB;
-  const std::string err = poses_->lookup(frames_.world, frames_.body, ros::Time(0), T_WB);
+  const std::string err = poses_->lookup(frames_.world, frames_.body, pose_stamp, T_WB);
   if (!err.empty()) return wait("waiting for the MAV pose: " + err);
   if (!planner_ || planner_resolution_m_ != replica_.resolution_m()) {
     planner_ = std::make_unique<semexp::ExplorationPlanner>(config_, exploration_, bounds_, camera_,

@@ -43,11 +43,10 @@ import tf2_ros
 from geometry_msgs.msg import TransformStamped
 from nav_msgs.msg import Path
 from sensor_msgs.msg import PointCloud2
-from std_srvs.srv import Trigger
 
 from semantic_exploration.msg import DropCounts, ExplorationStatus, MapBlocks
 from semantic_exploration.srv import (ComputeGains, ComputeGainsResponse, GetHistoryMasks,
-                                      GetHistoryMasksResponse, GetMap, GetMapResponse)
+                                      GetHistoryMasksResponse, GetMap, GetMapResponse, PlanOnce)
 from sensor_msgs.msg import Image
 
 # test_planner_node.py lies beside this file's real path (a catkin devel-space relay runs this file from elsewhere).
@@ -94,7 +93,7 @@ class PlannerBadInputTest(unittest.TestCase):
         # First an empty map (a full update without blocks), then the room.
         cls.map_pub.publish(blocks_msg(np.zeros((0, 0, 0), dtype=np.int8), 1, True))
         time.sleep(1.0)
-        cls.empty_map_result = rospy.ServiceProxy("/planner/plan_once", Trigger)()
+        cls.empty_map_result = rospy.ServiceProxy("/planner/plan_once", PlanOnce)()
         cls.paths_before_map = len(cls.paths)
         cls.map_pub.publish(blocks_msg(cls.grid, 2, True))
 
@@ -195,7 +194,7 @@ class PlannerBadInputTest(unittest.TestCase):
         self.assertGreaterEqual(done[0].service_timeouts, HANG_CALLS + 1)
 
     def test_2_a_service_that_goes_away_and_returns(self):
-        plan_once = rospy.ServiceProxy("/planner/plan_once", Trigger)
+        plan_once = rospy.ServiceProxy("/planner/plan_once", PlanOnce)
         self.gains_srv.shutdown()
         n_paths = len(self.paths)
         res = plan_once()
@@ -215,7 +214,7 @@ class PlannerBadInputTest(unittest.TestCase):
         self.move_to(start)
         time.sleep(1.0)  # the new static transform reaches the planner
         n_paths = len(self.paths)
-        res = rospy.ServiceProxy("/planner/plan_once", Trigger)()
+        res = rospy.ServiceProxy("/planner/plan_once", PlanOnce)()
         self.assertTrue(res.success, res.message)
         self.assertTrue(self.wait_for(lambda: len(self.paths) > n_paths, 10.0))
         path = self.paths[-1][1]
@@ -243,7 +242,7 @@ class PlannerBadInputTest(unittest.TestCase):
             for n, bad in enumerate((zero_step, long_data), start=1):
                 self.frontier_pub.publish(bad)
                 self.assertTrue(self.wait_for(lambda: drops.get("bad_frontiers", 0) >= n, 10.0), drops)
-                res = rospy.ServiceProxy("/planner/plan_once", Trigger)()  # answers: not hung
+                res = rospy.ServiceProxy("/planner/plan_once", PlanOnce)()  # answers: not hung
                 self.assertTrue(res.success, res.message)
         finally:
             self.frontier_pub.publish(good)
@@ -266,7 +265,7 @@ class PlannerBadInputTest(unittest.TestCase):
         self.move_to(start)
         time.sleep(1.0)
         n_paths = len(self.paths)
-        res = rospy.ServiceProxy("/planner/plan_once", Trigger)()
+        res = rospy.ServiceProxy("/planner/plan_once", PlanOnce)()
         self.assertFalse(res.success)
         self.assertTrue(res.message.startswith("the current position is not in free space and no escape was found"),
                         res.message)

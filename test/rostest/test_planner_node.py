@@ -19,11 +19,11 @@ import tf2_ros
 from geometry_msgs.msg import Point, TransformStamped
 from nav_msgs.msg import Path
 from sensor_msgs.msg import CameraInfo, Image, PointCloud2, PointField
-from std_srvs.srv import Trigger
 
 from semantic_exploration import map_blocks
 from semantic_exploration.msg import CandidateViewArray, ExplorationStatus, MapBlocks, MapStats
-from semantic_exploration.srv import ComputeGains, ComputeGainsResponse, GetHistoryMasks, GetMap, GetMapResponse
+from semantic_exploration.srv import (ComputeGains, ComputeGainsResponse, GetHistoryMasks, GetMap, GetMapResponse,
+                                      PlanOnce)
 
 PKG = "semantic_exploration"
 RES = 0.1
@@ -164,7 +164,7 @@ class PlannerNodeTest(unittest.TestCase):
         return GetMapResponse(map=blocks_msg(cls.grid, 7, True))
 
     def plan_once(self):
-        return rospy.ServiceProxy("/planner/plan_once", Trigger)()
+        return rospy.ServiceProxy("/planner/plan_once", PlanOnce)()
 
     def wait_for(self, cond, timeout=20.0):
         deadline = time.time() + timeout
@@ -202,6 +202,38 @@ class PlannerNodeTest(unittest.TestCase):
         before = self.get_map_calls
         self.map_pub.publish(blocks_msg(self.grid, 5, False))  # 2..4 lost
         self.assertTrue(self.wait_for(lambda: self.get_map_calls > before), "no get_map call after a gap")
+
+    def test_2b_frame_stamp_waits_for_the_frames_inputs(self):
+        # A frame the planner has nothing of yet: it answers pending, naming the
+        # first input missing, until stats, the map update and the frontier
+        # cloud those stats name have all arrived; then it plans.
+        frame = rospy.Time.now() + rospy.Duration(1000.0)
+        n_paths = len(self.paths)
+
+        def ask():
+            return rospy.ServiceProxy("/planner/plan_once", PlanOnce)(rospy.Time(), frame, rospy.Time())
+        res = ask()
+        self.assertTrue(res.pending and not res.success, res)
+        self.assertIn("background_map/stats", res.message)
+        self.assertTrue(self.wait_for(lambda: self.get_map_calls > 0))  # test_2's resync: the replica is at 7
+        time.sleep(0.5)
+        stats_pub = rospy.Publisher("/background_map/stats", MapStats, queue_size=1, latch=True)
+        self.assertTrue(self.wait_for(lambda: stats_pub.get_num_connections() > 0))
+        stats = MapStats(explored_volume_m3=10.0, surface_observed_share=-1.0, map_update_sequence=8)
+        stats.header.stamp = stats.frontiers_stamp = frame
+        stats_pub.publish(stats)
+        self.assertTrue(self.wait_for(lambda: "map_update 8" in ask().message), ask())
+        self.map_pub.publish(blocks_msg(self.grid, 8, False))
+        self.assertTrue(self.wait_for(lambda: "background_map/frontiers" in ask().message), ask())
+        frontiers = cloud([(3.95, y, 1.0) for y in (0.55, 1.05, 1.55, 2.05)])
+        frontiers.header.stamp = frame
+        time.sleep(0.5)
+        self.assertEqual(len(self.paths), n_paths, "a pending answer planned")
+        self.frontier_pub.publish(frontiers)
+        answers = []
+        self.assertTrue(self.wait_for(lambda: not answers.append(ask()) and not answers[-1].pending))
+        self.assertTrue(answers[-1].success, answers[-1].message)
+        self.assertTrue(self.wait_for(lambda: len(self.paths) > n_paths), "no path after the inputs arrived")
 
     def test_3_no_frontiers_terminates(self):
         # Semantic mode: "explored" also needs the background seen from <= d_bg

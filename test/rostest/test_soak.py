@@ -28,12 +28,12 @@ import tf2_ros
 from geometry_msgs.msg import Point, PoseStamped, TransformStamped
 from sensor_msgs.msg import CameraInfo, Image, PointCloud2, PointField
 from std_msgs.msg import String
-from std_srvs.srv import Trigger
 
 from semantic_exploration.msg import (DropCounts, Detections, FrameIntegrated, MapBlocks, MapStats,
                                       MatchedDetections, ObjectArray)
 from semantic_exploration.srv import (ComputeGains, ComputeGainsRequest, GetHistoryMasks, GetHistoryMasksRequest,
-                                      GetMap, GetMapRequest, RenderInstances, RenderInstancesRequest, SaveMap)
+                                      GetMap, GetMapRequest, PlanOnce, RenderInstances, RenderInstancesRequest,
+                                      SaveMap)
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
 import soak_messages as sm  # noqa: E402
@@ -374,7 +374,7 @@ class Soak(unittest.TestCase):
                     ("/object_map/render_instances", RenderInstances, RenderInstancesRequest),
                     ("/background_map/get_map", GetMap, GetMapRequest),
                     ("/background_map/save", SaveMap, None), ("/object_map/save", SaveMap, None),
-                    ("/planner/plan_once", Trigger, None)]
+                    ("/planner/plan_once", PlanOnce, None)]
         for name, srv, req_cls in services:
             rospy.wait_for_service(name, 10.0)
             proxy = rospy.ServiceProxy(name, srv)
@@ -386,7 +386,7 @@ class Soak(unittest.TestCase):
                 if srv is SaveMap:
                     req = [self.rng.choice(["", "relative/dir", os.path.join(tmp, "..", "x"), "/proc/none/x",
                                             os.path.join(tmp, "save%d" % i)])]
-                elif srv is Trigger:
+                elif srv is PlanOnce:
                     req = []
                 else:
                     req = [sm.fill(self.rng, req_cls())]
@@ -431,7 +431,7 @@ class Soak(unittest.TestCase):
         pub.publish(ping)
         for n in CAMERA_NODES:
             self._wait_for(lambda: self._count(n, "bad_camera_info") > before[n], 5.0, "%s to answer the ping" % n)
-        self.assertTrue(rospy.ServiceProxy("/planner/plan_once", Trigger)().message)
+        self.assertTrue(rospy.ServiceProxy("/planner/plan_once", PlanOnce)().message)
         for n in NODES:
             rss, peak = rss_mb(self.pids[n])
             self._log("%s: RSS %.0f MB at the start, %.0f MB at the end, peak %.0f MB, %d drops counted"

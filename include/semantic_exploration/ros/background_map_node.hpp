@@ -72,6 +72,10 @@ class BackgroundMapNode : public CameraNode {
   ros::WallTime pending_since_;
   ros::WallTime last_rgb_wall_;
   ros::WallTime last_occupied_pub_, last_frontier_pub_;
+  // What went out before each stats message (MapStats map_update_sequence, frontiers_stamp): a listener
+  // that has the stats of a frame can tell whether the update and cloud published before them reached it.
+  std::uint64_t last_update_sequence_ = 0;
+  ros::Time last_frontiers_stamp_;
   std_msgs::Header last_header_;
   std::uint64_t frames_integrated_ = 0;
   std::uint64_t invalid_depth_pixels_ = 0;

@@ -57,6 +57,7 @@ class ObjectMapNode : public CameraNode {
   semexp::ExplorationConfig exploration_;
   std::unique_ptr<semexp::ObjectMap> map_;
   ros::Time last_stamp_;
+  ros::Time last_published_stamp_;  ///< newest stamp ~objects went out with
   bool integrated_any_ = false;  ///< For the once-only first-frame log line.
   /// Last render_instances answer, reused by the frame it was made for if the map did not change since.
   struct CachedRender {

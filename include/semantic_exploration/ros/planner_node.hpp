@@ -14,7 +14,16 @@
 /// orientation) and the same path time-parameterised as `~trajectory`
 /// (trajectory_msgs/MultiDOFJointTrajectory, core/planning/trajectory.hpp), `~candidates` (CandidateViewArray), `~candidate_markers`,
 /// `~gain_images/{entropy,background,object,combined}` (32FC1, the winner's)
-/// and `~status` (ExplorationStatus); serves `~plan_once` (std_srvs/Trigger).
+/// and `~status` (ExplorationStatus); serves `~plan_once` (PlanOnce).
+///
+/// `~plan_once` with a frame_stamp (a lockstep simulator's call in
+/// deterministic runs) plans only once that frame's inputs are here:
+/// background_map/stats of the frame, the map update and frontier cloud
+/// those stats say were published before them, and object_map/objects of the
+/// frame (while object_map publishes); else it answers pending, naming what
+/// is missing, and the caller asks again. Topics from different publishers
+/// arrive in no fixed order, so a node's frame report does not mean its
+/// other outputs of that frame have reached this node.
 ///
 /// An iteration runs when the MAV reports its goal reached, on `~plan_once`,
 /// and (while no path is being flown) every `planner/retry_period_s` once the
@@ -38,7 +47,6 @@
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_msgs/String.h>
-#include <std_srvs/Trigger.h>
 
 #include <memory>
 #include <string>
@@ -47,6 +55,7 @@
 #include "semantic_exploration/MapBlocks.h"
 #include "semantic_exploration/MapStats.h"
 #include "semantic_exploration/ObjectArray.h"
+#include "semantic_exploration/PlanOnce.h"
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
 #include "semantic_exploration/core/planning/map_replica.hpp"
 #include "semantic_exploration/ros/node_common.hpp"
@@ -67,14 +76,17 @@ class PlannerNode {
   void goalReachedCallback(const geometry_msgs::PoseStampedConstPtr& msg);
   void pathRejectedCallback(const std_msgs::StringConstPtr& msg);
   void timerCallback(const ros::TimerEvent& ev);
-  bool planOnce(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
+  bool planOnce(semantic_exploration::PlanOnce::Request& req, semantic_exploration::PlanOnce::Response& res);
+  /// What of frame_stamp's inputs has not arrived yet ("" when all are here; see the file comment).
+  std::string missingInputs(const ros::Time& frame_stamp) const;
   void publishStatus(uint8_t state, const std::string& message);
 
   /// Applies one MapBlocks message to the replica; `gap` is set when a resync is needed.
   bool applyBlocks(const semantic_exploration::MapBlocks& msg, bool& gap);
   bool resync();
-  /// One planning iteration; true if a path was published. `message` says what happened.
-  bool iterate(std::string& message);
+  /// One planning iteration; true if a path was published. `message` says what happened. `stamp`:
+  /// the iteration's sim time (zero: now); `pose_stamp`: the MAV pose's stamp (zero: the latest).
+  bool iterate(std::string& message, const ros::Time& stamp = ros::Time(), const ros::Time& pose_stamp = ros::Time());
   /// Publishes the path of a winner that passed the final clearance check and logs why it won.
   void publishWinner(const semexp::IterationResult& r, const ros::Time& now);
   void publishResult(const semexp::IterationResult& r, const ros::Time& stamp, double current_yaw);
@@ -99,6 +111,10 @@ class PlannerNode {
   double explored_volume_m3_ = -1.0;  ///< from background_map/stats; negative until received
   double background_share_ = -1.0;    ///< surface share seen from <= d_bg, from background_map/stats; negative until received
   std::size_t map_retired_frontiers_ = 0;  ///< frontier voxels the background map retired by evidence (its stats)
+  // Stamps of the inputs received, for plan_once's frame_stamp (missingInputs()).
+  ros::Time stats_stamp_, frontiers_stamp_, objects_stamp_;
+  ros::Time stats_frontiers_stamp_;         ///< MapStats::frontiers_stamp of the newest stats
+  std::uint64_t stats_update_sequence_ = 0;  ///< MapStats::map_update_sequence of the newest stats
   semexp::TerminationConfig termination_;
   semexp::FrontierRetirementConfig retirement_;
 

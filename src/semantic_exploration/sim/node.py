@@ -158,6 +158,7 @@ class MavSimNode:
         rospy.Subscriber("~load_scene", String, lambda m: self._requests.put(m.data), queue_size=50)
         self._hidden = list(c.detector.hidden_object_ids)
         rospy.Subscriber("~hide_detections", UInt32MultiArray, self._on_hide, queue_size=5)
+        self._last_body_ns = 0  # stamp of the last MAV pose sent (tf world <- body), ns
         self._planner_lockstep = PlannerLockstep(
             rospy.resolve_name("planner/plan_once"), c.lockstep_planner_retry_s, c.lockstep_timeout_s,
             c.lockstep_startup_timeout_s) if c.lockstep and c.lockstep_planner else None
@@ -312,6 +313,7 @@ class MavSimNode:
         f = self.cfg.frames
         self.tf.sendTransform(self._transform(self.sim.T_WB(), f.world, f.body, t_ns))
         self.pub_pose.publish(self._pose_msg(t_ns))
+        self._last_body_ns = t_ns
 
     def _publish_frame(self, t_ns: int) -> None:
         c = self.cfg
@@ -417,7 +419,8 @@ class MavSimNode:
                         self._frames.wait_frame(last_frame)
                     pl = self._planner_lockstep
                     if not first and pl is not None and pl.due(t_ns, not sim.follower.active):
-                        pl.plan(t_ns, lambda level, text: getattr(rospy, "log" + level)("mav_sim: " + text))
+                        pl.plan(t_ns, lambda level, text: getattr(rospy, "log" + level)("mav_sim: " + text),
+                                frame_ns=last_frame, pose_ns=self._last_body_ns)
                         continue  # the path (if any) is swapped in at the top; then this frame
                     anchor_wall, anchor_ns = time.monotonic(), t_ns
                 if first:

@@ -8,8 +8,17 @@ machine's load, and everything after it differs between two runs. With it,
 whenever the MAV has no path (at the start, after reaching a goal, after a
 refused or failed plan) the simulator, at a frame boundary and once every
 lockstep node has integrated the last frame, calls ``planner/plan_once``
-(std_srvs/Trigger) and, if a path was published, waits for it before sim time
+(semantic_exploration/PlanOnce) and, if a path was published, waits for it before sim time
 moves on. A call that gives no path is repeated every ``retry_s`` of sim time.
+
+The call (semantic_exploration/PlanOnce) names the sim time, the last frame
+every lockstep node has handled and the stamp of the last MAV pose sent. The
+mapping nodes publish that frame's map update, frontiers, statistics and
+objects before they report it, but those reach the planner on connections of
+their own, later than the report under load: the planner answers ``pending``
+until they are all there, and is asked again (sim time still stopped), for up
+to ``timeout_s`` of wall time; after that it plans on what has arrived and
+the run is no longer repeatable (logged).
 mav/goal_reached is not published then (the planner would plan a second time
 on it); the planner's own retries should be off (planner/retry_period_s long).
 """
@@ -25,6 +34,7 @@ class PlannerLockstep:
         self.retry_ns = int(round(retry_s * NS))
         self.next_ns = 0              # sim time of the next call, ns (0: at the next boundary)
         self.calls = self.paths = 0
+        self.pending = 0              # calls answered "pending": the planner's inputs were still on their way
         self._handled = 0             # paths received so far (followed or refused)
         self._cv = threading.Condition()
         self._proxy = None
@@ -41,20 +51,34 @@ class PlannerLockstep:
     def due(self, t_ns: int, idle: bool) -> bool:
         return idle and t_ns >= self.next_ns
 
-    def plan(self, t_ns: int, log) -> bool:
-        """Calls plan_once (sim time stands still meanwhile); True once its path has
-        arrived. `log(level, text)` reports failures."""
+    def plan(self, t_ns: int, log, frame_ns: int = 0, pose_ns: int = 0) -> bool:
+        """Calls plan_once at sim time t_ns (which stands still meanwhile) on the
+        inputs of frame frame_ns and the pose sent at pose_ns (0: whatever has
+        arrived); True once its path has arrived. `log(level, text)` reports failures."""
         import rospy
-        from std_srvs.srv import Trigger
+        from semantic_exploration.srv import PlanOnce
         self.calls += 1
         self.next_ns = t_ns + self.retry_ns
         with self._cv:
             before = self._handled
+
+        def stamp(ns):
+            return rospy.Time(ns // NS, ns % NS)
         try:
             if self._proxy is None:
                 rospy.wait_for_service(self.service, timeout=self.startup_timeout_s)
-                self._proxy = rospy.ServiceProxy(self.service, Trigger, persistent=False)
-            res = self._proxy()
+                self._proxy = rospy.ServiceProxy(self.service, PlanOnce, persistent=False)
+            deadline = time.monotonic() + self.timeout_s
+            res = self._proxy(stamp(t_ns), stamp(frame_ns), stamp(pose_ns))
+            while res.pending:
+                self.pending += 1
+                if time.monotonic() > deadline:
+                    log("warn", "lockstep_planner: the planner's inputs did not arrive within %.1f s (%s); "
+                        "planning on what has arrived (this run is no longer repeatable)" % (self.timeout_s, res.message))
+                    res = self._proxy(stamp(t_ns), stamp(0), stamp(0))
+                    break
+                time.sleep(0.005)
+                res = self._proxy(stamp(t_ns), stamp(frame_ns), stamp(pose_ns))
         except Exception as e:  # a planner that is not up yet or died: hover, ask again later
             log("warn", "lockstep_planner: %s failed (%s); asking again in %.1f s of sim time"
                 % (self.service, e, self.retry_ns / NS))
