@@ -70,15 +70,22 @@ class PlannerLockstep:
                 self._proxy = rospy.ServiceProxy(self.service, PlanOnce, persistent=False)
             deadline = time.monotonic() + self.timeout_s
             res = self._proxy(stamp(t_ns), stamp(frame_ns), stamp(pose_ns))
+            waited = 0
+            first_missing = res.message
             while res.pending:
                 self.pending += 1
+                waited += 1
                 if time.monotonic() > deadline:
                     log("warn", "lockstep_planner: the planner's inputs did not arrive within %.1f s (%s); "
                         "planning on what has arrived (this run is no longer repeatable)" % (self.timeout_s, res.message))
                     res = self._proxy(stamp(t_ns), stamp(0), stamp(0))
+                    waited = 0  # not "came": logged above
                     break
                 time.sleep(0.005)
                 res = self._proxy(stamp(t_ns), stamp(frame_ns), stamp(pose_ns))
+            if waited and not res.pending:
+                log("info", "plan_once at %.3f s: the planner's inputs of the frame at %.3f s came after %d "
+                    "pending answer(s) (first: %s)" % (t_ns / NS, frame_ns / NS, waited, first_missing))
         except Exception as e:  # a planner that is not up yet or died: hover, ask again later
             log("warn", "lockstep_planner: %s failed (%s); asking again in %.1f s of sim time"
                 % (self.service, e, self.retry_ns / NS))
