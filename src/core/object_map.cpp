@@ -174,16 +174,20 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
   // detection of the same class: they are pieces of the detected object.
   std::map<std::uint32_t, std::uint32_t> merged_into;
   {
-    // summarize() walks all of an object's blocks: once per object and frame (nothing merges before the end).
-    std::map<std::uint32_t, TsdfSummary> summaries;
-    const auto summary = [this, &summaries](std::uint32_t id) -> const TsdfSummary& {
-      auto it = summaries.find(id);
-      if (it == summaries.end()) it = summaries.emplace(id, objects_.at(id)->tsdf.summarize(0.0)).first;
+    // summarize() walks all of an object's blocks: once per object, surface and frame (nothing merges before
+    // the end).
+    std::map<std::pair<std::uint32_t, bool>, TsdfSummary> summaries;
+    const auto summary = [this, &summaries](std::uint32_t id, bool tracked) -> const TsdfSummary& {
+      auto it = summaries.find({id, tracked});
+      if (it == summaries.end())
+        it = summaries.emplace(std::make_pair(id, tracked), objects_.at(id)->tsdf.summarize(0.0, tracked)).first;
       return it->second;
     };
-    // y's surface lies mostly inside x's box in 3D (boxes padded by 2 voxels).
+    // y's tracked surface lies mostly inside the box of x's reconstructed surface in 3D (boxes padded by 2
+    // voxels). Surface a bled mask added to x in a few detections is tracked but not reconstructed (under the
+    // foreground prior): it must not widen x's box over a neighbour.
     const auto inside_box = [this, &summary](std::uint32_t y, std::uint32_t x, bool smaller) {
-      const TsdfSummary &sx = summary(x), &sy = summary(y);
+      const TsdfSummary &sx = summary(x, false), &sy = summary(y, true);
       if (sx.voxel_count == 0 || sy.voxel_count == 0 || (smaller && sy.voxel_count >= sx.voxel_count)) return false;
       const Eigen::Vector3d pad = Eigen::Vector3d::Constant(2.0 * objects_.at(x)->resolution_m);
       const Eigen::AlignedBox3d bx(sx.bbox_min_W - pad, sx.bbox_max_W + pad);

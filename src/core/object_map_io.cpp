@@ -32,6 +32,11 @@ std::string vec(const Eigen::Vector3d& v) {
 
 }  // namespace
 
+TsdfSummary ObjectMap::summarize(const MappedObject& object, double d_obj_m) const {
+  const TsdfSummary s = object.tsdf.summarize(d_obj_m);
+  return s.voxel_count > 0 ? s : object.tsdf.summarize(d_obj_m, true);
+}
+
 Mesh ObjectMap::mesh(const MappedObject& object) const {
   Mesh m = object.tsdf.extractMesh();
   dropMeshFragments(m, config_.mesh_fragment_gap_m);
@@ -60,7 +65,7 @@ std::vector<std::string> ObjectMap::save(const std::string& directory, double d_
       return files;
     }
     files.push_back(path);
-    const TsdfSummary s = o.tsdf.summarize(d_obj_m);
+    const TsdfSummary s = summarize(o, d_obj_m);
     char buf[320];
     std::snprintf(buf, sizeof(buf),
                   "\"resolution_m\": %.4f, \"voxel_count\": %zu, \"observed_fraction\": %.4f, "

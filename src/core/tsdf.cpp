@@ -249,6 +249,7 @@ bool TsdfMapT<V>::castRay(const Eigen::Vector3f& o, const Eigen::Vector3f& dir, 
   const float res = static_cast<float>(params_.resolution_m);
   const float block_edge = res * B;
   const float step_min = 0.5f * res;
+  const float tracked = params_.trackedForeground();
   Eigen::Vector3i key(INT_MIN, INT_MIN, INT_MIN);
   const Block* block = nullptr;
   const V* prev = nullptr;
@@ -297,7 +298,7 @@ bool TsdfMapT<V>::castRay(const Eigen::Vector3f& o, const Eigen::Vector3f& dir, 
     // between voxel centres that are all positive): interpolate there.
     float interpolated;
     if (std::abs(sdf) < res && interpolate(p, interpolated)) sdf = interpolated;
-    if (prev && prev_sdf > 0.f && sdf <= 0.f && prev->foreground() + vx.foreground() > 1.f) {
+    if (prev && prev_sdf > 0.f && sdf <= 0.f && prev->foreground() + vx.foreground() > 2.f * tracked) {
       hit.distance_m = prev_t + (t - prev_t) * prev_sdf / (prev_sdf - sdf);
       hit.min_distance_m = std::min(prev->minDistance(), vx.minDistance());
       return true;
@@ -427,15 +428,17 @@ Mesh TsdfMapT<V>::extractMesh() const {
 }
 
 template <class V>
-TsdfSummary TsdfMapT<V>::summarize(double d_obj_m) const {
+TsdfSummary TsdfMapT<V>::summarize(double d_obj_m, bool tracked) const {
   TsdfSummary s;
+  const float min_foreground = tracked ? params_.trackedForeground() : 0.5f;
   const float res = static_cast<float>(params_.resolution_m);
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   std::size_t observed = 0;
   Eigen::AlignedBox3d box;
   forEachVoxel([&](const Eigen::Vector3i& index, const V& vx) {
     s.weight_sum += vx.weight();
-    if (vx.weight() <= 0.f || vx.foreground() <= 0.5f || std::abs(vx.sdf(truncation_m_)) >= res) return;
+    if (vx.weight() <= 0.f || std::abs(vx.sdf(truncation_m_)) >= res) return;
+    if (vx.foreground() <= min_foreground) return;
     const Eigen::Vector3d c = voxelCentre(index).template cast<double>();
     box.extend(c);
     sum += c;
@@ -455,9 +458,10 @@ TsdfSummary TsdfMapT<V>::summarize(double d_obj_m) const {
 template <class V>
 bool TsdfMapT<V>::hasSurface() const {
   const float res = static_cast<float>(params_.resolution_m);
+  const float tracked = params_.trackedForeground();
   for (const auto& kv : blocks_)
     for (const V& vx : kv.second.voxels)
-      if (vx.weight() > 0.f && vx.foreground() > 0.5f && std::abs(vx.sdf(truncation_m_)) < res) return true;
+      if (vx.weight() > 0.f && vx.foreground() > tracked && std::abs(vx.sdf(truncation_m_)) < res) return true;
   return false;
 }
 

@@ -177,7 +177,7 @@ void ObjectMapNode::publishObjects(const ros::Time& stamp) {
   }
   for (const auto& kv : map_->objects()) {
     const semexp::MappedObject& o = *kv.second;
-    const semexp::TsdfSummary s = o.tsdf.summarize(exploration_.d_obj_m);
+    const semexp::TsdfSummary s = map_->summarize(o, exploration_.d_obj_m);
     const semantic_exploration::ObjectInfo info = toObjectInfo(o, s);
     arr.objects.push_back(info);
     if (!draw) continue;

@@ -285,7 +285,15 @@ TEST(ObjectMap, NewDetectionWithFewPixelsBesideKnownObjectsMakesNoObject) {
   r = map.integrateFrame(cam, T_WC, depth, cv::Mat(), detection(12), {{1, 0, kChair}});
   ASSERT_EQ(r.created.size(), 1u);
   EXPECT_EQ(r.dropped_empty, 0u);
-  const TsdfSummary s = map.object(r.created[0])->tsdf.summarize(1.0);
+  // Every pixel of the patch lies k <= 6 px inside its border: evidence at most 0.5 + 0.5 * 6 / 9 = 0.83, and
+  // under the foreground prior (0.3, weight 2) a foreground of at most (2 * 0.3 + 0.83) / 3 = 0.48 after one
+  // detection. The object has no mesh surface yet; it is kept, and summarised, by its tracked surface.
+  const MappedObject& o = *map.object(r.created[0]);
+  ASSERT_DOUBLE_EQ(o.tsdf.params().foreground_prior, 0.3);
+  EXPECT_EQ(o.tsdf.summarize(1.0).voxel_count, 0u);
+  EXPECT_TRUE(o.tsdf.hasSurface());
+  const TsdfSummary s = map.summarize(o, 1.0);
+  EXPECT_EQ(s.voxel_count, o.tsdf.summarize(1.0, true).voxel_count);
   EXPECT_GT(s.voxel_count, 10u);
   EXPECT_NEAR(s.centroid_W.x(), 0.75, 0.03);  // on the wall's front face
 }

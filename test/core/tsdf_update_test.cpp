@@ -244,6 +244,53 @@ TEST(TsdfUpdate, ForegroundPriorNeedsMoreThanOneBorderDetection) {
   checkForegroundPrior<TsdfMapFloat>();
 }
 
+// The tracked surface (rendered, ray cast, kept) is every voxel a detection lifted above the prior; the
+// mesh needs 0.5. The wall of checkForegroundPrior seen once at a mask's border: 0.43360 with the prior
+// (0.3, weight 2), tracked but not meshed; then outside the mask once, 0.43360 * 3 / 4 = 0.3252, still
+// tracked; twice, 0.3252 * 3 / 4 = 0.2439, no longer. With the paper's update, 0.70079: both.
+TEST(TsdfUpdate, TrackedSurfaceIsWhatADetectionLiftedAboveThePrior) {
+  TsdfParams p = params();
+  EXPECT_EQ(p.trackedForeground(), 0.5f);  // the paper's update
+  p.foreground_prior = 0.3;
+  EXPECT_EQ(p.trackedForeground(), 0.5f);  // a prior without weight is no prior
+  p.foreground_prior_weight = 2.0;
+  EXPECT_EQ(p.trackedForeground(), 0.3f);
+  p.foreground_prior = 0.7;
+  EXPECT_EQ(p.trackedForeground(), 0.5f);  // a prior over 0.5 tracks what the mesh holds
+
+  const PinholeCamera cam = tinyCamera();
+  const Box wall(Eigen::Vector3d(1.0, -2.0, -2.0), Eigen::Vector3d(1.5, 2.0, 2.0));
+  const Eigen::Isometry3d T_WC = lookAlong(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  cv::Mat depth, labels;
+  renderShapes(cam, T_WC, {&wall}, depth, labels);
+  const auto hits = [](const TsdfMap& map) {
+    TsdfRayHit hit;
+    return map.castRay(Eigen::Vector3f(0.f, 0.01f, 0.01f), Eigen::Vector3f::UnitX(), 0.f, 3.f, hit) &&
+           std::abs(hit.distance_m - 1.f) < 0.02f;
+  };
+  for (const bool with_prior : {true, false}) {
+    TsdfParams q = params();
+    q.foreground_prior = with_prior ? 0.3 : 0.5;
+    q.foreground_prior_weight = with_prior ? 2.0 : 0.0;
+    TsdfMap map(q);
+    map.integrate(cam, T_WC, depth, cv::Mat(), cv::Mat(depth.size(), CV_8U, cv::Scalar(179)), true);
+    EXPECT_EQ(map.extractMesh().empty(), with_prior);
+    EXPECT_EQ(map.summarize(1.0).voxel_count == 0, with_prior);
+    EXPECT_GT(map.summarize(1.0, true).voxel_count, 0u);
+    EXPECT_TRUE(map.hasSurface());
+    EXPECT_TRUE(hits(map)) << "prior " << with_prior;
+    if (!with_prior) continue;
+    const cv::Mat outside = cv::Mat::zeros(depth.size(), CV_8U);
+    map.integrate(cam, T_WC, depth, cv::Mat(), outside, true);
+    EXPECT_TRUE(map.hasSurface());
+    EXPECT_TRUE(hits(map));
+    map.integrate(cam, T_WC, depth, cv::Mat(), outside, true);
+    EXPECT_FALSE(map.hasSurface());
+    EXPECT_FALSE(hits(map));
+    EXPECT_EQ(map.summarize(1.0, true).voxel_count, 0u);
+  }
+}
+
 TEST(TsdfUpdate, RayCastHitsTheSurface) {
   PinholeCamera cam;
   TsdfMap map(params());

@@ -140,6 +140,15 @@ class ObjectMap {
                     const std::vector<float>& max_depth_m, double d_obj_m, double d_max_m, std::vector<cv::Mat>& gains,
                     std::vector<cv::Mat>& hit_depth_m) const;
 
+  /// The object's summary as saved and published (ObjectInfo): that of its
+  /// reconstructed surface (foreground over 0.5, observed share from <=
+  /// d_obj_m), or, while it has none, of its tracked surface
+  /// (TsdfParams::trackedForeground()). An object made from one detection
+  /// whose pixels all lay near its mask's border has only a tracked surface
+  /// under the foreground prior; it still needs a place and a share for the
+  /// planner, not a box at the origin.
+  TsdfSummary summarize(const MappedObject& object, double d_obj_m) const;
+
   /// The object's mesh as saved and published: TsdfMap::extractMesh without
   /// the pieces farther than mesh_fragment_gap_m from its main surface.
   Mesh mesh(const MappedObject& object) const;

@@ -151,6 +151,18 @@ struct TsdfParams {
   /// update (the first observation sets the probability).
   double foreground_prior = 0.5;
   double foreground_prior_weight = 0.0;
+  /// Foreground probability over which a voxel's surface is tracked:
+  /// rendered for matching, hit by the planner's object rays, counted when a
+  /// new object is kept and as the extent of a piece that may be merged into
+  /// another object. It is foreground_prior when that lies under 0.5 with
+  /// some weight (any detection lifts a voxel above the prior), else 0.5.
+  /// The mesh, the observed share and the extent of the object a piece is
+  /// merged into keep the paper's 0.5. A prior that keeps bled surface out
+  /// of the mesh then neither shrinks the render later detections are matched
+  /// to nor drops a first detection whose pixels all lie near its mask's border.
+  float trackedForeground() const {
+    return foreground_prior_weight > 0.0 && foreground_prior < 0.5 ? static_cast<float>(foreground_prior) : 0.5f;
+  }
   int block_size = 8;          ///< voxels per block edge (power of two)
   double max_weight = 100.0;   ///< weight cap (one unit per full-weight observation at the surface, see full_weight_depth_m)
 
@@ -260,8 +272,9 @@ class TsdfMapT {
   /// Trilinearly interpolated SDF at p_W, m; false if one of the 8 voxels around it was never observed.
   bool interpolate(const Eigen::Vector3f& p_W, float& sdf_m) const;
 
-  /// First zero crossing from positive to negative SDF, with foreground
-  /// probability > 0.5, along origin_W + t dir_W (dir_W unit), t in [t_min, t_max].
+  /// First zero crossing from positive to negative SDF of a tracked surface
+  /// (mean foreground of the two voxels over TsdfParams::trackedForeground()),
+  /// along origin_W + t dir_W (dir_W unit), t in [t_min, t_max].
   bool castRay(const Eigen::Vector3f& origin_W, const Eigen::Vector3f& dir_W, float t_min, float t_max,
                TsdfRayHit& hit) const;
 
@@ -279,9 +292,12 @@ class TsdfMapT {
   /// Marching-cubes mesh of the zero crossing where foreground probability > 0.5, with colour.
   Mesh extractMesh() const;
 
-  /// Surface summary; observed_fraction counts voxels seen from <= d_obj_m.
-  TsdfSummary summarize(double d_obj_m) const;
-  /// True if some voxel is a surface voxel as counted by summarize() (stops at the first one).
+  /// Summary of the surface voxels (|sdf| < one voxel) whose foreground
+  /// probability exceeds 0.5 (the mesh's surface; with tracked, exceeds
+  /// TsdfParams::trackedForeground()); observed_fraction counts those seen
+  /// from <= d_obj_m.
+  TsdfSummary summarize(double d_obj_m, bool tracked = false) const;
+  /// True if some voxel is a tracked surface voxel (stops at the first one).
   bool hasSurface() const;
 
   /// Axis-aligned box of the allocated blocks in world, m; false if empty.
