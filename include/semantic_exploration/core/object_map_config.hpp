@@ -85,7 +85,7 @@ struct ObjectMapConfig {
   /// Defaults: one full detection lifts a new voxel to 0.533, one whose
   /// evidence is under 0.9 (7 px or less inside a mask's border, see
   /// foreground_border_px) leaves it under 0.5. With all the simulator's faults on, this took the median object
-  /// RMSE from 5.8 to 1.5-1.8 cm on the same frames (docs/BENCHMARKS.md).
+  /// RMSE from 5.82 to 1.59 cm on the same frames (docs/BENCHMARKS.md).
   /// foreground_prior_weight 0 = the paper's update.
   double foreground_prior = 0.3;         ///< probability, [0, 1]
   double foreground_prior_weight = 2.0;  ///< observations, [0, max_weight]
