@@ -184,11 +184,14 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
       return it->second;
     };
     // y's tracked surface lies mostly inside the box of x's reconstructed surface in 3D (boxes padded by 2
-    // voxels). Surface a bled mask added to x in a few detections is tracked but not reconstructed (under the
-    // foreground prior): it must not widen x's box over a neighbour.
+    // voxels; x's tracked surface while it has no reconstructed one). Surface a bled mask added to x in a few
+    // detections is tracked but not reconstructed (under the foreground prior): it must not widen x's box over
+    // a neighbour. `smaller` compares the tracked surfaces.
     const auto inside_box = [this, &summary](std::uint32_t y, std::uint32_t x, bool smaller) {
-      const TsdfSummary &sx = summary(x, false), &sy = summary(y, true);
-      if (sx.voxel_count == 0 || sy.voxel_count == 0 || (smaller && sy.voxel_count >= sx.voxel_count)) return false;
+      const TsdfSummary &sy = summary(y, true), &sx_tracked = summary(x, true);
+      const TsdfSummary& sx = summary(x, false).voxel_count > 0 ? summary(x, false) : sx_tracked;
+      if (sx.voxel_count == 0 || sy.voxel_count == 0 || (smaller && sy.voxel_count >= sx_tracked.voxel_count))
+        return false;
       const Eigen::Vector3d pad = Eigen::Vector3d::Constant(2.0 * objects_.at(x)->resolution_m);
       const Eigen::AlignedBox3d bx(sx.bbox_min_W - pad, sx.bbox_max_W + pad);
       const Eigen::AlignedBox3d by(sy.bbox_min_W - pad, sy.bbox_max_W + pad);

@@ -27,7 +27,13 @@ TsdfMapT<V>::TsdfMapT(const TsdfParams& params)
       voxels_per_block_(params.block_size * params.block_size * params.block_size),
       block_shift_(0),
       inv_resolution_(static_cast<float>(1.0 / params.resolution_m)),
-      truncation_m_(static_cast<float>(params.truncation_m)) {
+      truncation_m_(static_cast<float>(params.truncation_m)),
+      tracked_foreground_(params.trackedForeground()) {
+  if (tracked_foreground_ < 0.5f) {
+    V stored;
+    stored.setForeground(static_cast<float>(params.foreground_prior));
+    tracked_foreground_ = std::max(tracked_foreground_, stored.foreground());
+  }
   if (!(params.resolution_m > 0) || !(params.truncation_m > 0) || params.block_size < 1 ||
       (params.block_size & (params.block_size - 1)) != 0)
     throw std::invalid_argument("TsdfMap: resolution and truncation must be > 0, block size a power of two");
@@ -249,7 +255,7 @@ bool TsdfMapT<V>::castRay(const Eigen::Vector3f& o, const Eigen::Vector3f& dir, 
   const float res = static_cast<float>(params_.resolution_m);
   const float block_edge = res * B;
   const float step_min = 0.5f * res;
-  const float tracked = params_.trackedForeground();
+  const float tracked = tracked_foreground_;
   Eigen::Vector3i key(INT_MIN, INT_MIN, INT_MIN);
   const Block* block = nullptr;
   const V* prev = nullptr;
@@ -430,7 +436,7 @@ Mesh TsdfMapT<V>::extractMesh() const {
 template <class V>
 TsdfSummary TsdfMapT<V>::summarize(double d_obj_m, bool tracked) const {
   TsdfSummary s;
-  const float min_foreground = tracked ? params_.trackedForeground() : 0.5f;
+  const float min_foreground = tracked ? tracked_foreground_ : 0.5f;
   const float res = static_cast<float>(params_.resolution_m);
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   std::size_t observed = 0;
@@ -458,7 +464,7 @@ TsdfSummary TsdfMapT<V>::summarize(double d_obj_m, bool tracked) const {
 template <class V>
 bool TsdfMapT<V>::hasSurface() const {
   const float res = static_cast<float>(params_.resolution_m);
-  const float tracked = params_.trackedForeground();
+  const float tracked = tracked_foreground_;
   for (const auto& kv : blocks_)
     for (const V& vx : kv.second.voxels)
       if (vx.weight() > 0.f && vx.foreground() > tracked && std::abs(vx.sdf(truncation_m_)) < res) return true;

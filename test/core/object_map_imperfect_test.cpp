@@ -56,7 +56,7 @@ double trackedShareOn(const TsdfMap& tsdf, const Shape& shape, double tol_m) {
   const float res = static_cast<float>(p.resolution_m), trunc = static_cast<float>(p.truncation_m);
   size_t all = 0, on = 0;
   tsdf.forEachVoxel([&](const Eigen::Vector3i& index, const TsdfVoxel& vx) {
-    if (vx.weight() <= 0.f || vx.foreground() <= p.trackedForeground() || std::abs(vx.sdf(trunc)) >= res) return;
+    if (vx.weight() <= 0.f || vx.foreground() <= tsdf.trackedForeground() || std::abs(vx.sdf(trunc)) >= res) return;
     ++all;
     on += std::abs(shape.sdf(tsdf.voxelCentre(index).cast<double>())) < tol_m;
   });

@@ -246,8 +246,9 @@ TEST(TsdfUpdate, ForegroundPriorNeedsMoreThanOneBorderDetection) {
 
 // The tracked surface (rendered, ray cast, kept) is every voxel a detection lifted above the prior; the
 // mesh needs 0.5. The wall of checkForegroundPrior seen once at a mask's border: 0.43360 with the prior
-// (0.3, weight 2), tracked but not meshed; then outside the mask once, 0.43360 * 3 / 4 = 0.3252, still
-// tracked; twice, 0.3252 * 3 / 4 = 0.2439, no longer. With the paper's update, 0.70079: both.
+// (0.3, weight 2; the fixed-point voxel stores 110 / 254 = 0.43307), tracked but not meshed; then outside the
+// mask once, 0.43307 * 3 / 4 = 0.3248 (stored 0.3228 or 0.3268), still tracked; twice, about 0.244, no
+// longer. With the paper's update, 0.70079: both.
 TEST(TsdfUpdate, TrackedSurfaceIsWhatADetectionLiftedAboveThePrior) {
   TsdfParams p = params();
   EXPECT_EQ(p.trackedForeground(), 0.5f);  // the paper's update
@@ -289,6 +290,43 @@ TEST(TsdfUpdate, TrackedSurfaceIsWhatADetectionLiftedAboveThePrior) {
     EXPECT_FALSE(hits(map));
     EXPECT_EQ(map.summarize(1.0, true).voxel_count, 0u);
   }
+}
+
+// A voxel updated only as an undetected object keeps the prior it was given, as its layout stores it: never
+// tracked. The fixed-point voxel stores 0.25 as 64 / 254 = 0.25197 (above the prior) and 0.3 as 76 / 254 =
+// 0.29921 (below), so the map compares with the larger of the two.
+template <class Map>
+void checkPriorAloneIsNotTracked() {
+  const PinholeCamera cam = tinyCamera();
+  const Box wall(Eigen::Vector3d(1.0, -2.0, -2.0), Eigen::Vector3d(1.5, 2.0, 2.0));
+  const Eigen::Isometry3d T_WC = lookAlong(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  cv::Mat depth, labels;
+  renderShapes(cam, T_WC, {&wall}, depth, labels);
+  for (const double prior : {0.25, 0.3}) {
+    TsdfParams p = params();
+    p.foreground_prior = prior;
+    p.foreground_prior_weight = 2.0;
+    Map map(p);
+    for (int i = 0; i < 3; ++i)
+      map.integrate(cam, T_WC, depth, cv::Mat(), cv::Mat(depth.size(), CV_8U, cv::Scalar(255)), false);
+    EXPECT_GT(map.summarize(1.0, false).weight_sum, 0.0);
+    EXPECT_FALSE(map.hasSurface()) << "prior " << prior;
+    EXPECT_EQ(map.summarize(1.0, true).voxel_count, 0u) << "prior " << prior;
+    TsdfRayHit hit;
+    EXPECT_FALSE(map.castRay(Eigen::Vector3f(0.f, 0.01f, 0.01f), Eigen::Vector3f::UnitX(), 0.f, 3.f, hit));
+  }
+}
+
+TEST(TsdfUpdate, VoxelHoldingThePriorIsNotTracked) {
+  checkPriorAloneIsNotTracked<TsdfMap>();
+  checkPriorAloneIsNotTracked<TsdfMapFloat>();
+  TsdfParams p = params();
+  p.foreground_prior_weight = 2.0;
+  p.foreground_prior = 0.25;
+  EXPECT_FLOAT_EQ(TsdfMap(p).trackedForeground(), 64.f / 254.f);
+  EXPECT_FLOAT_EQ(TsdfMapFloat(p).trackedForeground(), 0.25f);
+  p.foreground_prior = 0.3;
+  EXPECT_FLOAT_EQ(TsdfMap(p).trackedForeground(), 0.3f);
 }
 
 TEST(TsdfUpdate, RayCastHitsTheSurface) {

@@ -65,3 +65,26 @@ def test_report_summary_and_experiment_report_name_them(gt, objects_dir, tmp_pat
     res = experiments.write_outputs(str(tmp_path / "campaign"), {"semantic": [run, run]}, grid_step_s=10)
     assert res["rows"][0]["spurious"] == 2 and res["rows"][0]["duplicated"] == 2
     assert "| semantic | 2 | 100% | 2 | 2 |" in (tmp_path / "campaign" / "report.md").read_text()
+
+
+def test_object_with_an_empty_mesh_is_neither_matched_nor_spurious(gt, tmp_path):  # noqa: F811
+    # Under the foreground prior an object made from one detection near its mask's border has a tracked
+    # surface but no mesh yet; object_map/save writes its PLY with no vertex.
+    d = str(tmp_path / "objects")
+    write_objects(d, {3: chair_mesh(gt), 5: bled_mask_mesh()})
+    with open(os.path.join(d, "object_9_chair.ply"), "w") as f:
+        f.write("ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+                "element face 0\nproperty list uchar int vertex_indices\nend_header\n")
+    with open(os.path.join(d, "objects.json")) as f:
+        doc = json.load(f)
+    doc["objects"].append({"id": 9, "class_name": "chair", "mesh": "object_9_chair.ply"})
+    with open(os.path.join(d, "objects.json"), "w") as f:
+        json.dump(doc, f)
+    ev = GroundTruthIndex(gt, ["chair"]).evaluate_objects(metrics.load_reconstruction(d), score=False)
+    assert ev.found_gt_ids == [chair_id(gt)]
+    assert ev.spurious_map_ids == [5]
+    assert ev.without_surface_map_ids == [9]
+    assert ev.duplicates == {}
+    rows = final.map_object_rows(3, {"spurious": [5], "duplicates": [], "without_surface": [9]})
+    assert rows[-1] == "| map objects without a mesh yet (neither matched nor spurious) | 1 (map ids 9) |"
+    assert len(final.map_object_rows(2, {"spurious": [5], "duplicates": [], "without_surface": []})) == 3

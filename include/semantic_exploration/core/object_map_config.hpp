@@ -76,13 +76,14 @@ struct ObjectMapConfig {
   /// observations (TsdfParams::foreground_prior). A prior under 0.5 with some
   /// weight needs several detections to bring a voxel's surface into the mesh:
   /// a surface a mask bled onto in one or two detections stays out of it.
-  /// Matching, merging and the planner's object rays see the tracked surface,
-  /// every voxel a detection lifted above the prior
-  /// (TsdfParams::trackedForeground()), so the prior shapes the mesh only.
+  /// Matching, the new-object test, the extent of a piece to be merged and the
+  /// planner's object rays see the tracked surface, every voxel a detection
+  /// lifted above the prior (TsdfParams::trackedForeground()); the mesh, the
+  /// observed share and the extent of the object a piece merges into keep 0.5.
   /// foreground_prior_weight * (0.5 - foreground_prior) must stay under 0.5:
   /// one full-evidence observation then still lifts a new voxel above 0.5
   /// (a detection seen whole gives its object a mesh surface at once).
-  /// Defaults: one full detection lifts a new voxel to 0.533, one whose
+  /// Defaults: one full detection lifts a new voxel to 0.53, one whose
   /// evidence is under 0.9 (7 px or less inside a mask's border, see
   /// foreground_border_px) leaves it under 0.5. With all the simulator's faults on, this took the median object
   /// RMSE from 5.82 to 1.59 cm on the same frames (docs/BENCHMARKS.md).

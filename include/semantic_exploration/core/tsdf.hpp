@@ -160,6 +160,10 @@ struct TsdfParams {
   /// merged into keep the paper's 0.5. A prior that keeps bled surface out
   /// of the mesh then neither shrinks the render later detections are matched
   /// to nor drops a first detection whose pixels all lie near its mask's border.
+  /// It is stickier than 0.5: a voxel one full detection lifted to 0.53 leaves
+  /// the tracked surface after two or three views outside the mask, where the
+  /// paper's update drops it from the render after one. The map compares with
+  /// the prior as its voxel type stores it (TsdfMapT::trackedForeground()).
   float trackedForeground() const {
     return foreground_prior_weight > 0.0 && foreground_prior < 0.5 ? static_cast<float>(foreground_prior) : 0.5f;
   }
@@ -194,8 +198,9 @@ struct TsdfRayHit {
   float min_distance_m = 0.f;  ///< minimum distance the surface there was observed from, m (inf if never)
 };
 
-/// Summary of the surface of one TSDF (voxels with foreground probability >
-/// 0.5 and |sdf| < one voxel).
+/// Summary of the surface of one TSDF (voxels with |sdf| < one voxel and
+/// foreground probability over 0.5, or over the tracked threshold: see
+/// TsdfMapT::summarize).
 struct TsdfSummary {
   Eigen::Vector3d bbox_min_W = Eigen::Vector3d::Zero();  ///< m
   Eigen::Vector3d bbox_max_W = Eigen::Vector3d::Zero();  ///< m
@@ -228,6 +233,12 @@ class TsdfMapT {
   };
 
   explicit TsdfMapT(const TsdfParams& params);
+
+  /// TsdfParams::trackedForeground(), raised to the prior as VoxelT stores it
+  /// when rounding raised that (the fixed-point voxel keeps p in 1/254 steps):
+  /// a voxel that holds the prior unchanged (one updated as an undetected
+  /// object only) is never tracked.
+  float trackedForeground() const { return tracked_foreground_; }
   // The dense index points into blocks_: moving keeps those nodes, copying would not.
   TsdfMapT(const TsdfMapT&) = delete;
   TsdfMapT& operator=(const TsdfMapT&) = delete;
@@ -346,6 +357,7 @@ class TsdfMapT {
   int block_shift_;  ///< log2(block_size)
   float inv_resolution_;
   float truncation_m_;
+  float tracked_foreground_;
   std::unordered_map<Eigen::Vector3i, Block, VoxelIndexHash> blocks_;
   Eigen::Vector3i block_min_{0, 0, 0}, block_max_{-1, -1, -1};  ///< inclusive range of allocated block indices
   /// Dense index of block pointers over [block_min_, block_max_] (empty if too large):

@@ -23,6 +23,7 @@ def evaluate(out, gt, classes, saved):
             res["ground_truth"] = ev.n_ground_truth
             # Map objects on no ground-truth object, and ground-truth objects more than one map object lies on.
             res["spurious"] = ev.spurious_map_ids
+            res["without_surface"] = ev.without_surface_map_ids  # empty meshes: neither matched nor spurious
             res["duplicates"] = [{"gt_id": g, "map_ids": ids} for g, ids in ev.duplicates.items()]
             res["objects"] = [{"map_id": m.map_id, "class": m.map_class, "gt_id": m.gt_id,
                                "on_surface_fraction": m.on_surface_fraction,
@@ -47,8 +48,8 @@ def evaluate(out, gt, classes, saved):
 def map_object_rows(n_objects, ev):
     """The report's rows on map objects: their number, the spurious ones (on no ground-truth object) and the
     ground-truth objects more than one map object lies on, from evaluate()'s result ev ('-' without one)."""
-    spurious, dups = ev.get("spurious"), ev.get("duplicates")
-    return ["| map objects | %d |" % n_objects,
+    spurious, dups, empty = ev.get("spurious"), ev.get("duplicates"), ev.get("without_surface")
+    rows = ["| map objects | %d |" % n_objects,
             "| spurious map objects (on no ground-truth object) | %s |" % (
                 "-" if spurious is None else "%d%s" % (len(spurious), " (map ids %s)" % ", ".join(
                     str(i) for i in spurious) if spurious else "")),
@@ -56,3 +57,7 @@ def map_object_rows(n_objects, ev):
                 "-" if dups is None else "%d%s" % (len(dups), " (%s)" % "; ".join(
                     "ground truth %d: map ids %s" % (d["gt_id"], ", ".join(str(i) for i in d["map_ids"]))
                     for d in dups) if dups else ""))]
+    if empty:  # only named when there are some (an object tracked under the foreground prior, no mesh yet)
+        rows.append("| map objects without a mesh yet (neither matched nor spurious) | %d (map ids %s) |" % (
+            len(empty), ", ".join(str(i) for i in empty)))
+    return rows

@@ -175,6 +175,7 @@ class ObjectMatch:
     gt_id: Optional[int]        # None: lies on no ground-truth object of its class
     on_surface_fraction: float  # fraction of its vertices within the threshold of gt_id's surface
     score: Optional[SurfaceScore] = None
+    empty: bool = False         # its mesh has no vertex yet (a surface tracked under the foreground prior only)
 
 
 @dataclass
@@ -190,8 +191,16 @@ class ObjectEvaluation:
 
     @property
     def spurious_map_ids(self) -> List[int]:
-        """Map objects matched to no ground-truth object (they lie on none of their class), ascending."""
-        return sorted(m.map_id for m in self.matches if m.gt_id is None)
+        """Map objects matched to no ground-truth object (they lie on none of their class), ascending. An
+        object whose mesh is still empty lies on nothing and is not one: see without_surface_map_ids."""
+        return sorted(m.map_id for m in self.matches if m.gt_id is None and not m.empty)
+
+    @property
+    def without_surface_map_ids(self) -> List[int]:
+        """Map objects saved with an empty mesh, ascending: under the foreground prior an object made from
+        one detection near its mask's border has a surface that matching tracks but no mesh yet. They can
+        be neither matched nor judged spurious."""
+        return sorted(m.map_id for m in self.matches if m.empty)
 
     @property
     def duplicates(self) -> Dict[int, List[int]]:

@@ -259,7 +259,7 @@ class GroundTruthIndex:
         for o in rec.get("objects", []):
             verts = read_ply_vertices(os.path.join(rec["dir"], o["mesh"]))
             gid, frac = self.match(o["class_name"], verts)
-            ev.matches.append(ObjectMatch(o["id"], o["class_name"], gid, frac))
+            ev.matches.append(ObjectMatch(o["id"], o["class_name"], gid, frac, empty=len(verts) == 0))
             matched.append(verts)
         if score:
             self.prepare_observability()
