@@ -159,9 +159,11 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
   // The termination's background share: one pass over the occupied blocks (70-120 ms on the default house's
   // map at 600 s), paced by image stamps; the planner reads it once per iteration.
   if (surface_share_period_.due(msg->header.stamp)) surface_ = map_->surfaceObservedWithin(exploration_.d_bg_m);
-  publishStats(msg->header);
+  // Clouds before the stats: the stats name the newest frontier cloud (frontiers_stamp), which must be this
+  // frame's when it fell due, or a planner that waits for it could plan on the previous frame's frontiers.
   frontiers_dirty_ = occupied_dirty_ = true;
   publishClouds(msg->header.stamp);
+  publishStats(msg->header);
   reportFrame(msg->header, true, timer);
 }
 

@@ -133,6 +133,11 @@ class TestBackgroundMapNode(unittest.TestCase):
         self.assertGreater(s.occupied_volume_m3, 0.0)
         self.assertGreater(s.frontier_count, 0)
         self.assertEqual(s.invalid_depth_pixels, 0)
+        # frontier_period_s 0: the frame's frontier cloud goes out before its stats, which name it, so a
+        # planner waiting for the frontiers the stats name plans on this frame's, not the one before.
+        self.assertEqual(s.header.stamp, stamp)
+        self.assertEqual(s.frontiers_stamp, stamp)
+        self.assertIn(stamp, [f.header.stamp for f in self.frontiers])
         deadline = time.time() + 5.0
         while not self.updates and time.time() < deadline:
             time.sleep(0.05)
