@@ -17,6 +17,23 @@ TsdfParams params() { return objectTsdfParams(); }
 
 const Sphere kSphere(Eigen::Vector3d(0.1, -0.05, 0.02), 0.25);
 
+// The tiny camera at the origin looking along +x at a wall whose face lies 1 m ahead.
+struct WallAhead {
+  PinholeCamera cam = tinyCamera();
+  Eigen::Isometry3d T_WC = lookAlong(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  cv::Mat depth;
+  WallAhead() {
+    const Box wall(Eigen::Vector3d(1.0, -2.0, -2.0), Eigen::Vector3d(1.5, 2.0, 2.0));
+    cv::Mat labels;
+    renderShapes(cam, T_WC, {&wall}, depth, labels);
+  }
+  /// Integrates the view with every pixel's mask value `mask` (255 inside, 0 outside, 129-254 at a border).
+  template <class Map>
+  void into(Map& map, std::uint8_t mask, bool detected) const {
+    map.integrate(cam, T_WC, depth, cv::Mat(), cv::Mat(depth.size(), CV_8U, cv::Scalar(mask)), detected);
+  }
+};
+
 TEST(TsdfUpdate, UndetectedUpdatesGeometryButNotForeground) {
   PinholeCamera cam;
   TsdfMap map(params());
@@ -197,11 +214,7 @@ TEST(TsdfUpdate, NearViewsOutweighFarOnesBeyondTheFullWeightDepth) {
 // The fixed-point voxel stores q / 254: each step is within half a step (1/508) of the float one.
 template <class Map>
 void checkForegroundPrior() {
-  const PinholeCamera cam = tinyCamera();
-  const Box wall(Eigen::Vector3d(1.0, -2.0, -2.0), Eigen::Vector3d(1.5, 2.0, 2.0));
-  const Eigen::Isometry3d T_WC = lookAlong(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
-  cv::Mat depth, labels;
-  renderShapes(cam, T_WC, {&wall}, depth, labels);
+  const WallAhead wall;
   struct View {
     std::uint8_t mask;
     bool detected;
@@ -214,7 +227,7 @@ void checkForegroundPrior() {
     Map map(p);
     std::vector<float> fg;
     for (const View& view : views) {
-      map.integrate(cam, T_WC, depth, cv::Mat(), cv::Mat(depth.size(), CV_8U, cv::Scalar(view.mask)), view.detected);
+      wall.into(map, view.mask, view.detected);
       float f = NAN;
       map.forEachVoxel([&](const Eigen::Vector3i& idx, const typename Map::Voxel& vx) {
         if (map.voxelCentre(idx).isApprox(Eigen::Vector3f(0.99f, 0.01f, 0.01f), 1e-4f)) f = vx.foreground();
@@ -259,11 +272,7 @@ TEST(TsdfUpdate, TrackedSurfaceIsWhatADetectionLiftedAboveThePrior) {
   p.foreground_prior = 0.7;
   EXPECT_EQ(p.trackedForeground(), 0.5f);  // a prior over 0.5 tracks what the mesh holds
 
-  const PinholeCamera cam = tinyCamera();
-  const Box wall(Eigen::Vector3d(1.0, -2.0, -2.0), Eigen::Vector3d(1.5, 2.0, 2.0));
-  const Eigen::Isometry3d T_WC = lookAlong(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
-  cv::Mat depth, labels;
-  renderShapes(cam, T_WC, {&wall}, depth, labels);
+  const WallAhead wall;
   const auto hits = [](const TsdfMap& map) {
     TsdfRayHit hit;
     return map.castRay(Eigen::Vector3f(0.f, 0.01f, 0.01f), Eigen::Vector3f::UnitX(), 0.f, 3.f, hit) &&
@@ -274,18 +283,17 @@ TEST(TsdfUpdate, TrackedSurfaceIsWhatADetectionLiftedAboveThePrior) {
     q.foreground_prior = with_prior ? 0.3 : 0.5;
     q.foreground_prior_weight = with_prior ? 2.0 : 0.0;
     TsdfMap map(q);
-    map.integrate(cam, T_WC, depth, cv::Mat(), cv::Mat(depth.size(), CV_8U, cv::Scalar(179)), true);
+    wall.into(map, 179, true);
     EXPECT_EQ(map.extractMesh().empty(), with_prior);
     EXPECT_EQ(map.summarize(1.0).voxel_count == 0, with_prior);
     EXPECT_GT(map.summarize(1.0, true).voxel_count, 0u);
     EXPECT_TRUE(map.hasSurface());
     EXPECT_TRUE(hits(map)) << "prior " << with_prior;
     if (!with_prior) continue;
-    const cv::Mat outside = cv::Mat::zeros(depth.size(), CV_8U);
-    map.integrate(cam, T_WC, depth, cv::Mat(), outside, true);
+    wall.into(map, 0, true);
     EXPECT_TRUE(map.hasSurface());
     EXPECT_TRUE(hits(map));
-    map.integrate(cam, T_WC, depth, cv::Mat(), outside, true);
+    wall.into(map, 0, true);
     EXPECT_FALSE(map.hasSurface());
     EXPECT_FALSE(hits(map));
     EXPECT_EQ(map.summarize(1.0, true).voxel_count, 0u);
@@ -297,18 +305,14 @@ TEST(TsdfUpdate, TrackedSurfaceIsWhatADetectionLiftedAboveThePrior) {
 // 0.29921 (below), so the map compares with the larger of the two.
 template <class Map>
 void checkPriorAloneIsNotTracked() {
-  const PinholeCamera cam = tinyCamera();
-  const Box wall(Eigen::Vector3d(1.0, -2.0, -2.0), Eigen::Vector3d(1.5, 2.0, 2.0));
-  const Eigen::Isometry3d T_WC = lookAlong(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
-  cv::Mat depth, labels;
-  renderShapes(cam, T_WC, {&wall}, depth, labels);
+  const WallAhead wall;
   for (const double prior : {0.25, 0.3}) {
     TsdfParams p = params();
     p.foreground_prior = prior;
     p.foreground_prior_weight = 2.0;
     Map map(p);
     for (int i = 0; i < 3; ++i)
-      map.integrate(cam, T_WC, depth, cv::Mat(), cv::Mat(depth.size(), CV_8U, cv::Scalar(255)), false);
+      wall.into(map, 255, false);
     EXPECT_GT(map.summarize(1.0, false).weight_sum, 0.0);
     EXPECT_FALSE(map.hasSurface()) << "prior " << prior;
     EXPECT_EQ(map.summarize(1.0, true).voxel_count, 0u) << "prior " << prior;
