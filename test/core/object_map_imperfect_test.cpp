@@ -29,6 +29,14 @@ std::vector<Eigen::Isometry3d> arc(const Eigen::Vector3d& target, double radius,
   return poses;
 }
 
+// The foreground prior of docs/BENCHMARKS.md (0.3, weight 2; off by default).
+ObjectMapConfig withPrior() {
+  ObjectMapConfig c;
+  c.foreground_prior = 0.3;
+  c.foreground_prior_weight = 2.0;
+  return c;
+}
+
 // The mask of `labels == label` grown by `px` pixels (a detector's mask bleeding over the object's border).
 cv::Mat bled(const cv::Mat& labels, int label, int px) {
   cv::Mat mask = labels == label;
@@ -73,7 +81,7 @@ TEST(ObjectMapImperfect, MaskBledOntoAWallBehindLeavesTheChairsMeshOnTheChair) {
   // wall 1 m behind the chair.
   std::vector<Mesh> meshes;
   for (const int bleed_px : {0, 5}) {
-    ObjectMap map{ObjectMapConfig(), ClassTable()};
+    ObjectMap map{withPrior(), ClassTable()};
     for (const auto& T_WC : arc(kTarget, 1.5, 50.0, 9)) {
       cv::Mat depth, labels;
       renderShapes(cam, T_WC, {&c, &kWall}, depth, labels);
@@ -163,7 +171,7 @@ TEST(ObjectMapImperfect, ForegroundPriorKeepsFloorSeenInFewBledFramesOutOfTheMes
 
 TEST(ObjectMapImperfect, DetectionMissedInEverySecondFrameIsOneObject) {
   PinholeCamera cam;
-  ObjectMap map{ObjectMapConfig(), ClassTable()};
+  ObjectMap map{withPrior(), ClassTable()};
   const BoxUnion c = chair(0.0, 0.0);
   // Round the chair in 30 deg steps; detected in every second frame only (60 deg apart), the frames between
   // update the object as a visible undetected one.
@@ -200,7 +208,7 @@ TEST(ObjectMapImperfect, BledMaskOverTwoChairsEndsAsTwoObjects) {
   const auto poses = arc(kTarget, 1.8, 40.0, 9);
   for (const size_t bled_frame : {size_t{0}, size_t{4}}) {
     SCOPED_TRACE("bled frame " + std::to_string(bled_frame));
-    ObjectMap map{ObjectMapConfig(), ClassTable()};
+    ObjectMap map{withPrior(), ClassTable()};
     for (size_t i = 0; i < poses.size(); ++i) {
       cv::Mat depth, labels;
       renderShapes(cam, poses[i], {&a, &b, &kWall}, depth, labels);
@@ -248,7 +256,7 @@ TEST(ObjectMapImperfect, SplitOffTooSmallToKeepLeavesTheObjectWhole) {
   PinholeCamera cam;
   const BoxUnion a = chair(0.0, -0.3), b = chair(0.0, 0.3);
   const auto poses = arc(kTarget, 1.8, 40.0, 9);
-  ObjectMap map{ObjectMapConfig(), ClassTable()};
+  ObjectMap map{withPrior(), ClassTable()};
   MatchingConfig matching;
   matching.min_mask_pixels = 20;  // lets the patch through matching to the object map
   cv::Mat depth, labels;
