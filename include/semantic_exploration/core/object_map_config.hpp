@@ -86,10 +86,10 @@ struct ObjectMapConfig {
   /// Off by default (the paper's update): with 0.3 and weight 2 the
   /// exploration_objects_setpoints rostest once saw a chair 64% complete,
   /// under its 70% bound (docs/BENCHMARKS.md). With 0.3 and weight 2, one
-  /// full detection lifts a new voxel to 0.53, one whose
-  /// evidence is under 0.9 (7 px or less inside a mask's border, see
-  /// foreground_border_px) leaves it under 0.5. With all the simulator's faults on, this took the median object
-  /// RMSE from 5.82 to 1.59 cm on the same frames (docs/BENCHMARKS.md).
+  /// full detection lifts a new voxel to 0.53, one whose evidence is under
+  /// 0.9 (7 px or less inside a mask's border, see foreground_border_px)
+  /// leaves it under 0.5; with all the simulator's faults on, it took the
+  /// median object RMSE from 5.82 to 1.59 cm on the same frames.
   /// foreground_prior_weight 0 = the paper's update.
   double foreground_prior = 0.5;         ///< probability, [0, 1]
   double foreground_prior_weight = 0.0;  ///< observations, [0, max_weight]
