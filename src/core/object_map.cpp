@@ -174,22 +174,24 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
   // detection of the same class: they are pieces of the detected object.
   std::map<std::uint32_t, std::uint32_t> merged_into;
   {
-    // summarize() walks all of an object's blocks: once per object, surface and frame (nothing merges before
-    // the end).
+    // Summaries walk all of an object's blocks: once per object, surface and frame (nothing merges before the
+    // end). tracked: the tracked surface; else the object as published (ObjectMap::summarize).
     std::map<std::pair<std::uint32_t, bool>, TsdfSummary> summaries;
     const auto summary = [this, &summaries](std::uint32_t id, bool tracked) -> const TsdfSummary& {
       auto it = summaries.find({id, tracked});
-      if (it == summaries.end())
-        it = summaries.emplace(std::make_pair(id, tracked), objects_.at(id)->tsdf.summarize(0.0, tracked)).first;
+      if (it == summaries.end()) {
+        const MappedObject& o = *objects_.at(id);
+        it = summaries.emplace(std::make_pair(id, tracked), tracked ? o.tsdf.summarize(0.0, true) : summarize(o, 0.0))
+                 .first;
+      }
       return it->second;
     };
     // y's tracked surface lies mostly inside the box of x's reconstructed surface in 3D (boxes padded by 2
-    // voxels; x's tracked surface while it has no reconstructed one). Surface a bled mask added to x in a few
-    // detections is tracked but not reconstructed (under the foreground prior): it must not widen x's box over
-    // a neighbour. `smaller` compares the tracked surfaces.
+    // voxels; x's tracked surface while it has no reconstructed one, as published). Surface a bled mask added
+    // to x in a few detections is tracked but not reconstructed (under the foreground prior): it must not widen
+    // x's box over a neighbour. `smaller` compares the tracked surfaces.
     const auto inside_box = [this, &summary](std::uint32_t y, std::uint32_t x, bool smaller) {
-      const TsdfSummary &sy = summary(y, true), &sx_tracked = summary(x, true);
-      const TsdfSummary& sx = summary(x, false).voxel_count > 0 ? summary(x, false) : sx_tracked;
+      const TsdfSummary &sy = summary(y, true), &sx_tracked = summary(x, true), &sx = summary(x, false);
       if (sx.voxel_count == 0 || sy.voxel_count == 0 || (smaller && sy.voxel_count >= sx_tracked.voxel_count))
         return false;
       const Eigen::Vector3d pad = Eigen::Vector3d::Constant(2.0 * objects_.at(x)->resolution_m);

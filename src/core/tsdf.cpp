@@ -255,7 +255,6 @@ bool TsdfMapT<V>::castRay(const Eigen::Vector3f& o, const Eigen::Vector3f& dir, 
   const float res = static_cast<float>(params_.resolution_m);
   const float block_edge = res * B;
   const float step_min = 0.5f * res;
-  const float tracked = tracked_foreground_;
   Eigen::Vector3i key(INT_MIN, INT_MIN, INT_MIN);
   const Block* block = nullptr;
   const V* prev = nullptr;
@@ -304,7 +303,7 @@ bool TsdfMapT<V>::castRay(const Eigen::Vector3f& o, const Eigen::Vector3f& dir, 
     // between voxel centres that are all positive): interpolate there.
     float interpolated;
     if (std::abs(sdf) < res && interpolate(p, interpolated)) sdf = interpolated;
-    if (prev && prev_sdf > 0.f && sdf <= 0.f && prev->foreground() + vx.foreground() > 2.f * tracked) {
+    if (prev && prev_sdf > 0.f && sdf <= 0.f && prev->foreground() + vx.foreground() > 2.f * tracked_foreground_) {
       hit.distance_m = prev_t + (t - prev_t) * prev_sdf / (prev_sdf - sdf);
       hit.min_distance_m = std::min(prev->minDistance(), vx.minDistance());
       return true;
@@ -436,15 +435,12 @@ Mesh TsdfMapT<V>::extractMesh() const {
 template <class V>
 TsdfSummary TsdfMapT<V>::summarize(double d_obj_m, bool tracked) const {
   TsdfSummary s;
-  const float min_foreground = tracked ? tracked_foreground_ : 0.5f;
-  const float res = static_cast<float>(params_.resolution_m);
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   std::size_t observed = 0;
   Eigen::AlignedBox3d box;
   forEachVoxel([&](const Eigen::Vector3i& index, const V& vx) {
     s.weight_sum += vx.weight();
-    if (vx.weight() <= 0.f || std::abs(vx.sdf(truncation_m_)) >= res) return;
-    if (vx.foreground() <= min_foreground) return;
+    if (!isSurfaceVoxel(vx, tracked)) return;
     const Eigen::Vector3d c = voxelCentre(index).template cast<double>();
     box.extend(c);
     sum += c;
@@ -463,11 +459,9 @@ TsdfSummary TsdfMapT<V>::summarize(double d_obj_m, bool tracked) const {
 
 template <class V>
 bool TsdfMapT<V>::hasSurface() const {
-  const float res = static_cast<float>(params_.resolution_m);
-  const float tracked = tracked_foreground_;
   for (const auto& kv : blocks_)
     for (const V& vx : kv.second.voxels)
-      if (vx.weight() > 0.f && vx.foreground() > tracked && std::abs(vx.sdf(truncation_m_)) < res) return true;
+      if (isSurfaceVoxel(vx, true)) return true;
   return false;
 }
 

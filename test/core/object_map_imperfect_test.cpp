@@ -29,14 +29,6 @@ std::vector<Eigen::Isometry3d> arc(const Eigen::Vector3d& target, double radius,
   return poses;
 }
 
-// The foreground prior of docs/BENCHMARKS.md (0.3, weight 2; off by default).
-ObjectMapConfig withPrior() {
-  ObjectMapConfig c;
-  c.foreground_prior = 0.3;
-  c.foreground_prior_weight = 2.0;
-  return c;
-}
-
 // The mask of `labels == label` grown by `px` pixels (a detector's mask bleeding over the object's border).
 cv::Mat bled(const cv::Mat& labels, int label, int px) {
   cv::Mat mask = labels == label;
@@ -60,11 +52,9 @@ double shareOn(const std::vector<Eigen::Vector3f>& vertices_W, const Shape& shap
 // Share of the tracked surface voxels (foreground over TsdfParams::trackedForeground(): what the render shows)
 // whose centres lie within `tol_m` of the shape.
 double trackedShareOn(const TsdfMap& tsdf, const Shape& shape, double tol_m) {
-  const TsdfParams& p = tsdf.params();
-  const float res = static_cast<float>(p.resolution_m), trunc = static_cast<float>(p.truncation_m);
   size_t all = 0, on = 0;
   tsdf.forEachVoxel([&](const Eigen::Vector3i& index, const TsdfVoxel& vx) {
-    if (vx.weight() <= 0.f || vx.foreground() <= tsdf.trackedForeground() || std::abs(vx.sdf(trunc)) >= res) return;
+    if (!tsdf.isSurfaceVoxel(vx, true)) return;
     ++all;
     on += std::abs(shape.sdf(tsdf.voxelCentre(index).cast<double>())) < tol_m;
   });
@@ -81,7 +71,7 @@ TEST(ObjectMapImperfect, MaskBledOntoAWallBehindLeavesTheChairsMeshOnTheChair) {
   // wall 1 m behind the chair.
   std::vector<Mesh> meshes;
   for (const int bleed_px : {0, 5}) {
-    ObjectMap map{withPrior(), ClassTable()};
+    ObjectMap map{objectMapConfigWithPrior(), ClassTable()};
     for (const auto& T_WC : arc(kTarget, 1.5, 50.0, 9)) {
       cv::Mat depth, labels;
       renderShapes(cam, T_WC, {&c, &kWall}, depth, labels);
@@ -159,10 +149,7 @@ TEST(ObjectMapImperfect, MaskBledOntoTheFloorInHalfTheFramesLeavesNoRingInTheMes
 // than those to lift it over 0.5. Measured: no floor vertex of 2204, 3.5 mm
 // RMSE (prior weight 1: 38 floor vertices, 2.3 cm).
 TEST(ObjectMapImperfect, ForegroundPriorKeepsFloorSeenInFewBledFramesOutOfTheMesh) {
-  ObjectMapConfig config;
-  config.foreground_prior = 0.3;
-  config.foreground_prior_weight = 2.0;
-  const FloorBleed r = chairOnFloorBledInHalfTheFrames(config);
+  const FloorBleed r = chairOnFloorBledInHalfTheFrames(objectMapConfigWithPrior());
   ASSERT_GT(r.vertices, 2000u);
   EXPECT_LT(r.on_floor, r.vertices / 200) << "of " << r.vertices << " vertices";
   EXPECT_EQ(r.ring, 0u) << "of " << r.vertices << " vertices";
@@ -171,7 +158,7 @@ TEST(ObjectMapImperfect, ForegroundPriorKeepsFloorSeenInFewBledFramesOutOfTheMes
 
 TEST(ObjectMapImperfect, DetectionMissedInEverySecondFrameIsOneObject) {
   PinholeCamera cam;
-  ObjectMap map{withPrior(), ClassTable()};
+  ObjectMap map{objectMapConfigWithPrior(), ClassTable()};
   const BoxUnion c = chair(0.0, 0.0);
   // Round the chair in 30 deg steps; detected in every second frame only (60 deg apart), the frames between
   // update the object as a visible undetected one.
@@ -208,7 +195,7 @@ TEST(ObjectMapImperfect, BledMaskOverTwoChairsEndsAsTwoObjects) {
   const auto poses = arc(kTarget, 1.8, 40.0, 9);
   for (const size_t bled_frame : {size_t{0}, size_t{4}}) {
     SCOPED_TRACE("bled frame " + std::to_string(bled_frame));
-    ObjectMap map{withPrior(), ClassTable()};
+    ObjectMap map{objectMapConfigWithPrior(), ClassTable()};
     for (size_t i = 0; i < poses.size(); ++i) {
       cv::Mat depth, labels;
       renderShapes(cam, poses[i], {&a, &b, &kWall}, depth, labels);
@@ -256,7 +243,7 @@ TEST(ObjectMapImperfect, SplitOffTooSmallToKeepLeavesTheObjectWhole) {
   PinholeCamera cam;
   const BoxUnion a = chair(0.0, -0.3), b = chair(0.0, 0.3);
   const auto poses = arc(kTarget, 1.8, 40.0, 9);
-  ObjectMap map{withPrior(), ClassTable()};
+  ObjectMap map{objectMapConfigWithPrior(), ClassTable()};
   MatchingConfig matching;
   matching.min_mask_pixels = 20;  // lets the patch through matching to the object map
   cv::Mat depth, labels;

@@ -23,13 +23,8 @@ const Sphere kA(Eigen::Vector3d(0.0, 0.0, 1.0), 0.25);
 const Sphere kB(Eigen::Vector3d(0.0, 0.9, 1.0), 0.2);
 constexpr int kChair = 1;  // "chair" in the default class table
 
-// The foreground prior of docs/BENCHMARKS.md (0.3, weight 2; off by default): what these tests were written for.
-ObjectMapConfig config() {
-  ObjectMapConfig c;
-  c.foreground_prior = 0.3;
-  c.foreground_prior_weight = 2.0;
-  return c;
-}
+// With the foreground prior: what these tests were written for.
+ObjectMapConfig config() { return objectMapConfigWithPrior(); }
 
 // Builds a map holding A (id 1) and B (id 2), each seen all round.
 ObjectMap twoObjects(const PinholeCamera& cam) {

@@ -310,6 +310,13 @@ class TsdfMapT {
   TsdfSummary summarize(double d_obj_m, bool tracked = false) const;
   /// True if some voxel is a tracked surface voxel (stops at the first one).
   bool hasSurface() const;
+  /// A surface voxel as summarize() counts it: observed, |sdf| under one
+  /// voxel, foreground over 0.5 (the mesh's) or, with tracked, over
+  /// trackedForeground().
+  bool isSurfaceVoxel(const VoxelT& vx, bool tracked) const {
+    return vx.weight() > 0.f && std::abs(vx.sdf(truncation_m_)) < static_cast<float>(params_.resolution_m) &&
+           vx.foreground() > (tracked ? tracked_foreground_ : 0.5f);
+  }
 
   /// Axis-aligned box of the allocated blocks in world, m; false if empty.
   bool allocatedBox(Eigen::AlignedBox3f& box_W) const;

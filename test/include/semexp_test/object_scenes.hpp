@@ -29,6 +29,15 @@ inline semexp::TsdfParams objectTsdfParams() {
   return p;
 }
 
+/// The object map with the foreground prior measured in docs/BENCHMARKS.md (0.3 with the weight of 2
+/// observations; off by default).
+inline semexp::ObjectMapConfig objectMapConfigWithPrior() {
+  semexp::ObjectMapConfig c;
+  c.foreground_prior = 0.3;
+  c.foreground_prior_weight = 2.0;
+  return c;
+}
+
 /// A chair 0.44 m wide standing on z = 0 at (x, y), facing -x: a seat 0.45 m
 /// high, a back up to 0.95 m on its +x side and four 4 cm legs.
 inline BoxUnion chair(double x, double y) {
