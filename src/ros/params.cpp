@@ -251,6 +251,7 @@ semexp::PlannerConfig loadPlanner(const ParamReader& p) {
   p.get(n + "max_failed_iterations", c.max_failed_iterations);
   p.get(n + "object_observed_fraction", c.object_observed_fraction);
   p.get(n + "object_standoff_factor", c.object_standoff_factor);
+  p.get(n + "object_view_samples", c.object_view_samples);
   p.get(n + "min_path_time_s", c.min_path_time_s);
   p.get(n + "cost_threshold_factor", c.cost_threshold_factor);
   p.get(n + "simplify_time_s", c.simplify_time_s);

@@ -106,7 +106,12 @@ TEST(Config, RaycastsMustFitOneGainRequest) {
   p.raycast_height = 180;  // one image fits, 20 of them (1.3 M rays) do not
   EXPECT_EQ(rejected([&] { p.validate(); }), "planner/raycast_width");
   p.n_candidates = 4;
+  // The object candidates' ring views go in one request too: 4 x 8 images of 64,800 rays do not fit, 4 x 1 do.
+  EXPECT_EQ(rejected([&] { p.validate(); }), "planner/object_view_samples");
+  p.object_view_samples = 1;
   EXPECT_EQ(rejected([&] { p.validate(); }), "");
+  p.object_view_samples = 0;
+  EXPECT_EQ(rejected([&] { p.validate(); }), "planner/object_view_samples");
   semexp::DepthHistoryConfig h;
   h.width = 720;
   h.height = 180;

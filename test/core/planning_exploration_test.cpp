@@ -136,6 +136,53 @@ TEST_F(ExplorationTest, IntermediateVertexYaw) {
     EXPECT_NEAR(r.path_yaw_rad[i], r.path_W[i].x() > 4.5 ? -M_PI / 2 : M_PI / 2, 1e-9) << r.path_W[i].transpose();
 }
 
+// One object at (3, 2, 1), box +-0.25 m; only views from y > 2.3 see its
+// unobserved side (object gain 0.6 in the window facing -y, i.e. towards the
+// object). The ring's 8 view points lie 0.75-0.85 m from the centroid, 45 deg
+// apart, so 3 or 4 of them are on that side: the candidate must be one of
+// them, with G = a_obj x 0.6 = 0.198. Views from y < 1.7 have more G
+// (entropy 0.9 x a_ent = 0.306 facing +x) but nothing of the object: the
+// ring is there to find the object's best view, so they must not be taken.
+// With one random view point instead, the candidate lands on the object's
+// side in about 3 of 8 draws only.
+TEST_F(ExplorationTest, ObjectCandidateTakesTheRingViewThatSeesMostOfTheObject) {
+  config.a_ent = 0.34;
+  config.a_bg = config.a_obj = 0.33;
+  config.p_frontier = 0.0;
+  config.object_view_samples = 8;
+  ObjectSummary o;
+  o.id = 4;
+  o.centroid_W = {3, 2, 1};
+  o.bbox_min_W = {2.75, 1.75, 0.75};
+  o.bbox_max_W = {3.25, 2.25, 1.25};
+  o.observed_fraction = 0.2;
+  grid.fill_box(o.bbox_min_W, o.bbox_max_W, TestGrid::kOccupied);
+  providers.gains = [](const std::vector<Eigen::Vector3d>& ps) {
+    std::vector<GainSet> out(ps.size());
+    for (std::size_t i = 0; i < ps.size(); ++i) {
+      out[i].object = ps[i].y() > 2.3 ? window_image(-M_PI / 2, 0.6f) : GainImage(36, 10, 0.0f);
+      out[i].entropy = ps[i].y() < 1.7 ? window_image(0.0, 0.9f) : GainImage(36, 10, 0.0f);
+    }
+    return out;
+  };
+  ExplorationInputs in = inputs();
+  in.frontiers_W.clear();
+  in.objects = {o};
+  in.background_observed_share = 0.0;
+  for (int it = 0; it < 5; ++it) {
+    ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+    for (int k = 0; k < it; ++k) planner.plan(in, providers);  // other ring phases
+    const IterationResult r = planner.plan(in, providers);
+    EXPECT_EQ(r.object_views, 8u);
+    ASSERT_EQ(r.candidates.size(), 1u);
+    const EvaluatedCandidate& c = r.candidates[0];
+    EXPECT_EQ(c.sample.source, CandidateSource::kObject);
+    EXPECT_GT(c.sample.position_W.y(), 2.3) << c.sample.position_W.transpose();
+    EXPECT_NEAR(c.gain, 0.33 * 0.6, 1e-6);
+    EXPECT_NEAR(c.yaw_rad, -M_PI / 2, 0.1);
+  }
+}
+
 TEST_F(ExplorationTest, TerminationExplored) {
   config.a_ent = 0.34;  // semantic mode: background and objects are pursued
   config.a_bg = config.a_obj = 0.33;

@@ -136,5 +136,37 @@ TEST_F(SamplerTest, ObjectViewPoints) {
   EXPECT_GT(z_hi, 0.7);
 }
 
+// The ring: 8 view points 45 deg apart from a random start, each where its
+// direction leaves the box plus the 0.5 m standoff, heights as for sample();
+// points whose clearance sphere is not free are left out.
+TEST_F(SamplerTest, ObjectViewRing) {
+  planner.object_view_samples = 8;
+  CandidateSampler sampler(planner, exploration, bounds);
+  ObjectSummary o;
+  o.id = 3;
+  o.centroid_W = {0, 0, 0.5};
+  o.bbox_min_W = {-0.25, -0.25, 0.0};
+  o.bbox_max_W = {0.25, 0.25, 1.0};
+  const auto ring = sampler.objectViewRing(o, {});
+  ASSERT_EQ(ring.size(), 8u);
+  std::vector<double> yaws;
+  for (const auto& q : ring) {
+    const double yaw = std::atan2(q.y(), q.x());
+    yaws.push_back(yaw);
+    const double r = 0.25 / std::max(std::abs(std::cos(yaw)), std::abs(std::sin(yaw))) + 0.5;
+    EXPECT_NEAR(std::hypot(q.x(), q.y()), r, 1e-9) << q.transpose();
+    EXPECT_GE(q.z(), 2.0 * planner.clearance_radius_m());
+    EXPECT_LE(q.z(), 1.0);
+  }
+  for (std::size_t k = 1; k < yaws.size(); ++k)
+    EXPECT_NEAR(std::remainder(yaws[k] - yaws[k - 1], 2.0 * M_PI), M_PI / 4, 1e-9);
+  // Only x < 0 free: the points of the other half are left out (none lies on x = 0 but by a measure-zero draw).
+  CollisionQuery left_free = [](const Eigen::Vector3d& p, double r) { return p.x() + r < 0.0; };
+  const auto left = sampler.objectViewRing(o, left_free);
+  EXPECT_GE(left.size(), 3u);
+  EXPECT_LE(left.size(), 4u);
+  for (const auto& q : left) EXPECT_TRUE(left_free(q, planner.clearance_radius_m())) << q.transpose();
+}
+
 }  // namespace
 }  // namespace semexp

@@ -35,6 +35,10 @@ struct PlannerConfig {
   std::uint32_t seed = 1;           ///< random seed of the sampler
   double object_observed_fraction = 0.9;  ///< an object counts as observed from <= d_obj at this ObjectInfo observed_fraction, [0, 1]
   double object_standoff_factor = 0.5;    ///< object view points lie this times d_obj outside the object's bounding box
+  /// View points tried around each object candidate; the one whose view (in
+  /// G's best yaw window) takes in the most object gain, then the most G,
+  /// becomes the candidate. 1 = one view point in a random direction.
+  int object_view_samples = 8;
   double min_path_time_s = 0.1;           ///< floor of the path time in u = g / t, s (a view at the current pose stays finite)
   double cost_threshold_factor = 1.05;    ///< a solve stops once its path is within this factor of the straight-line distance
   double simplify_time_s = 0.02;          ///< time for path simplification per candidate, s
@@ -85,6 +89,15 @@ struct PlannerConfig {
             ns + "object_observed_fraction", "must be in [0, 1]");
     require(std::isfinite(object_standoff_factor) && object_standoff_factor >= 0, ns + "object_standoff_factor",
             "must be >= 0");
+    require(object_view_samples >= 1 && object_view_samples <= 64, ns + "object_view_samples", "must be in [1, 64]");
+    // The views of every object candidate are evaluated in one gain request.
+    require(SphericalGrid::checkRequest(static_cast<long>(n_candidates) * object_view_samples, raycast_width,
+                                        raycast_height)
+                .empty(),
+            ns + "object_view_samples",
+            SphericalGrid::checkRequest(static_cast<long>(n_candidates) * object_view_samples, raycast_width,
+                                        raycast_height) +
+                " (n_candidates x object_view_samples views)");
     require(std::isfinite(min_path_time_s) && min_path_time_s > 0, ns + "min_path_time_s", "must be > 0 s");
     require(std::isfinite(cost_threshold_factor) && cost_threshold_factor >= 1, ns + "cost_threshold_factor",
             "must be >= 1");

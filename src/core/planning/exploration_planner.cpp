@@ -91,6 +91,44 @@ ExplorationPlanner::ExplorationPlanner(const PlannerConfig& planner, const Explo
     throw std::invalid_argument("ExplorationPlanner: map_resolution_m must be > 0");
 }
 
+bool ExplorationPlanner::chooseObjectViews(std::vector<CandidateSample>& samples,
+                                           const std::vector<ObjectSummary>& objects,
+                                           const ExplorationProviders& prov, IterationResult& r) {
+  const auto t0 = Clock::now();
+  std::vector<Eigen::Vector3d> views;
+  std::vector<std::pair<std::size_t, std::size_t>> range(samples.size(), {0, 0});  // per sample: [first, last)
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    if (samples[i].source != CandidateSource::kObject) continue;
+    const auto o = std::find_if(objects.begin(), objects.end(),
+                                [&](const ObjectSummary& x) { return x.id == samples[i].object_id; });
+    if (o == objects.end()) continue;
+    const std::vector<Eigen::Vector3d> ring = sampler_.objectViewRing(*o, prov.is_free);
+    range[i] = {views.size(), views.size() + ring.size()};
+    views.insert(views.end(), ring.begin(), ring.end());
+  }
+  bool ok = true;
+  if (!views.empty()) {
+    std::vector<ViewGains> g;
+    ok = evaluateViews(views, prov, planner_, window_columns_, g, r);
+    for (std::size_t i = 0; ok && i < samples.size(); ++i) {
+      // The object gain this view's yaw window takes in first, then G; ties keep the first; a ring with no positive
+      // gain leaves the sample where it was drawn.
+      std::pair<double, double> best{0.0, 0.0};
+      for (std::size_t k = range[i].first; k < range[i].second; ++k) {
+        const YawWindow& w = g[k].window;
+        const std::pair<double, double> key{windowMean(g[k].gains.object, w.first_column, w.columns), w.gain};
+        if (key > best) {
+          best = key;
+          samples[i].position_W = views[k];
+        }
+      }
+    }
+  }
+  r.object_views = views.size();
+  r.gains_s += secondsSince(t0);
+  return ok;
+}
+
 bool ExplorationPlanner::fail(IterationResult& r, const std::string& why) {
   ++failed_iterations_;
   r.message = why + " (" + std::to_string(failed_iterations_) + " of " +
@@ -149,6 +187,7 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   // their background gain like any other candidate, close the gap.
   if (samples.empty() && !r.termination.background_done) samples = sampler_.sampleFreeSpace(prov.is_free);
   r.sampling_s = secondsSince(t0);
+  if (planner_.object_view_samples > 1 && !chooseObjectViews(samples, in.objects, prov, r)) return finish();
   if (samples.empty()) {
     fail(r, "nothing to sample (no active frontiers, no object left to observe, no free view point)");
     return finish();

@@ -88,10 +88,7 @@ std::vector<CandidateSample> CandidateSampler::sample(const std::vector<Eigen::V
       s.source = CandidateSource::kObject;
       s.object_id = o.id;
       const double yaw0 = unit(rng_) * 2.0 * M_PI;
-      // From two clearance radii above the box bottom (the clearance sphere then stays off the floor the object
-      // stands on and its voxels) to the box top (see objectViewPoint).
-      const double z_lo = std::min(o.centroid_W.z(), o.bbox_min_W.z() + 2.0 * planner_.clearance_radius_m());
-      const double z = z_lo + unit(rng_) * std::max(0.0, o.bbox_max_W.z() - z_lo);
+      const double z = drawViewHeight(o);
       s.position_W = objectViewPoint(o, yaw0, z);
       if (is_free) {
         for (int k = 0; k < 8; ++k) {
@@ -104,6 +101,28 @@ std::vector<CandidateSample> CandidateSampler::sample(const std::vector<Eigen::V
       }
     }
     out.push_back(s);
+  }
+  return out;
+}
+
+double CandidateSampler::drawViewHeight(const ObjectSummary& o) {
+  // From two clearance radii above the box bottom (the clearance sphere then stays off the floor the object
+  // stands on and its voxels) to the box top (see objectViewPoint).
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double z_lo = std::min(o.centroid_W.z(), o.bbox_min_W.z() + 2.0 * planner_.clearance_radius_m());
+  return z_lo + unit(rng_) * std::max(0.0, o.bbox_max_W.z() - z_lo);
+}
+
+std::vector<Eigen::Vector3d> CandidateSampler::objectViewRing(const ObjectSummary& o, const CollisionQuery& is_free) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const int m = planner_.object_view_samples;
+  const double step = 2.0 * M_PI / m;
+  const double yaw0 = unit(rng_) * step;
+  std::vector<Eigen::Vector3d> out;
+  for (int k = 0; k < m; ++k) {
+    // Every draw is made whether or not the point is free, so the stream does not depend on the map.
+    const Eigen::Vector3d p = objectViewPoint(o, yaw0 + k * step, drawViewHeight(o));
+    if (!is_free || is_free(p, planner_.clearance_radius_m())) out.push_back(p);
   }
   return out;
 }

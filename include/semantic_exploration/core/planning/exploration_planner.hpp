@@ -84,6 +84,7 @@ struct IterationResult {
   std::string message;                   ///< what happened, human readable
   int candidates_reachable = 0;          ///< of the planned candidates
   int candidates_planned = 0;            ///< candidates a path was planned for
+  std::size_t object_views = 0;          ///< view points around the object candidates whose gains were computed
   /// The termination check of this iteration: which conditions of "explored" hold.
   TerminationDecision termination;
   std::size_t active_frontiers = 0;              ///< frontier voxels still to be observed
@@ -113,6 +114,13 @@ class ExplorationPlanner {
 
  private:
   bool fail(IterationResult& r, const std::string& why);
+  /// Moves each object sample to the view point of its object's ring
+  /// (CandidateSampler::objectViewRing) whose best yaw window (of G, as the
+  /// candidate will fly it) holds the most object gain, ties broken by G: one
+  /// batched gain call for all of them. The utility that ranks candidates is
+  /// untouched. False on a provider failure (reported in r).
+  bool chooseObjectViews(std::vector<CandidateSample>& samples, const std::vector<ObjectSummary>& objects,
+                         const ExplorationProviders& prov, IterationResult& r);
 
   PlannerConfig planner_;
   ExplorationConfig exploration_;

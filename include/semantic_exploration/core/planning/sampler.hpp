@@ -71,7 +71,20 @@ class CandidateSampler {
   /// from 0.30 m up, 96-100% (docs/BENCHMARKS.md "Termination").
   Eigen::Vector3d objectViewPoint(const ObjectSummary& object, double yaw_rad, double z_W) const;
 
+  /// Up to planner.object_view_samples view points around `object`: the
+  /// objectViewPoint of evenly spaced directions (a random start, 2 pi /
+  /// object_view_samples apart), each at its own height drawn as for
+  /// sample(); only those whose sphere of the clearance radius is free (all,
+  /// if is_free is empty). The planner keeps the one whose view takes in the
+  /// most object gain (ExplorationPlanner::chooseObjectViews): which side of
+  /// an object still needs a close view is known to the gain images, not to
+  /// the object's summary.
+  std::vector<Eigen::Vector3d> objectViewRing(const ObjectSummary& object, const CollisionQuery& is_free);
+
  private:
+  /// A camera height for a view of `object`, m (see objectViewPoint).
+  double drawViewHeight(const ObjectSummary& object);
+
   Eigen::Vector3d clampToBounds(const Eigen::Vector3d& p_W) const;
 
   PlannerConfig planner_;
