@@ -27,6 +27,21 @@ struct SamplerTest : ::testing::Test {
       objects.push_back(o);
     }
   }
+  // Centroid (0, 0, 0.5), box +-0.25 m wide, 0-1 m high.
+  static ObjectSummary unitBoxObject(std::uint32_t id) {
+    ObjectSummary o;
+    o.id = id;
+    o.centroid_W = {0, 0, 0.5};
+    o.bbox_min_W = {-0.25, -0.25, 0.0};
+    o.bbox_max_W = {0.25, 0.25, 1.0};
+    return o;
+  }
+  // Horizontal distance of unitBoxObject's view point in the direction of q from the centroid: the box is square,
+  // so a direction leaving through a side face does so 0.25 / max(|cos|, |sin|) from it, plus the 0.5 m standoff.
+  static double ringRadius(const Eigen::Vector3d& q) {
+    const double yaw = std::atan2(q.y(), q.x());
+    return 0.25 / std::max(std::abs(std::cos(yaw)), std::abs(std::sin(yaw))) + 0.5;
+  }
   static int count_frontier(const std::vector<CandidateSample>& s) {
     int n = 0;
     for (const auto& c : s) n += c.source == CandidateSource::kFrontier;
@@ -103,11 +118,7 @@ TEST_F(SamplerTest, ClassicModeNeverSamplesObjects) {
 // Diagonal (45 deg): the ray leaves through the corner at 0.25 sqrt(2).
 TEST_F(SamplerTest, ObjectViewPoints) {
   CandidateSampler sampler(planner, exploration, bounds);
-  ObjectSummary o;
-  o.id = 7;
-  o.centroid_W = {0, 0, 0.5};
-  o.bbox_min_W = {-0.25, -0.25, 0.0};
-  o.bbox_max_W = {0.25, 0.25, 1.0};
+  const ObjectSummary o = unitBoxObject(7);
   EXPECT_TRUE(sampler.objectViewPoint(o, 0.0).isApprox(Eigen::Vector3d(0.75, 0.0, 0.5)));
   const double d = 0.25 * std::sqrt(2.0) + 0.5;
   EXPECT_TRUE(sampler.objectViewPoint(o, M_PI / 4).isApprox(Eigen::Vector3d(d / std::sqrt(2.0), d / std::sqrt(2.0), 0.5)));
@@ -119,13 +130,10 @@ TEST_F(SamplerTest, ObjectViewPoints) {
     ASSERT_EQ(s.size(), 1u);
     EXPECT_EQ(s[0].object_id, 7u);
     EXPECT_TRUE(left_free(s[0].position_W, planner.mav_radius_m)) << s[0].position_W.transpose();
-    // On the ring 0.25 + 0.5 m from the centroid (the box is square: any direction leaving through a side
-    // face lies 0.25 / max(|cos|, |sin|) from it), between two clearance radii above the box bottom
-    // (2 x (0.125 + 0.04) m) and the box top.
+    // On the ring round the box, between two clearance radii above the box bottom (2 x (0.125 + 0.04) m) and
+    // the box top.
     const Eigen::Vector3d q = s[0].position_W;
-    const double yaw = std::atan2(q.y(), q.x());
-    const double ring = 0.25 / std::max(std::abs(std::cos(yaw)), std::abs(std::sin(yaw))) + 0.5;
-    EXPECT_NEAR(std::hypot(q.x(), q.y()), ring, 1e-9) << q.transpose();
+    EXPECT_NEAR(std::hypot(q.x(), q.y()), ringRadius(q), 1e-9) << q.transpose();
     EXPECT_GE(q.z(), 2.0 * planner.clearance_radius_m());
     EXPECT_LE(q.z(), 1.0);
     z_lo = std::min(z_lo, q.z());
@@ -142,19 +150,13 @@ TEST_F(SamplerTest, ObjectViewPoints) {
 TEST_F(SamplerTest, ObjectViewRing) {
   planner.object_view_samples = 8;
   CandidateSampler sampler(planner, exploration, bounds);
-  ObjectSummary o;
-  o.id = 3;
-  o.centroid_W = {0, 0, 0.5};
-  o.bbox_min_W = {-0.25, -0.25, 0.0};
-  o.bbox_max_W = {0.25, 0.25, 1.0};
+  const ObjectSummary o = unitBoxObject(3);
   const auto ring = sampler.objectViewRing(o, {});
   ASSERT_EQ(ring.size(), 8u);
   std::vector<double> yaws;
   for (const auto& q : ring) {
-    const double yaw = std::atan2(q.y(), q.x());
-    yaws.push_back(yaw);
-    const double r = 0.25 / std::max(std::abs(std::cos(yaw)), std::abs(std::sin(yaw))) + 0.5;
-    EXPECT_NEAR(std::hypot(q.x(), q.y()), r, 1e-9) << q.transpose();
+    yaws.push_back(std::atan2(q.y(), q.x()));
+    EXPECT_NEAR(std::hypot(q.x(), q.y()), ringRadius(q), 1e-9) << q.transpose();
     EXPECT_GE(q.z(), 2.0 * planner.clearance_radius_m());
     EXPECT_LE(q.z(), 1.0);
   }
