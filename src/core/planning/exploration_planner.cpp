@@ -373,10 +373,15 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   r.retirement_s += secondsSince(t0);
 
   failed_iterations_ = 0;
-  r.message += fmt("winner %.0f: utility %.3f 1/s, gain %.3f", r.winner, win.utility, win.gain) +
+  const std::string source = win.sample.source == CandidateSource::kObject
+                                 ? "object " + std::to_string(win.sample.object_id)
+                                 : candidateSourceName(win.sample.source);
+  r.message += fmt("winner %.0f (", r.winner) + source +
+               fmt("): utility %.3f 1/s, gain %.3f (object gain %.3f)", win.utility, win.gain, win.gain_obj) +
                fmt(", path %.2f m ", pathLength_m(r.path_W)) + PlannedPath::name(win.plan.status) +
                fmt("; %.0f of %.0f candidates planned, %.0f reachable", r.candidates_planned,
                    static_cast<double>(r.candidates.size()), r.candidates_reachable);
+  if (r.object_views > 0) r.message += fmt("; %.0f object ring views", static_cast<double>(r.object_views));
   return finish();
 }
 
