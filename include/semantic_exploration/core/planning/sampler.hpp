@@ -35,13 +35,15 @@ struct CandidateSample {
 /// planner then gets as close as the free space allows). An object candidate
 /// is a view point beside the object: from its centroid along a random
 /// horizontal direction to where that ray leaves the bounding box, plus a
-/// standoff of object_standoff_factor * d_obj, at the centroid's height, so
-/// that the surface facing the view point is seen from about half d_obj. Up
-/// to 8 directions (45 degrees apart, from a random start) are tried for one
-/// whose sphere of radius R is free; if none is, the first is kept and the
-/// planner reaches as close to it as it can. Positions are clamped into the
-/// bounds shrunk by R. The random engine is seeded once, so a run is
-/// reproducible given the same inputs.
+/// standoff of object_standoff_factor * d_obj, at a drawn camera height (see
+/// objectViewPoint), so that the surface facing the view point is seen from
+/// about half d_obj. Up to 8 directions (45 degrees apart, from a random
+/// start) are tried for one whose sphere of radius R is free; if none is, the
+/// first is kept and the planner reaches as close to it as it can. With
+/// object_view_samples > 1 the planner replaces this point by the best of
+/// objectViewRing's. Positions are clamped into the bounds shrunk by R. The
+/// random engine is seeded once, so a run is reproducible given the same
+/// inputs.
 class CandidateSampler {
  public:
   CandidateSampler(const PlannerConfig& planner, const ExplorationConfig& exploration, const Bounds& bounds);
