@@ -108,6 +108,9 @@ TEST(Config, RaycastsMustFitOneGainRequest) {
   p.n_candidates = 4;
   // The object candidates' ring views go in one request too: 4 x 8 images of 64,800 rays do not fit, 4 x 1 do.
   EXPECT_EQ(rejected([&] { p.validate(); }), "planner/object_view_samples");
+  p.p_frontier = 1.0;  // classic: no object is sampled, so no ring is evaluated
+  EXPECT_EQ(rejected([&] { p.validate(); }), "");
+  p.p_frontier = 0.5;
   p.object_view_samples = 1;
   EXPECT_EQ(rejected([&] { p.validate(); }), "");
   p.object_view_samples = 0;

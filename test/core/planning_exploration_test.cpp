@@ -139,7 +139,8 @@ TEST_F(ExplorationTest, IntermediateVertexYaw) {
 // One object at (3, 2, 1), box +-0.25 m; only views from y > 2.3 see its
 // unobserved side (object gain 0.6 in the window facing -y, i.e. towards the
 // object). The ring's 8 view points lie 0.75-0.85 m from the centroid, 45 deg
-// apart, so 3 or 4 of them are on that side: the candidate must be one of
+// apart; y > 2.3 is an arc of about 136 deg of the ring, so 2 or 3 of them
+// are on that side: the candidate must be one of
 // them, with G = a_obj x 0.6 = 0.198. Views from y < 1.7 have more G
 // (entropy 0.9 x a_ent = 0.306 facing +x) but nothing of the object: the
 // ring is there to find the object's best view, so they must not be taken.
@@ -181,6 +182,36 @@ TEST_F(ExplorationTest, ObjectCandidateTakesTheRingViewThatSeesMostOfTheObject) 
     EXPECT_NEAR(c.gain, 0.33 * 0.6, 1e-6);
     EXPECT_NEAR(c.yaw_rad, -M_PI / 2, 0.1);
   }
+}
+
+// A gain provider that fails while the ring is evaluated: reported as a
+// provider error, no winner, not counted as a failed iteration.
+TEST_F(ExplorationTest, RingGainFailureIsReportedNotCounted) {
+  config.a_ent = 0.34;
+  config.a_bg = config.a_obj = 0.33;
+  config.p_frontier = 0.0;
+  ObjectSummary o;
+  o.id = 4;
+  o.centroid_W = {3, 2, 1};
+  o.bbox_min_W = {2.75, 1.75, 0.75};
+  o.bbox_max_W = {3.25, 2.25, 1.25};
+  o.observed_fraction = 0.2;
+  int calls = 0;
+  providers.gains = [&calls](const std::vector<Eigen::Vector3d>&) -> std::vector<GainSet> {
+    ++calls;
+    throw std::runtime_error("service timed out");
+  };
+  ExplorationInputs in = inputs();
+  in.frontiers_W.clear();
+  in.objects = {o};
+  in.background_observed_share = 0.0;
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  const IterationResult r = planner.plan(in, providers);
+  EXPECT_EQ(calls, 1);  // the ring's request, nothing after it
+  EXPECT_TRUE(r.provider_error);
+  EXPECT_LT(r.winner, 0);
+  EXPECT_NE(r.message.find("service timed out"), std::string::npos) << r.message;
+  EXPECT_EQ(planner.failedIterations(), 0);
 }
 
 TEST_F(ExplorationTest, TerminationExplored) {

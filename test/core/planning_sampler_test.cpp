@@ -162,7 +162,7 @@ TEST_F(SamplerTest, ObjectViewRing) {
   }
   for (std::size_t k = 1; k < yaws.size(); ++k)
     EXPECT_NEAR(std::remainder(yaws[k] - yaws[k - 1], 2.0 * M_PI), M_PI / 4, 1e-9);
-  // Only x < 0 free: the points of the other half are left out (none lies on x = 0 but by a measure-zero draw).
+  // Only x < -r free (r = 0.165 m, the clearance radius): the points on the other side are left out.
   CollisionQuery left_free = [](const Eigen::Vector3d& p, double r) { return p.x() + r < 0.0; };
   const auto left = sampler.objectViewRing(o, left_free);
   EXPECT_GE(left.size(), 3u);

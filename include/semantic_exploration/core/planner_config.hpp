@@ -90,8 +90,9 @@ struct PlannerConfig {
     require(std::isfinite(object_standoff_factor) && object_standoff_factor >= 0, ns + "object_standoff_factor",
             "must be >= 0");
     require(object_view_samples >= 1 && object_view_samples <= 64, ns + "object_view_samples", "must be in [1, 64]");
-    // The views of every object candidate are evaluated in one gain request.
-    require(SphericalGrid::checkRequest(static_cast<long>(n_candidates) * object_view_samples, raycast_width,
+    // The views of every object candidate are evaluated in one gain request (no object is sampled at P_fr = 1).
+    require(p_frontier >= 1.0 ||
+                SphericalGrid::checkRequest(static_cast<long>(n_candidates) * object_view_samples, raycast_width,
                                         raycast_height)
                 .empty(),
             ns + "object_view_samples",

@@ -224,7 +224,7 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   t0 = Clock::now();
   std::vector<ViewGains> view_gains;
   const bool gains_ok = evaluateViews(views, prov, planner_, window_columns_, view_gains, r);
-  r.gains_s = secondsSince(t0);
+  r.gains_s += secondsSince(t0);
   if (!gains_ok) return finish();
   for (std::size_t i = 0; i < n; ++i) {
     EvaluatedCandidate& c = r.candidates[i];
