@@ -136,6 +136,25 @@ TEST_F(ExplorationTest, IntermediateVertexYaw) {
     EXPECT_NEAR(r.path_yaw_rad[i], r.path_W[i].x() > 4.5 ? -M_PI / 2 : M_PI / 2, 1e-9) << r.path_W[i].transpose();
 }
 
+// Semantic weights, objects only, and inputs with one object at (3, 2, 1),
+// box +-0.25 m, seen from <= d_obj over a fifth of its surface.
+ExplorationInputs objectOnlyInputs(PlannerConfig& config, const ExplorationInputs& base) {
+  config.a_ent = 0.34;
+  config.a_bg = config.a_obj = 0.33;
+  config.p_frontier = 0.0;
+  ObjectSummary o;
+  o.id = 4;
+  o.centroid_W = {3, 2, 1};
+  o.bbox_min_W = {2.75, 1.75, 0.75};
+  o.bbox_max_W = {3.25, 2.25, 1.25};
+  o.observed_fraction = 0.2;
+  ExplorationInputs in = base;
+  in.frontiers_W.clear();
+  in.objects = {o};
+  in.background_observed_share = 0.0;
+  return in;
+}
+
 // One object at (3, 2, 1), box +-0.25 m; only views from y > 2.3 see its
 // unobserved side (object gain 0.6 in the window facing -y, i.e. towards the
 // object). The ring's 8 view points lie 0.75-0.85 m from the centroid, 45 deg
@@ -147,17 +166,9 @@ TEST_F(ExplorationTest, IntermediateVertexYaw) {
 // With one random view point instead, the candidate lands on the object's
 // side in about 3 of 8 draws only.
 TEST_F(ExplorationTest, ObjectCandidateTakesTheRingViewThatSeesMostOfTheObject) {
-  config.a_ent = 0.34;
-  config.a_bg = config.a_obj = 0.33;
-  config.p_frontier = 0.0;
   config.object_view_samples = 8;
-  ObjectSummary o;
-  o.id = 4;
-  o.centroid_W = {3, 2, 1};
-  o.bbox_min_W = {2.75, 1.75, 0.75};
-  o.bbox_max_W = {3.25, 2.25, 1.25};
-  o.observed_fraction = 0.2;
-  grid.fill_box(o.bbox_min_W, o.bbox_max_W, TestGrid::kOccupied);
+  const ExplorationInputs in = objectOnlyInputs(config, inputs());
+  grid.fill_box(in.objects[0].bbox_min_W, in.objects[0].bbox_max_W, TestGrid::kOccupied);
   providers.gains = [](const std::vector<Eigen::Vector3d>& ps) {
     std::vector<GainSet> out(ps.size());
     for (std::size_t i = 0; i < ps.size(); ++i) {
@@ -166,10 +177,6 @@ TEST_F(ExplorationTest, ObjectCandidateTakesTheRingViewThatSeesMostOfTheObject) 
     }
     return out;
   };
-  ExplorationInputs in = inputs();
-  in.frontiers_W.clear();
-  in.objects = {o};
-  in.background_observed_share = 0.0;
   for (int it = 0; it < 5; ++it) {
     ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
     for (int k = 0; k < it; ++k) planner.plan(in, providers);  // other ring phases
@@ -187,24 +194,12 @@ TEST_F(ExplorationTest, ObjectCandidateTakesTheRingViewThatSeesMostOfTheObject) 
 // A gain provider that fails while the ring is evaluated: reported as a
 // provider error, no winner, not counted as a failed iteration.
 TEST_F(ExplorationTest, RingGainFailureIsReportedNotCounted) {
-  config.a_ent = 0.34;
-  config.a_bg = config.a_obj = 0.33;
-  config.p_frontier = 0.0;
-  ObjectSummary o;
-  o.id = 4;
-  o.centroid_W = {3, 2, 1};
-  o.bbox_min_W = {2.75, 1.75, 0.75};
-  o.bbox_max_W = {3.25, 2.25, 1.25};
-  o.observed_fraction = 0.2;
+  const ExplorationInputs in = objectOnlyInputs(config, inputs());
   int calls = 0;
   providers.gains = [&calls](const std::vector<Eigen::Vector3d>&) -> std::vector<GainSet> {
     ++calls;
     throw std::runtime_error("service timed out");
   };
-  ExplorationInputs in = inputs();
-  in.frontiers_W.clear();
-  in.objects = {o};
-  in.background_observed_share = 0.0;
   ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
   const IterationResult r = planner.plan(in, providers);
   EXPECT_EQ(calls, 1);  // the ring's request, nothing after it
