@@ -196,6 +196,8 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
         "snapshots": getattr(args, "snapshot_summary", None),
         "background_snapshots": getattr(args, "background_snapshot_summary", None),
         "cpu_budget": mon.cpu.summary(getattr(args, "camera_rate_hz", None)),  # None: the rate of the frames
+        # Objects the planner retired by evidence at its last status (object_retirement.hpp).
+        "retired_objects": list(getattr(mon, "retired_objects", [])),
     }
     free = os.path.join(gt["gt_dir"], "free_space.json")
     if os.path.exists(free):
@@ -228,12 +230,14 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
         "| path length | %.1f m |" % mon.path_length_m,
         "| collisions | %d |" % mon.collisions,
         "", "## Objects found", "",
-        "| id | class | centroid (m) | voxels | observed from <= d_obj |", "|---|---|---|---|---|",
+        "Retired: below planner/object_observed_fraction after object_retirement/max_failed_views flights aimed "
+        "at it that did not raise its share seen from <= d_obj; it no longer holds `explored` open.", "",
+        "| id | class | centroid (m) | voxels | observed from <= d_obj | retired |", "|---|---|---|---|---|---|",
     ]
     for o in objects:
-        lines.append("| %d | %s | (%.2f, %.2f, %.2f) | %d | %.0f%% |" % (
+        lines.append("| %d | %s | (%.2f, %.2f, %.2f) | %d | %.0f%% | %s |" % (
             o.id, o.class_name, o.centroid.x, o.centroid.y, o.centroid.z, o.voxel_count,
-            100.0 * o.observed_fraction))
+            100.0 * o.observed_fraction, "yes" if o.id in summary["retired_objects"] else "no"))
     ev = summary["evaluation"]
     if ev.get("objects"):
         lines += ["", "## Object reconstruction (against ground truth, 5 cm)", "",

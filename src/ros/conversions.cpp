@@ -241,6 +241,7 @@ semantic_exploration::ExplorationStatus toExplorationStatus(const semexp::Iterat
     s.object_ids.push_back(o.id);
     s.object_observed_shares.push_back(static_cast<float>(o.observed_fraction));
   }
+  for (const std::uint32_t id : r.retired_object_ids) s.retired_object_ids.push_back(id);
   return s;
 }
 

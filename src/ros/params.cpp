@@ -313,6 +313,16 @@ semexp::FrontierRetirementConfig loadFrontierRetirement(const ParamReader& p) {
   return c;
 }
 
+semexp::ObjectRetirementConfig loadObjectRetirement(const ParamReader& p) {
+  semexp::ObjectRetirementConfig c;
+  const std::string n = "object_retirement/";
+  p.get(n + "enabled", c.enabled);
+  p.get(n + "max_failed_views", c.max_failed_views);
+  p.get(n + "min_share_growth", c.min_share_growth);
+  c.validate(n);
+  return c;
+}
+
 SetpointStreamerConfig loadSetpointStreamer(const ParamReader& p) {
   SetpointStreamerConfig c;
   const std::string n = "setpoint_streamer/";
@@ -341,6 +351,7 @@ std::vector<std::pair<std::string, std::function<void(const ParamReader&)>>> all
       {"loadPlannerNode", [](const ParamReader& p) { loadPlannerNode(p); }},
       {"loadTermination", [](const ParamReader& p) { loadTermination(p); }},
       {"loadFrontierRetirement", [](const ParamReader& p) { loadFrontierRetirement(p); }},
+      {"loadObjectRetirement", [](const ParamReader& p) { loadObjectRetirement(p); }},
       {"loadBackgroundMapNode", [](const ParamReader& p) { loadBackgroundMapNode(p); }},
       {"loadDepthHistoryNode",
        [](const ParamReader& p) { loadDepthHistoryNode(p, semexp::DepthHistoryConfig()); }},

@@ -30,6 +30,7 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   termination_ = loadTermination(p);
   retirement_ = loadFrontierRetirement(p);
   semexp::FrontierRetirement(retirement_, camera_, bounds_, config_.clearance_radius_m(), 1.0);  // checks them together
+  object_retirement_ = loadObjectRetirement(p);
   node_config_ = loadPlannerNode(p);
   trajectory_ = loadTrajectory(p);
   poses_ = std::make_unique<PoseSource>(loadTf(p), false);  // the latest pose, never an interpolated one: no gap guard
@@ -226,7 +227,8 @@ bool PlannerNode::iterate(std::string& message, const ros::Time& stamp, const ro
   if (!err.empty()) return wait("waiting for the MAV pose: " + err);
   if (!planner_ || planner_resolution_m_ != replica_.resolution_m()) {
     planner_ = std::make_unique<semexp::ExplorationPlanner>(config_, exploration_, bounds_, camera_,
-                                                             replica_.resolution_m(), termination_, retirement_);
+                                                             replica_.resolution_m(), termination_, retirement_,
+                                                             object_retirement_);
     planner_resolution_m_ = replica_.resolution_m();
   }
   if (!have_frontiers_) return wait("waiting for the first frontier cloud");

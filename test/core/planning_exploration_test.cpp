@@ -177,8 +177,11 @@ TEST_F(ExplorationTest, ObjectCandidateTakesTheRingViewThatSeesMostOfTheObject) 
     }
     return out;
   };
+  ObjectRetirementConfig keep;  // the same share on every call would retire the object after 3
+  keep.enabled = false;
   for (int it = 0; it < 5; ++it) {
-    ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+    ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05, TerminationConfig(),
+                               FrontierRetirementConfig(), keep);
     for (int k = 0; k < it; ++k) planner.plan(in, providers);  // other ring phases
     const IterationResult r = planner.plan(in, providers);
     EXPECT_EQ(r.object_views, 8u);
@@ -188,6 +191,46 @@ TEST_F(ExplorationTest, ObjectCandidateTakesTheRingViewThatSeesMostOfTheObject) 
     EXPECT_GT(c.sample.position_W.y(), 2.3) << c.sample.position_W.transpose();
     EXPECT_NEAR(c.gain, 0.33 * 0.6, 1e-6);
     EXPECT_NEAR(c.yaw_rad, -M_PI / 2, 0.1);
+  }
+}
+
+// The object of the ring test, with the background done and no frontier:
+// three flights aimed at it leave its share at 0.2, so the fourth iteration
+// retires it (object_retirement.hpp, K = 3) and the exploration ends
+// "explored", with the object counted as retired.
+TEST_F(ExplorationTest, ObjectWhoseAimedFlightsDoNotRaiseItsShareIsRetired) {
+  config.object_view_samples = 8;
+  ExplorationInputs in = objectOnlyInputs(config, inputs());
+  in.background_observed_share = 0.95;
+  grid.fill_box(in.objects[0].bbox_min_W, in.objects[0].bbox_max_W, TestGrid::kOccupied);
+  providers.gains = [](const std::vector<Eigen::Vector3d>& ps) {
+    std::vector<GainSet> out(ps.size());
+    for (std::size_t i = 0; i < ps.size(); ++i)
+      out[i].object = ps[i].y() > 2.3 ? window_image(-M_PI / 2, 0.6f) : GainImage(36, 10, 0.0f);
+    return out;
+  };
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+  for (int flight = 1; flight <= 3; ++flight) {
+    const IterationResult r = planner.plan(in, providers);
+    ASSERT_GE(r.winner, 0) << r.message;
+    EXPECT_EQ(r.candidates[static_cast<std::size_t>(r.winner)].sample.source, CandidateSource::kObject);
+    EXPECT_TRUE(r.retired_object_ids.empty()) << "flight " << flight;
+    EXPECT_FALSE(r.finished);
+  }
+  const IterationResult r = planner.plan(in, providers);
+  EXPECT_EQ(r.retired_object_ids, std::vector<std::uint32_t>{in.objects[0].id});
+  EXPECT_TRUE(r.finished);
+  EXPECT_EQ(r.termination_reason, "explored");
+  EXPECT_EQ(r.termination.objects_retired, 1u);
+  EXPECT_NE(r.message.find("object 4 retired: 3 flights aimed at it left its share seen from <= d_obj at 0.200"),
+            std::string::npos)
+      << r.message;
+  // A flight that raised the share by 0.01 or more would have cleared the count.
+  ExplorationPlanner again(config, exploration, room_bounds(), camera, 0.05);
+  for (int flight = 1; flight <= 4; ++flight) {
+    const IterationResult g = again.plan(in, providers);
+    EXPECT_TRUE(g.retired_object_ids.empty()) << "flight " << flight;
+    in.objects[0].observed_fraction += 0.02;
   }
 }
 

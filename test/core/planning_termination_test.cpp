@@ -368,3 +368,22 @@ TEST(FrontierRetirement, ARecheckThatLosesTheFirstOldViewPointStillCountsTheNewO
   EXPECT_EQ(s.retired_by_evidence, 1u);
   EXPECT_EQ(s.retired_by_geometry, 0u);
 }
+
+TEST(Termination, RetiredObjectsBelowTheShareDoNotHoldExploredOpen) {
+  TerminationCheck t(TerminationConfig(), semantic());
+  TerminationInputs in;
+  in.active_frontiers = 0;
+  in.background_share = 0.95;
+  in.objects = {object(1, 0.95), object(2, 0.87), object(3, 0.6)};
+  in.retired_object_ids = {2};  // 3 is below the share and not retired
+  TerminationDecision d = t.check(in);
+  EXPECT_FALSE(d.objects_done);
+  EXPECT_FALSE(d.finished);
+  in.retired_object_ids = {2, 3};
+  d = t.check(in);
+  EXPECT_TRUE(d.objects_done);
+  EXPECT_EQ(d.objects_retired, 2u);
+  EXPECT_EQ(d.reason, "explored");
+  EXPECT_NE(d.message.find("1 seen from <= d_obj at >= 0.90, 2 retired below it"), std::string::npos) << d.message;
+  EXPECT_NE(d.message.find("lowest 0.600"), std::string::npos) << d.message;
+}

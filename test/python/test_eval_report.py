@@ -31,3 +31,21 @@ def test_report_and_summary_name_the_detector(tmp_path):
     assert json.loads((tmp_path / "summary.json").read_text())["detector"] == det
     run_mission.write_report(str(tmp_path), args, gt, RunLog(), {}, 10.0, None, "end of bag")
     assert "| detector | unknown |" in (tmp_path / "report.md").read_text().splitlines()
+
+
+def test_report_marks_the_objects_the_planner_retired(tmp_path):
+    from types import SimpleNamespace as NS
+    gt_dir = tmp_path / "gt"
+    gt_dir.mkdir()
+    gt = {"scene": "house", "objects": [], "gt_dir": str(gt_dir)}
+    args = argparse.Namespace(mode="semantic", seed=0, classes=["chair"], no_eval=True)
+    log = RunLog()
+    log._on_status(NS(object_ids=[3, 5], retired_object_ids=[5], state=2, iteration=7))
+    log._on_status(NS(object_ids=[], retired_object_ids=[], state=1, iteration=8))  # "planning": no lists
+    log.objects = NS(objects=[NS(id=i, class_name="chair", centroid=NS(x=0.0, y=0.0, z=0.0), voxel_count=10,
+                                 observed_fraction=f) for i, f in ((3, 0.95), (5, 0.87))])
+    run_mission.write_report(str(tmp_path), args, gt, log, {}, 10.0, 5.0, "explored")
+    report = (tmp_path / "report.md").read_text().splitlines()
+    assert "| 3 | chair | (0.00, 0.00, 0.00) | 10 | 95% | no |" in report
+    assert "| 5 | chair | (0.00, 0.00, 0.00) | 10 | 87% | yes |" in report
+    assert json.loads((tmp_path / "summary.json").read_text())["retired_objects"] == [5]

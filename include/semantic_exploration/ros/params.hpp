@@ -29,6 +29,7 @@
 #include "semantic_exploration/core/planner_config.hpp"
 #include "semantic_exploration/core/frontier_evidence.hpp"
 #include "semantic_exploration/core/planning/frontier_retirement.hpp"
+#include "semantic_exploration/core/planning/object_retirement.hpp"
 #include "semantic_exploration/core/planning/termination.hpp"
 #include "semantic_exploration/core/planning/trajectory.hpp"
 
@@ -166,6 +167,7 @@ TfSettings loadTf(const ParamReader& p);                              ///< `tf_t
 PlannerNodeConfig loadPlannerNode(const ParamReader& p);  ///< `planner/{service_timeout_s,retry_period_s,goal_timeout_factor}`
 semexp::TerminationConfig loadTermination(const ParamReader& p);               ///< `termination/*`
 semexp::FrontierRetirementConfig loadFrontierRetirement(const ParamReader& p);  ///< `frontier_retirement/*`
+semexp::ObjectRetirementConfig loadObjectRetirement(const ParamReader& p);  ///< `object_retirement/*`
 semexp::FrontierEvidenceConfig loadFrontierEvidence(const ParamReader& p);      ///< `frontier_evidence/*`
 
 /// `planner/{a_max_mps2,alpha_max_radps2,trajectory_sample_period_s}`: the trajectory's limits besides v_max, omega_max.

@@ -117,6 +117,7 @@ class PlannerNode {
   std::uint64_t stats_update_sequence_ = 0;  ///< MapStats::map_update_sequence of the newest stats
   semexp::TerminationConfig termination_;
   semexp::FrontierRetirementConfig retirement_;
+  semexp::ObjectRetirementConfig object_retirement_;
 
   uint8_t state_ = 0;
   bool finished_ = false;

@@ -76,7 +76,8 @@ void setGains(EvaluatedCandidate& c, const ViewGains& g) {
 ExplorationPlanner::ExplorationPlanner(const PlannerConfig& planner, const ExplorationConfig& exploration,
                                        const Bounds& bounds, const PinholeCamera& camera, double map_resolution_m,
                                        const TerminationConfig& termination,
-                                       const FrontierRetirementConfig& retirement)
+                                       const FrontierRetirementConfig& retirement,
+                                       const ObjectRetirementConfig& object_retirement)
     : planner_(planner),
       exploration_(exploration),
       bounds_(bounds),
@@ -85,7 +86,8 @@ ExplorationPlanner::ExplorationPlanner(const PlannerConfig& planner, const Explo
       sampler_(planner, exploration, bounds),
       window_columns_(semexp::windowColumns(camera.hfov_rad(), planner.raycast_width)),
       termination_(termination, planner),
-      retirement_(retirement, camera, bounds, planner.clearance_radius_m(), map_resolution_m) {
+      retirement_(retirement, camera, bounds, planner.clearance_radius_m(), map_resolution_m),
+      object_retirement_(object_retirement, planner.object_observed_fraction) {
   camera_.validate();
   if (!(std::isfinite(map_resolution_m_) && map_resolution_m_ > 0))
     throw std::invalid_argument("ExplorationPlanner: map_resolution_m must be > 0");
@@ -162,6 +164,20 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   r.frontier_clusters = split.clusters;
   r.retired_clusters_geometry = split.retired_by_geometry;
   r.retired_clusters_evidence = split.retired_by_evidence;
+  // Objects the last flights aimed at without raising their share (object_retirement.hpp).
+  const std::vector<std::uint32_t> retired_before = object_retirement_.retiredIds();
+  object_retirement_.update(in.objects);
+  r.retired_object_ids = object_retirement_.retiredIds();
+  for (const ObjectSummary& o : in.objects) {
+    const bool was = std::binary_search(retired_before.begin(), retired_before.end(), o.id);
+    const bool is = std::binary_search(r.retired_object_ids.begin(), r.retired_object_ids.end(), o.id);
+    if (is && !was)
+      r.message += fmt("object %.0f retired: %.0f flights aimed at it left its share seen from <= d_obj at %.3f; ",
+                       o.id, object_retirement_.config().max_failed_views, o.observed_fraction);
+    else if (was && !is)
+      r.message += fmt("object %.0f back: its share seen from <= d_obj moved to %.3f; ", o.id, o.observed_fraction);
+  }
+  const std::vector<ObjectSummary> active_objects = object_retirement_.active(in.objects);
 
   // Termination (termination.hpp).
   TerminationInputs ti;
@@ -169,19 +185,20 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   ti.active_frontiers = split.active_W.size();
   ti.background_share = in.background_observed_share;
   ti.objects = in.objects;
+  ti.retired_object_ids = r.retired_object_ids;
   ti.explored_volume_m3 = in.explored_volume_m3;
   r.termination = termination_.check(ti);
   if (r.termination.finished) {
     r.finished = true;
     r.termination_reason = r.termination.reason;
-    r.message = r.termination.message;
+    r.message += r.termination.message;
     return finish();
   }
 
   // 1. Sampling.
   t0 = Clock::now();
   const std::uint64_t iteration = sampling_iterations_++;
-  std::vector<CandidateSample> samples = sampler_.sample(split.active_W, in.objects, prov.is_free);
+  std::vector<CandidateSample> samples = sampler_.sample(split.active_W, active_objects, prov.is_free);
   // Frontiers and objects done but background seen from too far: the paper
   // samples nothing else, so view points in known free space, chosen by
   // their background gain like any other candidate, close the gap.
@@ -371,6 +388,9 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   t0 = Clock::now();
   retirement_.recordViews(poses, not_occupied, targets);
   r.retirement_s += secondsSince(t0);
+  if (win.sample.source == CandidateSource::kObject)
+    for (const ObjectSummary& o : in.objects)
+      if (o.id == win.sample.object_id) object_retirement_.recordView(o.id, o.observed_fraction);
 
   failed_iterations_ = 0;
   const std::string source = win.sample.source == CandidateSource::kObject

@@ -62,7 +62,10 @@ TerminationDecision TerminationCheck::check(const TerminationInputs& in) {
   double min_share = 1.0;
   for (const auto& o : in.objects) {
     min_share = std::min(min_share, o.observed_fraction);
-    if (o.observed_fraction < planner_.object_observed_fraction) ++objects_below;
+    if (o.observed_fraction >= planner_.object_observed_fraction) continue;
+    const bool retired = std::find(in.retired_object_ids.begin(), in.retired_object_ids.end(), o.id) !=
+                         in.retired_object_ids.end();
+    ++(retired ? d.objects_retired : objects_below);
   }
   d.objects_done = !pursuesObjects() || objects_below == 0;
   const std::pair<const char*, bool> conds[3] = {
@@ -85,10 +88,15 @@ TerminationDecision TerminationCheck::check(const TerminationInputs& in) {
     if (pursuesBackground())
       d.message += fmt(", background seen from <= d_bg: %.3f (>= %.3f)", in.background_share,
                        config_.background_observed_share);
-    if (pursuesObjects())
+    if (pursuesObjects() && d.objects_retired == 0)
       d.message += fmt(", %.0f objects, each seen from <= d_obj at >= %.2f (lowest %.3f)",
                        static_cast<double>(in.objects.size()), planner_.object_observed_fraction,
                        in.objects.empty() ? 1.0 : min_share);
+    else if (pursuesObjects())
+      d.message += fmt(", %.0f objects: %.0f seen from <= d_obj at >= %.2f", static_cast<double>(in.objects.size()),
+                       static_cast<double>(in.objects.size() - d.objects_retired), planner_.object_observed_fraction) +
+                   fmt(", %.0f retired below it (flights aimed at them did not raise it; lowest %.3f)",
+                       static_cast<double>(d.objects_retired), min_share);
     d.message += "; the last condition to hold: " + d.last_condition;
     return d;
   }

@@ -51,6 +51,7 @@ class RunLog:
 
     def __init__(self):
         self.status = None
+        self.retired_objects = []  # objects the planner retired by evidence (ExplorationStatus.retired_object_ids)
         self.stats = None
         self.objects = None
         self.collisions = 0
@@ -95,6 +96,9 @@ class RunLog:
 
     def _on_status(self, msg):
         self.status = msg
+        # Statuses between iterations ("planning") carry no object lists; keep the last iteration's.
+        if msg.object_ids:
+            self.retired_objects = sorted(getattr(msg, "retired_object_ids", None) or [])
 
     def _on_stats(self, msg):
         self.stats = msg

@@ -23,6 +23,7 @@
 #include "semantic_exploration/core/planning/candidate_evaluation.hpp"
 #include "semantic_exploration/core/planning/interfaces.hpp"
 #include "semantic_exploration/core/planning/frontier_retirement.hpp"
+#include "semantic_exploration/core/planning/object_retirement.hpp"
 #include "semantic_exploration/core/planning/path_planner.hpp"
 #include "semantic_exploration/core/planning/termination.hpp"
 #include "semantic_exploration/core/planning/sampler.hpp"
@@ -90,6 +91,8 @@ struct IterationResult {
   std::size_t active_frontiers = 0;              ///< frontier voxels still to be observed
   std::vector<Eigen::Vector3d> retired_frontiers_W;  ///< frontier voxels no reachable view can observe
   std::size_t retired_clusters_geometry = 0, retired_clusters_evidence = 0, frontier_clusters = 0;
+  /// Objects retired by evidence (object_retirement.hpp): not sampled, not holding "explored".
+  std::vector<std::uint32_t> retired_object_ids;
   double sampling_s = 0.0, path_planning_s = 0.0, gains_s = 0.0, yaw_s = 0.0, total_s = 0.0;  ///< wall times
   /// Wall time of frontier retirement: judging this iteration's frontiers and recording the winner's views, s.
   double retirement_s = 0.0;
@@ -101,7 +104,8 @@ class ExplorationPlanner {
   ExplorationPlanner(const PlannerConfig& planner, const ExplorationConfig& exploration, const Bounds& bounds,
                      const PinholeCamera& camera, double map_resolution_m,
                      const TerminationConfig& termination = TerminationConfig(),
-                     const FrontierRetirementConfig& retirement = FrontierRetirementConfig());
+                     const FrontierRetirementConfig& retirement = FrontierRetirementConfig(),
+                     const ObjectRetirementConfig& object_retirement = ObjectRetirementConfig());
 
   /// Runs one iteration. Never throws for provider failures (they are
   /// reported in the result and do not count as failed iterations).
@@ -132,6 +136,7 @@ class ExplorationPlanner {
   int failed_iterations_ = 0;
   TerminationCheck termination_;
   FrontierRetirement retirement_;
+  ObjectRetirement object_retirement_;
   std::uint64_t sampling_iterations_ = 0;   ///< iterations that sampled candidates; seeds their paths
 };
 

@@ -11,7 +11,8 @@
 ///  - background: the share of the observed background surface (occupied
 ///    voxels) seen from <= d_bg is at least background_observed_share;
 ///  - objects: every object's share seen from <= d_obj is at least
-///    PlannerConfig::object_observed_fraction.
+///    PlannerConfig::object_observed_fraction, or the object is retired by
+///    evidence (object_retirement.hpp: flights aimed at it did not raise it).
 /// A condition is only required where the planner pursues it: background
 /// with a_bg > 0, objects with a_obj > 0. The paper's classic baseline
 /// (a_bg = a_obj = 0) thus stops on frontiers alone, by its own rule.
@@ -65,6 +66,8 @@ struct TerminationInputs {
   std::size_t active_frontiers = 0;    ///< frontier voxels not retired
   double background_share = -1.0;      ///< background surface share seen from <= d_bg, [0, 1]; < 0 unknown
   std::vector<ObjectSummary> objects;  ///< observed_fraction = share seen from <= d_obj
+  /// Objects retired by evidence (ObjectRetirement): below the share, yet not holding "explored".
+  std::vector<std::uint32_t> retired_object_ids;
   double explored_volume_m3 = -1.0;    ///< < 0 unknown
 };
 
@@ -76,6 +79,7 @@ struct TerminationDecision {
   bool frontiers_done = false;
   bool background_done = false;  ///< also true where the background is not pursued
   bool objects_done = false;     ///< also true where objects are not pursued
+  std::size_t objects_retired = 0;  ///< objects below the share that count as done because they are retired
   /// The condition of "explored" that became true last ("frontiers",
   /// "background" or "objects"; "" until all hold).
   std::string last_condition;

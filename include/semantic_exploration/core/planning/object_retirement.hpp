@@ -1,0 +1,79 @@
+#pragma once
+/// @file object_retirement.hpp
+/// Objects whose remaining surface no flight aimed at them brings within
+/// d_obj stop holding the exploration open (paper Section IV-D asks for every
+/// object observed from <= d_obj; a chair's seat underside, or its side
+/// against a wall, can stay out of a level camera's reach).
+///
+/// The evidence rule, like FrontierRetirement's for frontier clusters: an
+/// object below PlannerConfig::object_observed_fraction is retired after
+/// max_failed_views flights that were meant to observe it (the winner was an
+/// object candidate of it) and after which its share seen from <= d_obj did
+/// not grow by at least min_share_growth. A flight that raises the share
+/// clears the count. A retired object comes back once its share moves by
+/// min_share_growth from its value at retirement, either way: surface newly
+/// seen from close by (it is observable after all) or new surface seen from
+/// afar (there is more of it to observe). Retired objects are not sampled and
+/// do not hold "explored" (termination.hpp).
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "semantic_exploration/core/config_error.hpp"
+#include "semantic_exploration/core/planning/interfaces.hpp"
+
+namespace semexp {
+
+struct ObjectRetirementConfig {
+  bool enabled = true;            ///< false: no object is ever retired
+  int max_failed_views = 3;       ///< flights aimed at an object that did not raise its share before it is retired (K)
+  double min_share_growth = 0.01; ///< a flight raised an object's share when it grew by this much, (0, 1]
+
+  void validate(const std::string& ns = "object_retirement/") const {
+    require(max_failed_views > 0, ns + "max_failed_views", "must be > 0");
+    require(std::isfinite(min_share_growth) && min_share_growth > 0 && min_share_growth <= 1,
+            ns + "min_share_growth", "must be in (0, 1]");
+  }
+};
+
+class ObjectRetirement {
+ public:
+  /// done_share: PlannerConfig::object_observed_fraction (objects at or
+  /// above it need no view and are never retired). Throws ConfigError on an
+  /// invalid config or a done_share outside [0, 1].
+  ObjectRetirement(const ObjectRetirementConfig& config, double done_share);
+
+  /// Judges the flight recorded since the last call (recordView) against the
+  /// objects' shares now, and brings back retired objects whose share moved.
+  /// Objects no longer in the map are forgotten.
+  void update(const std::vector<ObjectSummary>& objects);
+  /// The published path was chosen to observe object `id`, whose share is
+  /// share_now; judged at the next update(). Only the last call before an
+  /// update() counts (one flight per iteration).
+  void recordView(std::uint32_t id, double share_now);
+
+  bool retired(std::uint32_t id) const;
+  /// Ids of the retired objects, ascending.
+  std::vector<std::uint32_t> retiredIds() const;
+  /// `objects` without the retired ones.
+  std::vector<ObjectSummary> active(const std::vector<ObjectSummary>& objects) const;
+
+  const ObjectRetirementConfig& config() const { return config_; }
+
+ private:
+  struct State {
+    int failed_views = 0;
+    bool retired = false;
+    double share_at_retirement = 0.0;
+  };
+  ObjectRetirementConfig config_;
+  double done_share_;
+  std::map<std::uint32_t, State> state_;
+  bool pending_ = false;  ///< a flight aimed at pending_id_ awaits judgement
+  std::uint32_t pending_id_ = 0;
+  double pending_share_ = 0.0;
+};
+
+}  // namespace semexp
