@@ -21,7 +21,8 @@ std_msgs::ColorRGBA colour(float r, float g, float b, float a) {
 }  // namespace
 
 visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& r, const std_msgs::Header& header,
-                                                 double voxel_size_m) {
+                                                 double voxel_size_m,
+                                                 const std::vector<semexp::ObjectSummary>& objects) {
   double max_u = 0.0;
   for (const auto& c : r.candidates) max_u = std::max(max_u, c.utility);
   visualization_msgs::MarkerArray markers;
@@ -88,6 +89,28 @@ visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& 
     for (const auto& p : r.retired_frontiers_W) cubes.points.push_back(toPoint(p));
     markers.markers.push_back(cubes);
   }
+  visualization_msgs::Marker boxes;
+  boxes.header = header;
+  boxes.ns = "retired_objects";
+  boxes.id = id++;
+  boxes.type = visualization_msgs::Marker::LINE_LIST;
+  boxes.pose.orientation.w = 1.0;
+  boxes.scale.x = 0.02;
+  boxes.color = colour(0.6f, 0.2f, 0.8f, 1.f);
+  for (const semexp::ObjectSummary& o : objects) {
+    if (!std::binary_search(r.retired_object_ids.begin(), r.retired_object_ids.end(), o.id)) continue;
+    // The 12 edges of the box: between corners that differ in one coordinate.
+    for (int a = 0; a < 8; ++a)
+      for (int axis = 0; axis < 3; ++axis) {
+        if (a & (1 << axis)) continue;
+        const int b = a | (1 << axis);
+        for (const int c : {a, b})
+          boxes.points.push_back(toPoint(Eigen::Vector3d((c & 1) ? o.bbox_max_W.x() : o.bbox_min_W.x(),
+                                                         (c & 2) ? o.bbox_max_W.y() : o.bbox_min_W.y(),
+                                                         (c & 4) ? o.bbox_max_W.z() : o.bbox_min_W.z())));
+      }
+  }
+  if (!boxes.points.empty()) markers.markers.push_back(boxes);
   return markers;
 }
 

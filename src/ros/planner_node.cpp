@@ -282,6 +282,7 @@ bool PlannerNode::iterate(std::string& message, const ros::Time& stamp, const ro
       r.winner = -1;
     }
   }
+  if (!r.object_retirement_events.empty()) ROS_INFO("planner: iteration %u: %s", iteration_, r.object_retirement_events.c_str());
   const bool published = r.winner >= 0;
   if (published) publishWinner(r, now);
   publishResult(r, now, in.yaw_rad);
@@ -324,7 +325,7 @@ void PlannerNode::publishWinner(const semexp::IterationResult& r, const ros::Tim
 void PlannerNode::publishResult(const semexp::IterationResult& r, const ros::Time& stamp, double current_yaw) {
   const semantic_exploration::CandidateViewArray arr = toCandidateViewArray(r, frames_.world, stamp, current_yaw);
   candidates_pub_.publish(arr);
-  markers_pub_.publish(candidateMarkers(r, arr.header, replica_.resolution_m()));
+  markers_pub_.publish(candidateMarkers(r, arr.header, replica_.resolution_m(), objects_));
   if (r.winner < 0) return;
   const int w = config_.raycast_width, h = config_.raycast_height;
   const std::vector<float>* images[4] = {&r.winner_gains.entropy.values, &r.winner_gains.background.values,

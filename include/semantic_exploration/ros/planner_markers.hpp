@@ -18,9 +18,12 @@ namespace semexp_ros {
 /// ("candidate_utility"); and the winner's path as a blue line strip
 /// ("winner_path"), and the retired frontier voxels as purple cubes of
 /// voxel_size_m ("retired_frontiers"; active ones are in the background
-/// map's frontier cloud). All in header.frame_id.
+/// map's frontier cloud), and the boxes of the objects retired by evidence
+/// as purple wireframes ("retired_objects"; `objects` gives their boxes).
+/// All in header.frame_id.
 visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& r, const std_msgs::Header& header,
-                                                 double voxel_size_m);
+                                                 double voxel_size_m,
+                                                 const std::vector<semexp::ObjectSummary>& objects = {});
 
 /// One line on the winner of an iteration for the log: its source, where,
 /// its gains, path and utility, and the frontiers and background share

@@ -172,11 +172,12 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
     const bool was = std::binary_search(retired_before.begin(), retired_before.end(), o.id);
     const bool is = std::binary_search(r.retired_object_ids.begin(), r.retired_object_ids.end(), o.id);
     if (is && !was)
-      r.message += fmt("object %.0f retired: %.0f flights aimed at it left its share seen from <= d_obj at %.3f; ",
+      r.object_retirement_events += fmt("object %.0f retired: %.0f flights aimed at it left its share seen from <= d_obj at %.3f; ",
                        o.id, object_retirement_.config().max_failed_views, o.observed_fraction);
     else if (was && !is)
-      r.message += fmt("object %.0f back: its share seen from <= d_obj moved to %.3f; ", o.id, o.observed_fraction);
+      r.object_retirement_events += fmt("object %.0f back: its share seen from <= d_obj moved to %.3f; ", o.id, o.observed_fraction);
   }
+  r.message = r.object_retirement_events;
   const std::vector<ObjectSummary> active_objects = object_retirement_.active(in.objects);
 
   // Termination (termination.hpp).

@@ -93,6 +93,7 @@ struct IterationResult {
   std::size_t retired_clusters_geometry = 0, retired_clusters_evidence = 0, frontier_clusters = 0;
   /// Objects retired by evidence (object_retirement.hpp): not sampled, not holding "explored".
   std::vector<std::uint32_t> retired_object_ids;
+  std::string object_retirement_events;  ///< objects retired or back this iteration, for the log ("" if none)
   double sampling_s = 0.0, path_planning_s = 0.0, gains_s = 0.0, yaw_s = 0.0, total_s = 0.0;  ///< wall times
   /// Wall time of frontier retirement: judging this iteration's frontiers and recording the winner's views, s.
   double retirement_s = 0.0;
