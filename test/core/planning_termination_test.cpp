@@ -232,6 +232,32 @@ TEST(FrontierRetirement, AViewThatShrinksTheClusterIsNoFailure) {
   EXPECT_EQ(fr.update(voxels, free_space).active_W.size(), 15u);  // failed view 1 of 2 again
 }
 
+// A cluster whose count noise moves between 25 and 20 voxels under aimed views
+// (K = 3, shrink_fraction 0.2): the first drop, 25 -> 20, is 20% and counts as
+// progress; from then on the run's first count is 20, and 25, 20, 25 are not
+// 20% below it (16 or fewer), so the third view after the drop retires it.
+// Judged against the view before, each 25 -> 20 dip would restart the run and
+// it would never be retired.
+TEST(FrontierRetirement, ACountThatNoiseMovesUpAndDownIsNotProgress) {
+  FrontierRetirementConfig cfg;
+  cfg.max_failed_views = 3;
+  FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
+  const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.75);
+  const auto full = patch(centre);
+  const std::vector<Eigen::Vector3d> dipped(full.begin(), full.begin() + 20);
+  const CollisionQuery free_space = cylinder(2.0);
+  const std::vector<const std::vector<Eigen::Vector3d>*> counts = {&full, &dipped, &full, &dipped};
+  std::size_t active = 0;
+  for (std::size_t k = 0; k < counts.size(); ++k) {
+    active = fr.update(*counts[k], free_space).active_W.size();
+    EXPECT_EQ(active, counts[k]->size()) << "update " << k;  // judged so far: progress (25 -> 20), failed 1, failed 2
+    fr.recordViews({}, free_space, {centre});
+  }
+  const FrontierRetirement::Split s = fr.update(full, free_space);  // failed 3 (25 vs the run's first count, 20)
+  EXPECT_EQ(s.active_W.size(), 0u);
+  EXPECT_EQ(s.retired_by_evidence, 1u);
+}
+
 TEST(FrontierRetirement, APoseCountsAsAViewOnlyInsideTheFieldOfViewAndRange) {
   FrontierRetirementConfig cfg;
   FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);

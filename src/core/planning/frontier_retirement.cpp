@@ -186,8 +186,10 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
   for (auto& kv : clusters_) {
     Cluster& c = kv.second;
     if (c.voxels_at_view < 0) continue;
-    const bool shrank = c.voxels <= c.voxels_at_view * (1.0 - config_.shrink_fraction);
+    if (c.voxels_at_first_view < 0) c.voxels_at_first_view = c.voxels_at_view;
+    const bool shrank = c.voxels <= c.voxels_at_first_view * (1.0 - config_.shrink_fraction);
     c.failed_views = shrank ? 0 : c.failed_views + 1;
+    if (shrank) c.voxels_at_first_view = -1;  // progress: the next view starts a new run from its own count
     c.voxels_at_view = -1;
     if (!c.by_evidence && c.failed_views >= config_.max_failed_views) {
       c.by_evidence = true;
@@ -223,6 +225,7 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
     if (now.more) {
       c.by_evidence = false;  // new free space around it: worth another look
       c.failed_views = 0;
+      c.voxels_at_first_view = -1;
       c.possible_at_retirement.clear();
     }
   }

@@ -20,7 +20,10 @@
 ///    it (the winner was a frontier candidate in it) or that had it inside the
 ///    field of view within view_range_m with nothing occupied between the
 ///    camera and the cluster's cube (poses every 0.5 m along each winning
-///    path) and after which it did not shrink by at least shrink_fraction.
+///    path) and after which it was not at least shrink_fraction smaller than
+///    at the first of those views (not than at the view before: the counts of
+///    small clusters go up and down with depth noise, and each dip would
+///    restart the run).
 /// A cluster's "view" is one iteration whose path it was seen from.
 /// Every cluster is judged by geometry again every recheck_iterations
 /// iterations (surface found since can hide it): one retired by geometry
@@ -126,6 +129,10 @@ class FrontierRetirement {
     bool by_geometry = false;
     bool by_evidence = false;
     int voxels_at_view = -1;      ///< voxel count when a view of it was recorded (-1 none)
+    /// Voxel count at the first view of the current run of failed views (-1
+    /// none): a view shrank the cluster only if it fell shrink_fraction below
+    /// this, so a count that noise moves up and down does not restart the run.
+    int voxels_at_first_view = -1;
     Eigen::Vector3d centre_W = Eigen::Vector3d::Zero();  ///< mean of its frontier voxels, m
   };
   /// Whether more view points are possible now than before, and any at all.
