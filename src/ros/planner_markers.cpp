@@ -18,6 +18,20 @@ std_msgs::ColorRGBA colour(float r, float g, float b, float a) {
   return c;
 }
 
+/// A marker of `type` at the identity pose, every scale component `scale`.
+visualization_msgs::Marker marker(const std_msgs::Header& header, const char* ns, int id, int type, double scale,
+                                  const std_msgs::ColorRGBA& c) {
+  visualization_msgs::Marker m;
+  m.header = header;
+  m.ns = ns;
+  m.id = id;
+  m.type = type;
+  m.pose.orientation.w = 1.0;
+  m.scale.x = m.scale.y = m.scale.z = scale;
+  m.color = c;
+  return m;
+}
+
 }  // namespace
 
 visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& r, const std_msgs::Header& header,
@@ -66,37 +80,19 @@ visualization_msgs::MarkerArray candidateMarkers(const semexp::IterationResult& 
     markers.markers.push_back(t);
   }
   if (r.winner >= 0) {
-    visualization_msgs::Marker line;
-    line.header = header;
-    line.ns = "winner_path";
-    line.id = id++;
-    line.type = visualization_msgs::Marker::LINE_STRIP;
-    line.pose.orientation.w = 1.0;
-    line.scale.x = 0.04;
-    line.color = colour(0.2f, 0.4f, 1.f, 1.f);
+    visualization_msgs::Marker line = marker(header, "winner_path", id++, visualization_msgs::Marker::LINE_STRIP,
+                                             0.04, colour(0.2f, 0.4f, 1.f, 1.f));
     for (const auto& p : r.path_W) line.points.push_back(toPoint(p));
     markers.markers.push_back(line);
   }
   if (!r.retired_frontiers_W.empty()) {
-    visualization_msgs::Marker cubes;
-    cubes.header = header;
-    cubes.ns = "retired_frontiers";
-    cubes.id = id++;
-    cubes.type = visualization_msgs::Marker::CUBE_LIST;
-    cubes.pose.orientation.w = 1.0;
-    cubes.scale.x = cubes.scale.y = cubes.scale.z = voxel_size_m;
-    cubes.color = colour(0.6f, 0.2f, 0.8f, 0.6f);
+    visualization_msgs::Marker cubes = marker(header, "retired_frontiers", id++, visualization_msgs::Marker::CUBE_LIST,
+                                              voxel_size_m, colour(0.6f, 0.2f, 0.8f, 0.6f));
     for (const auto& p : r.retired_frontiers_W) cubes.points.push_back(toPoint(p));
     markers.markers.push_back(cubes);
   }
-  visualization_msgs::Marker boxes;
-  boxes.header = header;
-  boxes.ns = "retired_objects";
-  boxes.id = id++;
-  boxes.type = visualization_msgs::Marker::LINE_LIST;
-  boxes.pose.orientation.w = 1.0;
-  boxes.scale.x = 0.02;
-  boxes.color = colour(0.6f, 0.2f, 0.8f, 1.f);
+  visualization_msgs::Marker boxes = marker(header, "retired_objects", id++, visualization_msgs::Marker::LINE_LIST,
+                                            0.02, colour(0.6f, 0.2f, 0.8f, 1.f));
   for (const semexp::ObjectSummary& o : objects) {
     if (!std::binary_search(r.retired_object_ids.begin(), r.retired_object_ids.end(), o.id)) continue;
     // The 12 edges of the box: between corners that differ in one coordinate.
