@@ -231,7 +231,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
         "| collisions | %d |" % mon.collisions,
         "", "## Objects found", "",
         "Retired: below planner/object_observed_fraction after object_retirement/max_failed_views flights aimed "
-        "at it that did not raise its share seen from <= d_obj; it no longer holds `explored` open.", "",
+        "at it that did not move its share seen from <= d_obj; it no longer holds `explored` open.", "",
         "| id | class | centroid (m) | voxels | observed from <= d_obj | retired |", "|---|---|---|---|---|---|",
     ]
     for o in objects:

@@ -318,7 +318,7 @@ semexp::ObjectRetirementConfig loadObjectRetirement(const ParamReader& p) {
   const std::string n = "object_retirement/";
   p.get(n + "enabled", c.enabled);
   p.get(n + "max_failed_views", c.max_failed_views);
-  p.get(n + "min_share_growth", c.min_share_growth);
+  p.get(n + "min_share_change", c.min_share_change);
   c.validate(n);
   return c;
 }

@@ -162,6 +162,7 @@ void PlannerNode::pathRejectedCallback(const std_msgs::StringConstPtr& msg) {
            node_config_.retry_period_s);
   state_ = ExplorationStatus::STATE_WAITING;
   last_attempt_ = ros::WallTime::now();
+  if (planner_) planner_->discardViews();  // the path was not flown: no evidence for retirement
   publishStatus(state_, "path rejected by the executor: " + msg->data);
 }
 
@@ -280,6 +281,7 @@ bool PlannerNode::iterate(std::string& message, const ros::Time& stamp, const ro
       r.message = "the chosen path failed the final occupancy check (" + check.why + ") and was not published; " +
                   r.message;
       r.winner = -1;
+      planner_->discardViews();
     }
   }
   if (!r.object_retirement_events.empty()) ROS_INFO("planner: iteration %u: %s", iteration_, r.object_retirement_events.c_str());

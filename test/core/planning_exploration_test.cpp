@@ -225,10 +225,12 @@ TEST_F(ExplorationTest, ObjectWhoseAimedFlightsDoNotRaiseItsShareIsRetired) {
   EXPECT_NE(r.message.find("object 4 retired: 3 flights aimed at it left its share seen from <= d_obj at 0.200"),
             std::string::npos)
       << r.message;
-  // A flight that raised the share by 0.01 or more would have cleared the count.
+  // Flights that raise the share by 0.01 or more clear the count each time.
   ExplorationPlanner again(config, exploration, room_bounds(), camera, 0.05);
   for (int flight = 1; flight <= 4; ++flight) {
     const IterationResult g = again.plan(in, providers);
+    ASSERT_GE(g.winner, 0) << g.message;
+    EXPECT_EQ(g.candidates[static_cast<std::size_t>(g.winner)].sample.source, CandidateSource::kObject);
     EXPECT_TRUE(g.retired_object_ids.empty()) << "flight " << flight;
     in.objects[0].observed_fraction += 0.02;
   }

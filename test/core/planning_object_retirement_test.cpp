@@ -1,5 +1,5 @@
 // Object retirement by evidence (object_retirement.hpp) on hand-built share
-// sequences: K = 3 flights aimed at an object, min_share_growth 0.01, done at 0.9.
+// sequences: K = 3 flights aimed at an object, min_share_change 0.01, done at 0.9.
 #include <gtest/gtest.h>
 
 #include "semantic_exploration/core/planning/object_retirement.hpp"
@@ -51,6 +51,38 @@ TEST(ObjectRetirement, AFlightThatRaisesTheShareClearsTheCount) {
   EXPECT_FALSE(r.retired(1));
   r.update({object(1, 0.81)});  // failed 3
   EXPECT_TRUE(r.retired(1));
+}
+
+TEST(ObjectRetirement, AFlightThatLowersTheShareFoundNewSurfaceAndClearsTheCount) {
+  ObjectRetirement r(ObjectRetirementConfig(), 0.9);
+  iterate(r, {object(1, 0.80)}, 1);
+  iterate(r, {object(1, 0.80)}, 1);  // failed 1
+  iterate(r, {object(1, 0.80)}, 1);  // failed 2
+  iterate(r, {object(1, 0.79)}, 1);  // -0.01: new surface seen from afar, cleared
+  iterate(r, {object(1, 0.79)}, 1);  // failed 1
+  r.update({object(1, 0.795)});      // failed 2 (moved by 0.005 only)
+  EXPECT_FALSE(r.retired(1));
+}
+
+TEST(ObjectRetirement, AViewThatWasNotFlownIsNotJudged) {
+  ObjectRetirement r(ObjectRetirementConfig(), 0.9);
+  iterate(r, {object(1, 0.5)}, 1);
+  iterate(r, {object(1, 0.5)}, 1);  // failed 1
+  iterate(r, {object(1, 0.5)}, 1);  // failed 2
+  r.discardView();                  // the third path was dropped before it was flown
+  r.update({object(1, 0.5)});
+  EXPECT_FALSE(r.retired(1));
+  r.recordView(1, 0.5);
+  r.update({object(1, 0.5)});  // failed 3
+  EXPECT_TRUE(r.retired(1));
+}
+
+TEST(ObjectRetirement, ARetiredObjectThatReachesTheDoneShareIsNoLongerRetired) {
+  ObjectRetirement r(ObjectRetirementConfig(), 0.9);
+  for (int i = 0; i < 4; ++i) iterate(r, {object(1, 0.895)}, i < 3 ? 1 : 0);
+  ASSERT_TRUE(r.retired(1));
+  r.update({object(1, 0.9)});  // moved by 0.005 only, but done
+  EXPECT_FALSE(r.retired(1));
 }
 
 TEST(ObjectRetirement, OnlyFlightsAimedAtTheObjectCount) {
@@ -108,7 +140,17 @@ TEST(ObjectRetirement, InvalidConfigNamesTheParameter) {
     EXPECT_NE(std::string(e.what()).find("object_retirement/max_failed_views"), std::string::npos) << e.what();
   }
   c = ObjectRetirementConfig();
-  c.min_share_growth = 0.0;
-  EXPECT_THROW(ObjectRetirement(c, 0.9), ConfigError);
-  EXPECT_THROW(ObjectRetirement(ObjectRetirementConfig(), 1.5), ConfigError);
+  c.min_share_change = 0.0;
+  try {
+    ObjectRetirement r(c, 0.9);
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("object_retirement/min_share_change"), std::string::npos) << e.what();
+  }
+  try {
+    ObjectRetirement r(ObjectRetirementConfig(), 1.5);
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("planner/object_observed_fraction"), std::string::npos) << e.what();
+  }
 }

@@ -258,6 +258,21 @@ TEST(FrontierRetirement, ACountThatNoiseMovesUpAndDownIsNotProgress) {
   EXPECT_EQ(s.retired_by_evidence, 1u);
 }
 
+TEST(FrontierRetirement, ViewsThatWereNotFlownAreNotJudged) {
+  FrontierRetirementConfig cfg;
+  cfg.max_failed_views = 1;
+  FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
+  const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.75);
+  const auto voxels = patch(centre);
+  const CollisionQuery free_space = cylinder(2.0);
+  fr.update(voxels, free_space);
+  fr.recordViews({}, free_space, {centre});
+  fr.discardViews();  // the path was rejected
+  EXPECT_EQ(fr.update(voxels, free_space).retired_by_evidence, 0u);
+  fr.recordViews({}, free_space, {centre});
+  EXPECT_EQ(fr.update(voxels, free_space).retired_by_evidence, 1u);  // K = 1 flown view that did not shrink it
+}
+
 TEST(FrontierRetirement, APoseCountsAsAViewOnlyInsideTheFieldOfViewAndRange) {
   FrontierRetirementConfig cfg;
   FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);

@@ -42,7 +42,7 @@ bool evaluateViews(const std::vector<Eigen::Vector3d>& ps, const ExplorationProv
       throw std::runtime_error("history provider returned a wrong number of masks");
   } catch (const std::exception& e) {
     r.provider_error = true;
-    r.message = std::string("gain evaluation failed: ") + e.what();
+    r.message += std::string("gain evaluation failed: ") + e.what();
     return false;
   }
   const GainWeights weights{cfg.a_ent, cfg.a_bg, cfg.a_obj};
@@ -56,7 +56,7 @@ bool evaluateViews(const std::vector<Eigen::Vector3d>& ps, const ExplorationProv
     }
   } catch (const std::exception& e) {
     r.provider_error = true;
-    r.message = std::string("bad gain images: ") + e.what();
+    r.message += std::string("bad gain images: ") + e.what();
     return false;
   }
   return true;
@@ -133,7 +133,7 @@ bool ExplorationPlanner::chooseObjectViews(std::vector<CandidateSample>& samples
 
 bool ExplorationPlanner::fail(IterationResult& r, const std::string& why) {
   ++failed_iterations_;
-  r.message = why + " (" + std::to_string(failed_iterations_) + " of " +
+  r.message += why + " (" + std::to_string(failed_iterations_) + " of " +
               std::to_string(planner_.max_failed_iterations) + " iterations without a reachable candidate)";
   if (failed_iterations_ >= planner_.max_failed_iterations) {
     r.finished = true;
@@ -367,7 +367,7 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
       }
     } catch (const std::exception& e) {
       // The path itself is fine; intermediate vertices keep the final yaw.
-      r.message = std::string("intermediate yaw evaluation failed: ") + e.what() + "; ";
+      r.message += std::string("intermediate yaw evaluation failed: ") + e.what() + "; ";
     }
   }
   r.yaw_s = secondsSince(t0);

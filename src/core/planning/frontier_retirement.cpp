@@ -240,6 +240,10 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
   return out;
 }
 
+void FrontierRetirement::discardViews() {
+  for (auto& kv : clusters_) kv.second.voxels_at_view = -1;
+}
+
 void FrontierRetirement::recordViews(const std::vector<ViewPose>& poses, const CollisionQuery& not_occupied,
                                      const std::vector<Eigen::Vector3d>& targets_W) {
   if (!config_.enabled) return;

@@ -19,9 +19,9 @@ void ObjectRetirement::update(const std::vector<ObjectSummary>& objects) {
     auto it = state_.find(o.id);
     if (it == state_.end()) continue;
     State& s = it->second;
-    if (s.retired && std::abs(o.observed_fraction - s.share_at_retirement) >= config_.min_share_growth) {
+    if (s.retired && (std::abs(o.observed_fraction - s.share_at_retirement) >= config_.min_share_change ||
+                      o.observed_fraction >= done_share_))
       s = State();
-    }
   }
   for (auto it = state_.begin(); it != state_.end();) it = present.count(it->first) ? std::next(it) : state_.erase(it);
 
@@ -32,7 +32,8 @@ void ObjectRetirement::update(const std::vector<ObjectSummary>& objects) {
     if (o.id != pending_id_) continue;
     State& s = state_[o.id];
     if (s.retired) return;
-    if (o.observed_fraction - pending_share_ >= config_.min_share_growth || o.observed_fraction >= done_share_) {
+    if (std::abs(o.observed_fraction - pending_share_) >= config_.min_share_change ||
+        o.observed_fraction >= done_share_) {
       s.failed_views = 0;
       return;
     }

@@ -95,7 +95,7 @@ TerminationDecision TerminationCheck::check(const TerminationInputs& in) {
     else if (pursuesObjects())
       d.message += fmt(", %.0f objects: %.0f seen from <= d_obj at >= %.2f", static_cast<double>(in.objects.size()),
                        static_cast<double>(in.objects.size() - d.objects_retired), planner_.object_observed_fraction) +
-                   fmt(", %.0f retired below it (flights aimed at them did not raise it; lowest %.3f)",
+                   fmt(", %.0f retired below it (flights aimed at them did not move it; lowest %.3f)",
                        static_cast<double>(d.objects_retired), min_share);
     d.message += "; the last condition to hold: " + d.last_condition;
     return d;

@@ -112,6 +112,13 @@ class ExplorationPlanner {
   /// reported in the result and do not count as failed iterations).
   IterationResult plan(const ExplorationInputs& in, const ExplorationProviders& providers);
 
+  /// The winner of the last plan() was not flown (dropped by a final check,
+  /// rejected by the executor): its views are not evidence for retirement.
+  void discardViews() {
+    retirement_.discardViews();
+    object_retirement_.discardView();
+  }
+
   /// Consecutive iterations without a reachable candidate of positive utility.
   int failedIterations() const { return failed_iterations_; }
   const PlannerConfig& config() const { return planner_; }

@@ -108,6 +108,9 @@ class FrontierRetirement {
   void recordViews(const std::vector<ViewPose>& poses, const CollisionQuery& not_occupied,
                    const std::vector<Eigen::Vector3d>& targets_W = {});
 
+  /// The views recorded last were not flown (the path was dropped or rejected): not judged.
+  void discardViews();
+
   /// Possible view points of a cluster at `centre_W` (0 = not observable).
   /// `stop_at` > 0 stops counting there.
   int viewPoints(const Eigen::Vector3d& centre_W, const CollisionQuery& not_occupied, int stop_at = 0) const;

@@ -9,12 +9,14 @@
 /// object below PlannerConfig::object_observed_fraction is retired after
 /// max_failed_views flights that were meant to observe it (the winner was an
 /// object candidate of it) and after which its share seen from <= d_obj did
-/// not grow by at least min_share_growth. A flight that raises the share
-/// clears the count. A retired object comes back once its share moves by
-/// min_share_growth from its value at retirement, either way: surface newly
-/// seen from close by (it is observable after all) or new surface seen from
-/// afar (there is more of it to observe). Retired objects are not sampled and
-/// do not hold "explored" (termination.hpp).
+/// not move by at least min_share_change. A flight that moves the share
+/// clears the count: up is surface newly seen from close by, down is new
+/// surface seen from afar (there is more of it to observe). A retired object
+/// comes back once its share moves by min_share_change from its value at
+/// retirement, either way, for the same reasons, or reaches the done share.
+/// Retired objects are not sampled and do not hold "explored"
+/// (termination.hpp). Their unobserved voxels still add object gain to other
+/// candidates' views (the object map's gain service does not know of them).
 
 #include <cstdint>
 #include <map>
@@ -28,13 +30,13 @@ namespace semexp {
 
 struct ObjectRetirementConfig {
   bool enabled = true;            ///< false: no object is ever retired
-  int max_failed_views = 3;       ///< flights aimed at an object that did not raise its share before it is retired (K)
-  double min_share_growth = 0.01; ///< a flight raised an object's share when it grew by this much, (0, 1]
+  int max_failed_views = 3;       ///< flights aimed at an object that did not move its share before it is retired (K)
+  double min_share_change = 0.01; ///< a flight moved an object's share when it changed by this much either way, (0, 1]
 
   void validate(const std::string& ns = "object_retirement/") const {
     require(max_failed_views > 0, ns + "max_failed_views", "must be > 0");
-    require(std::isfinite(min_share_growth) && min_share_growth > 0 && min_share_growth <= 1,
-            ns + "min_share_growth", "must be in (0, 1]");
+    require(std::isfinite(min_share_change) && min_share_change > 0 && min_share_change <= 1,
+            ns + "min_share_change", "must be in (0, 1]");
   }
 };
 
@@ -53,6 +55,8 @@ class ObjectRetirement {
   /// share_now; judged at the next update(). Only the last call before an
   /// update() counts (one flight per iteration).
   void recordView(std::uint32_t id, double share_now);
+  /// The view recorded last was not flown (the path was dropped or rejected): not judged.
+  void discardView() { pending_ = false; }
 
   bool retired(std::uint32_t id) const;
   /// Ids of the retired objects, ascending.

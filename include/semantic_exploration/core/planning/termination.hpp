@@ -12,7 +12,7 @@
 ///    voxels) seen from <= d_bg is at least background_observed_share;
 ///  - objects: every object's share seen from <= d_obj is at least
 ///    PlannerConfig::object_observed_fraction, or the object is retired by
-///    evidence (object_retirement.hpp: flights aimed at it did not raise it).
+///    evidence (object_retirement.hpp: flights aimed at it did not move it).
 /// A condition is only required where the planner pursues it: background
 /// with a_bg > 0, objects with a_obj > 0. The paper's classic baseline
 /// (a_bg = a_obj = 0) thus stops on frontiers alone, by its own rule.
