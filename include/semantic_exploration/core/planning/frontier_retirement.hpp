@@ -23,7 +23,8 @@
 ///    path) and after which it was not at least shrink_fraction smaller than
 ///    at the first of those views (not than at the view before: the counts of
 ///    small clusters go up and down with depth noise, and each dip would
-///    restart the run).
+///    restart the run). A cluster that grows during a run and shrinks back,
+///    but not below where the run started, has not shrunk either.
 /// A cluster's "view" is one iteration whose path it was seen from.
 /// Every cluster is judged by geometry again every recheck_iterations
 /// iterations (surface found since can hide it): one retired by geometry
