@@ -164,7 +164,7 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   r.frontier_clusters = split.clusters;
   r.retired_clusters_geometry = split.retired_by_geometry;
   r.retired_clusters_evidence = split.retired_by_evidence;
-  // Objects the last flights aimed at without raising their share (object_retirement.hpp).
+  // Objects the last flights aimed at without moving their share (object_retirement.hpp).
   const std::vector<std::uint32_t> retired_before = object_retirement_.retiredIds();
   object_retirement_.update(in.objects);
   r.retired_object_ids = object_retirement_.retiredIds();
