@@ -94,15 +94,28 @@ TEST(ObjectRetirement, OnlyFlightsAimedAtTheObjectCount) {
 
 TEST(ObjectRetirement, ComesBackWhenItsShareMovesEitherWay) {
   ObjectRetirement r(ObjectRetirementConfig(), 0.9);
-  for (int i = 0; i < 4; ++i) iterate(r, {object(1, 0.87), object(2, 0.6)}, i < 3 ? 1 : 0);
+  for (int i = 0; i < 3; ++i) iterate(r, {object(1, 0.87), object(2, 0.6)}, 1);
+  // The third failed flight retires object 1, and update() says so once.
+  std::vector<ObjectRetirementChange> changes = r.update({object(1, 0.87), object(2, 0.6)});
+  ASSERT_EQ(changes.size(), 1u);
+  EXPECT_EQ(changes[0].id, 1u);
+  EXPECT_TRUE(changes[0].retired);
+  EXPECT_DOUBLE_EQ(changes[0].share, 0.87);
   for (int i = 0; i < 4; ++i) iterate(r, {object(1, 0.87), object(2, 0.6)}, i < 3 ? 2 : 0);
   ASSERT_TRUE(r.retired(1));
   ASSERT_TRUE(r.retired(2));
-  r.update({object(1, 0.875), object(2, 0.595)});  // moved by 0.005: both stay retired
+  EXPECT_TRUE(r.update({object(1, 0.875), object(2, 0.595)}).empty());  // moved by 0.005: both stay retired
   EXPECT_TRUE(r.retired(1) && r.retired(2));
-  r.update({object(1, 0.88), object(2, 0.59)});  // a passing look raised 1, new far surface lowered 2
+  changes = r.update({object(1, 0.88), object(2, 0.59)});  // a passing look raised 1, new far surface lowered 2
   EXPECT_FALSE(r.retired(1));
   EXPECT_FALSE(r.retired(2));
+  ASSERT_EQ(changes.size(), 2u);
+  EXPECT_EQ(changes[0].id, 1u);
+  EXPECT_FALSE(changes[0].retired);
+  EXPECT_DOUBLE_EQ(changes[0].share, 0.88);
+  EXPECT_EQ(changes[1].id, 2u);
+  EXPECT_FALSE(changes[1].retired);
+  EXPECT_DOUBLE_EQ(changes[1].share, 0.59);
   // Back with a clean count: K more failed flights retire it again.
   iterate(r, {object(1, 0.88)}, 1);
   iterate(r, {object(1, 0.88)}, 1);

@@ -165,18 +165,14 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   r.retired_clusters_geometry = split.retired_by_geometry;
   r.retired_clusters_evidence = split.retired_by_evidence;
   // Objects the last flights aimed at without moving their share (object_retirement.hpp).
-  const std::vector<std::uint32_t> retired_before = object_retirement_.retiredIds();
-  object_retirement_.update(in.objects);
-  r.retired_object_ids = object_retirement_.retiredIds();
-  for (const ObjectSummary& o : in.objects) {
-    const bool was = std::binary_search(retired_before.begin(), retired_before.end(), o.id);
-    const bool is = std::binary_search(r.retired_object_ids.begin(), r.retired_object_ids.end(), o.id);
-    if (is && !was)
+  for (const ObjectRetirementChange& c : object_retirement_.update(in.objects)) {
+    if (c.retired)
       r.object_retirement_events += fmt("object %.0f retired: %.0f flights aimed at it left its share seen from <= d_obj at %.3f; ",
-                       o.id, object_retirement_.config().max_failed_views, o.observed_fraction);
-    else if (was && !is)
-      r.object_retirement_events += fmt("object %.0f back: its share seen from <= d_obj moved to %.3f; ", o.id, o.observed_fraction);
+                                        c.id, object_retirement_.config().max_failed_views, c.share);
+    else
+      r.object_retirement_events += fmt("object %.0f back: its share seen from <= d_obj moved to %.3f; ", c.id, c.share);
   }
+  r.retired_object_ids = object_retirement_.retiredIds();
   r.message = r.object_retirement_events;
   const std::vector<ObjectSummary> active_objects = object_retirement_.active(in.objects);
 

@@ -12,7 +12,8 @@ ObjectRetirement::ObjectRetirement(const ObjectRetirementConfig& config, double 
           "must be in [0, 1]");
 }
 
-void ObjectRetirement::update(const std::vector<ObjectSummary>& objects) {
+std::vector<ObjectRetirementChange> ObjectRetirement::update(const std::vector<ObjectSummary>& objects) {
+  std::vector<ObjectRetirementChange> changes;
   std::set<std::uint32_t> present;
   for (const ObjectSummary& o : objects) {
     present.insert(o.id);
@@ -20,29 +21,33 @@ void ObjectRetirement::update(const std::vector<ObjectSummary>& objects) {
     if (it == state_.end()) continue;
     State& s = it->second;
     if (s.retired && (std::abs(o.observed_fraction - s.share_at_retirement) >= config_.min_share_change ||
-                      o.observed_fraction >= done_share_))
+                      o.observed_fraction >= done_share_)) {
       s = State();
+      changes.push_back({o.id, false, o.observed_fraction});
+    }
   }
   for (auto it = state_.begin(); it != state_.end();) it = present.count(it->first) ? std::next(it) : state_.erase(it);
 
-  if (!pending_) return;
+  if (!pending_) return changes;
   pending_ = false;
-  if (!config_.enabled) return;
+  if (!config_.enabled) return changes;
   for (const ObjectSummary& o : objects) {
     if (o.id != pending_id_) continue;
     State& s = state_[o.id];
-    if (s.retired) return;
+    if (s.retired) return changes;
     if (std::abs(o.observed_fraction - pending_share_) >= config_.min_share_change ||
         o.observed_fraction >= done_share_) {
       s.failed_views = 0;
-      return;
+      return changes;
     }
     if (++s.failed_views >= config_.max_failed_views) {
       s.retired = true;
       s.share_at_retirement = o.observed_fraction;
+      changes.push_back({o.id, true, o.observed_fraction});
     }
-    return;
+    return changes;
   }
+  return changes;
 }
 
 void ObjectRetirement::recordView(std::uint32_t id, double share_now) {

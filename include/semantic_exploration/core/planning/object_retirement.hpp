@@ -40,6 +40,13 @@ struct ObjectRetirementConfig {
   }
 };
 
+/// A change of an object's retirement, as update() made it.
+struct ObjectRetirementChange {
+  std::uint32_t id = 0;
+  bool retired = false;  ///< true: retired now; false: back (its share moved or reached the done share)
+  double share = 0.0;    ///< its share seen from <= d_obj at the change, [0, 1]
+};
+
 class ObjectRetirement {
  public:
   /// done_share: PlannerConfig::object_observed_fraction (objects at or
@@ -49,8 +56,9 @@ class ObjectRetirement {
 
   /// Judges the flight recorded since the last call (recordView) against the
   /// objects' shares now, and brings back retired objects whose share moved.
-  /// Objects no longer in the map are forgotten.
-  void update(const std::vector<ObjectSummary>& objects);
+  /// Objects no longer in the map are forgotten. Returns the objects that
+  /// were retired or came back in this call, in the order of `objects`.
+  std::vector<ObjectRetirementChange> update(const std::vector<ObjectSummary>& objects);
   /// The published path was chosen to observe object `id`, whose share is
   /// share_now; judged at the next update(). Only the last call before an
   /// update() counts (one flight per iteration).
