@@ -7,6 +7,7 @@
 
 #include "semantic_exploration/core/gains.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
+#include "semantic_exploration/core/parallel_for.hpp"
 
 namespace semexp {
 
@@ -267,7 +268,8 @@ std::vector<GainImages> OccupancyMap::computeGains(const std::vector<Eigen::Vect
   for (int v = 0; v < Hh; ++v)
     for (int u = 0; u < W; ++u) dirs[v * W + u] = grid.direction(u, v);
   std::vector<GainImages> out(positions_W.size());
-  for (std::size_t j = 0; j < positions_W.size(); ++j) {
+  // Positions are independent and each writes only its own images.
+  parallelFor(positions_W.size(), st.threads, [&](std::size_t j) {
     GainImages& g = out[j];
     g.width = W;
     g.height = Hh;
@@ -313,7 +315,7 @@ std::vector<GainImages> OccupancyMap::computeGains(const std::vector<Eigen::Vect
       });
       g.entropy[i] = static_cast<float>(std::clamp(ent / norm, 0.0, 1.0));
     }
-  }
+  });
   return out;
 }
 

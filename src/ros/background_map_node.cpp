@@ -283,6 +283,7 @@ bool BackgroundMapNode::computeGains(semantic_exploration::ComputeGains::Request
   gs.d_min_m = camera_.d_min_m;
   gs.d_max_m = camera_.d_max_m;
   gs.d_desired_m = exploration_.d_bg_m;
+  gs.threads = config_.gain_threads;
   std::vector<semexp::GainImages> gains;
   try {
     gains = map_->computeGains(pos, grid, gs, req.max_depth_m);

@@ -98,6 +98,7 @@ semexp::BackgroundMapConfig loadBackgroundMap(const ParamReader& p) {
   p.get(n + "free_margin_quadratic_per_m", c.free_margin_quadratic_per_m);
   p.get(n + "publish_period_s", c.publish_period_s);
   p.get(n + "integration_threads", c.integration_threads);
+  p.get(n + "gain_threads", c.gain_threads);
   c.validate(n);
   return c;
 }

@@ -2,7 +2,8 @@
 // side on the same map, candidates and seeds: n = 20 candidates, 36 x 10
 // raycasts, OMPL stopped after planner/ompl_iterations iterations per
 // candidate (deterministic mode, so both modes plan identical paths to the
-// candidates they both plan), all hardware threads. Prints both iteration
+// candidates they both plan), all hardware threads for path planning and the
+// background map node's default gain_threads for the gains. Prints both iteration
 // medians and their ratio, the share of iterations with an identical winner
 // (same candidate, same path), the candidates planned per iteration, and the
 // lazy mode's stages (sampling, path planning, gains, yaw).
@@ -99,6 +100,7 @@ int main(int argc, char** argv) {
   gain_settings.d_min_m = camera.d_min_m;
   gain_settings.d_max_m = camera.d_max_m;
   gain_settings.d_desired_m = exploration.d_bg_m;
+  gain_settings.threads = semexp::BackgroundMapConfig().gain_threads;  // the background map node's default
 
   // The planner node's collision queries: its MapReplica, fed here by one
   // full snapshot instead of the MapBlocks stream.
@@ -179,9 +181,10 @@ int main(int argc, char** argv) {
   const double speedup = lazy_ms > 0 ? all_ms / lazy_ms : 0.0;
   const double share = static_cast<double>(identical) / kIterations;
   std::printf("planner iteration on the background map core (12 x 8 x 3 m, r = 0.04 m), n = %d, %d x %d raycasts, "
-              "OMPL stopped after %d iterations per candidate, %u hardware threads, %d iterations per mode\n",
+              "OMPL stopped after %d iterations per candidate, %u hardware threads, gains on %d threads, %d iterations per "
+              "mode\n",
               config.n_candidates, config.raycast_width, config.raycast_height, config.ompl_iterations,
-              std::thread::hardware_concurrency(), kIterations);
+              std::thread::hardware_concurrency(), gain_settings.threads, kIterations);
   std::printf("  %-34s %12s %12s\n", "", "lazy", "exhaustive");
   std::printf("  %-34s %12.1f %12.1f   ratio %.1fx (paper, Jetson Xavier NX: 2800 ms -- reference value, not "
               "measured here)\n",

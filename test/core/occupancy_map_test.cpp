@@ -526,6 +526,45 @@ TEST(OccupancyMap, RaycastAndEntropyGainMatchFineSampling) {
   EXPECT_LT(worst_ent, 2e-3);
 }
 
+TEST(OccupancyMap, GainsAreTheSameOnAnyNumberOfThreads) {
+  BackgroundMapConfig cfg;
+  PinholeCamera cam;
+  const BoxRoom scene = semexp_test::standardRoom();
+  OccupancyMap map(cfg, scene.bounds(0.2));
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Isometry3d T = lookPose({-1.0 + 0.5 * i, 0.2, 1.3}, 1.6 * i, 0.1);
+    map.integrate(scene.render(cam, T).data(), nullptr, cam, T);
+  }
+  SphericalGrid grid;
+  GainSettings gs;
+  // Seen, unseen and outside positions; more positions than threads and fewer.
+  const std::vector<Eigen::Vector3d> pos = {{0.1, 0.2, 1.2}, {-1.5, -0.5, 1.6}, {1.0, 1.0, 0.8}, {0.0, -1.0, 2.0},
+                                            {-0.5, 0.5, 1.0}};
+  gs.threads = 1;
+  const auto one = map.computeGains(pos, grid, gs);
+  double sum = 0.0;
+  for (const GainImages& g : one)
+    for (std::size_t i = 0; i < g.entropy.size(); ++i) sum += g.entropy[i] + g.distance[i];
+  ASSERT_GT(sum, 0.0);  // the comparison below compares something
+  for (int threads : {2, 3, 8}) {
+    gs.threads = threads;
+    const auto many = map.computeGains(pos, grid, gs);
+    ASSERT_EQ(many.size(), one.size());
+    for (std::size_t j = 0; j < pos.size(); ++j) {
+      EXPECT_EQ(many[j].entropy, one[j].entropy) << threads << " threads, position " << j;
+      EXPECT_EQ(many[j].distance, one[j].distance) << threads << " threads, position " << j;
+      EXPECT_EQ(many[j].hit_depth_m, one[j].hit_depth_m) << threads << " threads, position " << j;
+    }
+  }
+  cfg.gain_threads = 0;
+  try {
+    cfg.validate();
+    FAIL() << "gain_threads 0 accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("background_map/gain_threads"), std::string::npos) << e.what();
+  }
+}
+
 TEST(OccupancyMap, NoiseMarginKeepsVoxelsInFrontOfTheSurfaceFromBeingCarved) {
   PinholeCamera cam;
   const BoxRoom scene = wallScene();

@@ -33,6 +33,7 @@ struct BackgroundMapConfig {
   double free_margin_quadratic_per_m = 0.006;
   double publish_period_s = 1.0;   ///< minimum period between ~occupied point clouds, s
   int integration_threads = 2;     ///< threads that integrate a frame, the caller's included (same map for any count)
+  int gain_threads = 2;            ///< threads that compute one gain request's positions, the caller's included (same gains for any count)
 
   void validate(const std::string& ns = "background_map/") const {
     require(std::isfinite(resolution_m) && resolution_m > 0, ns + "resolution_m", "must be > 0 m");
@@ -52,6 +53,7 @@ struct BackgroundMapConfig {
             ns + "log_odds_min", "log-odds parameters must lie in (-30, 30)");
     require(publish_period_s >= 0, ns + "publish_period_s", "must be >= 0 s");
     require(integration_threads >= 1 && integration_threads <= 64, ns + "integration_threads", "must be in [1, 64]");
+    require(gain_threads >= 1 && gain_threads <= 64, ns + "gain_threads", "must be in [1, 64]");
   }
 };
 

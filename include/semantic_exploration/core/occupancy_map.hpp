@@ -59,6 +59,7 @@ struct GainSettings {
   double d_min_m = 0.1;       ///< entropy is accumulated from this distance on, m
   double d_max_m = 10.0;      ///< rays end here, m
   double d_desired_m = 3.0;   ///< d_bg of Eq. 1, m
+  int threads = 1;            ///< threads sharing the positions, the caller's included (same images for any count)
 };
 
 /// Gain images of one position; row-major, SphericalGrid layout.

@@ -1,7 +1,8 @@
 #include "semantic_exploration/core/planning/path_planner.hpp"
 
+#include "semantic_exploration/core/parallel_for.hpp"
+
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -140,19 +141,6 @@ std::uint32_t pathSeed(std::uint32_t seed, std::uint64_t iteration, std::uint64_
   return ompl_seeded::mix(ompl_seeded::mix(seed, iteration), candidate);
 }
 
-template <typename Job>
-void PathPlanner::parallelFor(std::size_t n, const Job& job) const {
-  std::atomic<std::size_t> next{0};
-  auto worker = [&]() {
-    for (std::size_t i = next++; i < n; i = next++) job(i);
-  };
-  const int k = std::min<int>(threads(), static_cast<int>(n));
-  std::vector<std::thread> pool;
-  for (int t = 1; t < k; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
-}
-
 PlanningStart PathPlanner::planningStart(const Eigen::Vector3d& start) const {
   PlanningStart out;
   out.start_W = out.from_W = start;
@@ -212,7 +200,7 @@ ResolvedGoal PathPlanner::resolveGoal(const PlanningStart& from, const Eigen::Ve
 std::vector<ResolvedGoal> PathPlanner::resolveGoals(const PlanningStart& from,
                                                      const std::vector<Eigen::Vector3d>& goals) const {
   std::vector<ResolvedGoal> out(goals.size());
-  parallelFor(goals.size(), [&](std::size_t i) { out[i] = resolveGoal(from, goals[i]); });
+  parallelFor(goals.size(), threads(), [&](std::size_t i) { out[i] = resolveGoal(from, goals[i]); });
   return out;
 }
 
@@ -350,7 +338,7 @@ std::vector<PlannedPath> PathPlanner::planAll(const PlanningStart& from, const s
                                                const std::vector<std::uint32_t>& seeds) const {
   if (seeds.size() != goals.size()) throw std::invalid_argument("PathPlanner::planAll: one seed per goal");
   std::vector<PlannedPath> out(goals.size());
-  parallelFor(goals.size(), [&](std::size_t i) {
+  parallelFor(goals.size(), threads(), [&](std::size_t i) {
     try {
       out[i] = plan(from, goals[i], seeds[i]);
     } catch (const std::exception&) {

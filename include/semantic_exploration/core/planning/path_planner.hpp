@@ -140,9 +140,6 @@ class PathPlanner {
 
  private:
   PlannedPath planFromValidStart(const Eigen::Vector3d& start_W, const ResolvedGoal& goal, std::uint32_t seed) const;
-  /// Runs job(i) for i in [0, n) on threads() threads.
-  template <typename Job>
-  void parallelFor(std::size_t n, const Job& job) const;
 
   PlannerConfig config_;
   Bounds bounds_;
