@@ -132,6 +132,30 @@ TEST(Termination, FewerActiveFrontiersIsProgress) {
   }
 }
 
+TEST(Termination, AFrontierClusterRetiredByEvidenceIsProgressThoughNewVoxelsHideIt) {
+  // Volume flat, stall window 3 (classic: volume and frontiers only). The
+  // active count rises 13, 20, 24, 24, 24, ... as flights add frontier
+  // voxels, while clusters are retired by evidence at iterations 1 and 3
+  // (running count 0, 1, 1, 2, 2, ...). Windows of 3 iterations back, in
+  // retirements: it 3: 0 -> 2, it 4: 1 -> 2, it 5: 1 -> 2 go on; it 6:
+  // 2 -> 2 with 24 -> 24 voxels stops.
+  TerminationCheck t(TerminationConfig(), classic());
+  TerminationInputs in;
+  in.explored_volume_m3 = 100.0;
+  const std::size_t active[] = {13, 20, 24, 24, 24, 24, 24};
+  const std::size_t retired[] = {0, 1, 1, 2, 2, 2, 2};
+  for (int it = 0; it < 7; ++it) {
+    in.active_frontiers = active[it];
+    in.frontier_clusters_retired = retired[it];
+    const TerminationDecision d = t.check(in);
+    EXPECT_EQ(d.finished, it == 6) << it << ": " << d.message;
+    if (it == 6) {
+      EXPECT_EQ(d.reason, "no_progress");
+      EXPECT_NE(d.message.find("no frontier cluster was retired by evidence"), std::string::npos) << d.message;
+    }
+  }
+}
+
 // ------------------------------------------------------------ retirement
 
 namespace {

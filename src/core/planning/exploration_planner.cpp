@@ -184,6 +184,7 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   ti.objects = in.objects;
   ti.retired_object_ids = r.retired_object_ids;
   ti.explored_volume_m3 = in.explored_volume_m3;
+  ti.frontier_clusters_retired = retirement_.evidenceRetirements();
   r.termination = termination_.check(ti);
   if (r.termination.finished) {
     r.finished = true;

@@ -28,6 +28,8 @@ bool TerminationCheck::progressed(const Sample& old, const Sample& now, std::str
   if (now.active_frontiers < old.active_frontiers) return true;
   what += fmt(", active frontier voxels went from %.0f to %.0f", static_cast<double>(old.active_frontiers),
               static_cast<double>(now.active_frontiers));
+  if (now.frontier_clusters_retired > old.frontier_clusters_retired) return true;
+  what += ", no frontier cluster was retired by evidence";
   if (pursuesBackground() && old.background_share >= 0 && now.background_share >= 0) {
     const double d = now.background_share - old.background_share;
     if (d >= config_.stall_share) return true;
@@ -103,7 +105,7 @@ TerminationDecision TerminationCheck::check(const TerminationInputs& in) {
 
   // no_progress: a window of stall_iterations checks in which nothing pursued improved.
   if (planner_.stall_iterations <= 0 || in.explored_volume_m3 < 0) return d;
-  Sample now{in.explored_volume_m3, in.active_frontiers, in.background_share, {}};
+  Sample now{in.explored_volume_m3, in.active_frontiers, in.frontier_clusters_retired, in.background_share, {}};
   for (const auto& o : in.objects) now.object_shares[o.id] = o.observed_fraction;
   history_.push_back(now);
   const std::size_t k = static_cast<std::size_t>(planner_.stall_iterations);

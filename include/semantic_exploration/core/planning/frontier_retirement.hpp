@@ -120,6 +120,9 @@ class FrontierRetirement {
   bool sees(const ViewPose& pose, const Eigen::Vector3d& p_W, const CollisionQuery& not_occupied) const;
 
   const FrontierRetirementConfig& config() const { return config_; }
+  /// Clusters retired by evidence so far, a running count (one that comes
+  /// back and is retired again counts twice).
+  std::size_t evidenceRetirements() const { return evidence_retirements_; }
 
  private:
   struct Cluster {
@@ -167,6 +170,7 @@ class FrontierRetirement {
   double resolution_m_;
   std::unordered_map<std::uint64_t, Cluster> clusters_;
   long iteration_ = 0;
+  std::size_t evidence_retirements_ = 0;
 };
 
 }  // namespace semexp

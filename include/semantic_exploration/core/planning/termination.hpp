@@ -20,7 +20,9 @@
 /// "no_progress": nothing the planner pursues improved over the last
 /// stall_iterations iterations: the explored volume grew less than
 /// stall_volume_m3, the active frontier voxels did not become fewer (they
-/// do as frontiers are observed or retired), and (where pursued) neither
+/// do as frontiers are observed or retired) and no frontier cluster was
+/// retired by evidence (flights past noisy surfaces add frontier voxels
+/// that can hide the retirements from the count), and (where pursued) neither
 /// the background share nor any object's share grew by stall_share, and no
 /// object appeared.
 
@@ -69,6 +71,9 @@ struct TerminationInputs {
   /// Objects retired by evidence (ObjectRetirement): below the share, yet not holding "explored".
   std::vector<std::uint32_t> retired_object_ids;
   double explored_volume_m3 = -1.0;    ///< < 0 unknown
+  /// Frontier clusters retired by evidence so far, a running count
+  /// (FrontierRetirement::evidenceRetirements).
+  std::size_t frontier_clusters_retired = 0;
 };
 
 /// The outcome of one check.
@@ -103,6 +108,7 @@ class TerminationCheck {
   struct Sample {
     double volume_m3;
     std::size_t active_frontiers;
+    std::size_t frontier_clusters_retired;
     double background_share;
     std::map<std::uint32_t, double> object_shares;
   };
