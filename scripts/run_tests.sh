@@ -64,7 +64,7 @@ stage_done sanitize
 # once took longer on a loaded 2-core machine (845 s against 806 s), and two
 # tests with wall-time limits on node start-up failed.
 echo "[test] pytest test/python"
-(cd "$ROOT" && timeout 1200 "$SEMEXP_VENV/bin/python" -m pytest -q -p no:cacheprovider test/python \
+(cd "$ROOT" && timeout 1800 "$SEMEXP_VENV/bin/python" -m pytest -q -p no:cacheprovider test/python \
   --junitxml="$RESULTS/pytest/pytest.xml") > "$RESULTS/pytest/pytest.log" 2>&1
 rc=$?
 tail -n 30 "$RESULTS/pytest/pytest.log"
