@@ -260,6 +260,7 @@ std::vector<GainImages> OccupancyMap::computeGains(const std::vector<Eigen::Vect
   if (const std::string why = SphericalGrid::checkRequest(static_cast<long>(positions_W.size()), grid.width,
                                                          grid.height); !why.empty())
     throw std::invalid_argument("OccupancyMap::computeGains: " + why);
+  if (st.threads < 1) throw std::invalid_argument("OccupancyMap::computeGains: threads must be >= 1");
   const std::vector<float>& H = entropy_lut_;
   const int W = grid.width, Hh = grid.height, n = W * Hh;  // <= SphericalGrid::kMaxPixels: no overflow
   const bool have_max = max_depth_m.size() == positions_W.size() * static_cast<std::size_t>(n) && n > 0;
@@ -267,15 +268,18 @@ std::vector<GainImages> OccupancyMap::computeGains(const std::vector<Eigen::Vect
   std::vector<Eigen::Vector3d> dirs(static_cast<std::size_t>(n));
   for (int v = 0; v < Hh; ++v)
     for (int u = 0; u < W; ++u) dirs[v * W + u] = grid.direction(u, v);
+  // The images are allocated here, on the caller's thread; the positions are
+  // independent and each job writes only its own images.
   std::vector<GainImages> out(positions_W.size());
-  // Positions are independent and each writes only its own images.
-  parallelFor(positions_W.size(), st.threads, [&](std::size_t j) {
-    GainImages& g = out[j];
+  for (GainImages& g : out) {
     g.width = W;
     g.height = Hh;
     g.entropy.assign(n, 0.f);
     g.distance.assign(n, 0.f);
     g.hit_depth_m.assign(n, static_cast<float>(st.d_max_m));
+  }
+  parallelFor(positions_W.size(), st.threads, [&](std::size_t j) {
+    GainImages& g = out[j];
     const Eigen::Vector3d& pos = positions_W[j];
     for (int i = 0; i < n; ++i) {
       double t_end = st.d_max_m;

@@ -537,7 +537,7 @@ TEST(OccupancyMap, GainsAreTheSameOnAnyNumberOfThreads) {
   }
   SphericalGrid grid;
   GainSettings gs;
-  // Seen, unseen and outside positions; more positions than threads and fewer.
+  // Positions in the part the frames saw and in the part they did not; more positions than threads and fewer.
   const std::vector<Eigen::Vector3d> pos = {{0.1, 0.2, 1.2}, {-1.5, -0.5, 1.6}, {1.0, 1.0, 0.8}, {0.0, -1.0, 2.0},
                                             {-0.5, 0.5, 1.0}};
   gs.threads = 1;
@@ -556,6 +556,12 @@ TEST(OccupancyMap, GainsAreTheSameOnAnyNumberOfThreads) {
       EXPECT_EQ(many[j].hit_depth_m, one[j].hit_depth_m) << threads << " threads, position " << j;
     }
   }
+  gs.threads = 0;
+  EXPECT_THROW(map.computeGains(pos, grid, gs), std::invalid_argument);
+}
+
+TEST(OccupancyMap, GainThreadsBelowOneAreRefusedByName) {
+  BackgroundMapConfig cfg;
   cfg.gain_threads = 0;
   try {
     cfg.validate();

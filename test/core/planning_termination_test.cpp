@@ -133,7 +133,7 @@ TEST(Termination, FewerActiveFrontiersIsProgress) {
 }
 
 TEST(Termination, AFrontierClusterRetiredByEvidenceIsProgressThoughNewVoxelsHideIt) {
-  // Volume flat, stall window 3 (classic: volume and frontiers only). The
+  // Volume flat, stall window 3 (classic: the object shares do not count). The
   // active count rises 13, 20, 24, 24, 24, ... as flights add frontier
   // voxels, while clusters are retired by evidence at iterations 1 and 3
   // (running count 0, 1, 1, 2, 2, ...). Windows of 3 iterations back, in
@@ -151,7 +151,7 @@ TEST(Termination, AFrontierClusterRetiredByEvidenceIsProgressThoughNewVoxelsHide
     EXPECT_EQ(d.finished, it == 6) << it << ": " << d.message;
     if (it == 6) {
       EXPECT_EQ(d.reason, "no_progress");
-      EXPECT_NE(d.message.find("no frontier cluster was retired by evidence"), std::string::npos) << d.message;
+      EXPECT_NE(d.message.find("no frontier cluster was retired by evidence for the first time"), std::string::npos) << d.message;
     }
   }
 }
@@ -237,6 +237,23 @@ TEST(FrontierRetirement, RetiredByEvidenceAfterKViewsAndBackWhenFreeSpaceGrows) 
   s = fr.update(voxels, cylinder(2.5));
   EXPECT_EQ(s.active_W.size(), 25u);
   EXPECT_EQ(s.retired_by_evidence, 0u);
+  EXPECT_EQ(fr.evidenceRetirements(), 1u);
+  // K more failed views retire it again: the same cluster, no new progress for the stall rule.
+  for (int view = 1; view <= 3; ++view) {
+    fr.update(voxels, cylinder(2.5));
+    fr.recordViews({}, cylinder(2.5), {centre});
+  }
+  s = fr.update(voxels, cylinder(2.5));
+  EXPECT_EQ(s.retired_by_evidence, 1u);
+  EXPECT_EQ(fr.evidenceRetirements(), 1u);
+  // Another cluster retired by evidence is.
+  const Eigen::Vector3d other = centre + Eigen::Vector3d(0.0, 0.0, -0.5);
+  for (int view = 1; view <= 3; ++view) {
+    fr.update(patch(other), cylinder(2.5));
+    fr.recordViews({}, cylinder(2.5), {other});
+  }
+  fr.update(patch(other), cylinder(2.5));
+  EXPECT_EQ(fr.evidenceRetirements(), 2u);
 }
 
 TEST(FrontierRetirement, AViewThatShrinksTheClusterIsNoFailure) {

@@ -4,8 +4,11 @@ L-shaped corridor between two rooms, written as ``<name>_semantic.ply``
 0-based ``object_id``, -1 for none) and ``<name>.house`` (``ASCII 1.1`` with
 C and O records), the two files a Habitat / Matterport3D scene comes as.
 
-Plan view (z up, 0.5 m cells, walls 0.1 m thick outside the free cells,
-floor at z = 0, ceiling at HEIGHT_M):
+Plan view (z up, 0.5 m cells, floor at z = 0, ceiling at HEIGHT_M). Each
+cell edge that borders a cell that is not free gets a wall 0.1 m thick on
+the far side, 0.1 m longer at both ends to close corners; where the
+corridor meets a room those ends reach 0.1 m into the opening, leaving it
+0.8 m wide:
 
 - room A: x in [0, 3), y in [0, 3), a cabinet against its west wall;
 - corridor, first leg: x in [3, 6), y in [1, 2) (1 m wide), east from room A;

@@ -2,7 +2,9 @@
 L-shaped corridor between two rooms built from boxes (habitat_primitives.py),
 loaded from its ``_semantic.ply`` + ``.house``. The paper's classic baseline
 (frontiers only) must end it ``explored`` by its own rule (no active frontier
-voxel left), without a collision, having explored the scene's free space.
+voxel left), without a collision. A loose check besides: the map's explored
+volume (free plus occupied) is at least 90% of the ground truth's explorable
+free volume; leaving room B (27 m^3 of the 55 m^3) unvisited would fail it.
 
 One deterministic lockstep mission: about 350 s of sim time, 2-4 min of wall
 time on the 2-core machine. Skipped where ROS is not sourced."""
@@ -43,14 +45,18 @@ def test_classic_mission_on_an_l_shaped_corridor_ends_explored(tmp_path):
     env = {k: v for k, v in os.environ.items() if k != "ROS_HOME"}  # the run's logs in out/ros_home
     proc = subprocess.Popen([sys.executable, os.path.join(ROOT, "scripts", "run_mission.py"), "--deterministic",
                              "--scene", ply, "--mode", "classic", "--sim-limit-s", str(SIM_LIMIT_S),
-                             "--wall-limit-s", "1500", "--no-eval", "--out", str(out), "--progress-period-s", "60"],
+                             "--wall-limit-s", "1100", "--no-eval", "--out", str(out), "--progress-period-s", "60"],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
                             start_new_session=True)
-    try:
-        output, _ = proc.communicate(timeout=1800)
+    try:  # within the guard on the whole pytest run (scripts/run_tests.sh)
+        output, _ = proc.communicate(timeout=1200)
     except subprocess.TimeoutExpired:  # SIGINT: run_mission stops the nodes it started
         os.killpg(proc.pid, signal.SIGINT)
-        output, _ = proc.communicate(timeout=60)
+        try:
+            output, _ = proc.communicate(timeout=60)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            output, _ = proc.communicate()
     assert proc.returncode == 0, output
     with open(str(out / "summary.json")) as f:
         s = json.load(f)

@@ -59,7 +59,9 @@ struct GainSettings {
   double d_min_m = 0.1;       ///< entropy is accumulated from this distance on, m
   double d_max_m = 10.0;      ///< rays end here, m
   double d_desired_m = 3.0;   ///< d_bg of Eq. 1, m
-  int threads = 1;            ///< threads sharing the positions, the caller's included (same images for any count)
+  /// Threads sharing the positions, the caller's included, >= 1 (same images
+  /// for any count); the background map node sets background_map/gain_threads.
+  int threads = 1;
 };
 
 /// Gain images of one position; row-major, SphericalGrid layout.
@@ -125,6 +127,8 @@ class OccupancyMap {
   /// Entropy, Eq. 1 distance gain and hit depth images for each position.
   /// `max_depth_m`: empty, or grid.width*grid.height per position: rays stop
   /// there (occlusion by something else), entropy included up to it.
+  /// Throws std::invalid_argument on a grid too large for one request or
+  /// settings.threads < 1.
   std::vector<GainImages> computeGains(const std::vector<Eigen::Vector3d>& positions_W, const SphericalGrid& grid,
                                        const GainSettings& settings,
                                        const std::vector<float>& max_depth_m = {}) const;

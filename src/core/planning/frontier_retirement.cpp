@@ -193,7 +193,7 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
     c.voxels_at_view = -1;
     if (!c.by_evidence && c.failed_views >= config_.max_failed_views) {
       c.by_evidence = true;
-      ++evidence_retirements_;
+      ever_retired_by_evidence_.insert(kv.first);
       c.possible_at_retirement = possibleViewPoints(c.centre_W, not_occupied);
       c.viewpoints_at_retirement =
           static_cast<int>(std::count(c.possible_at_retirement.begin(), c.possible_at_retirement.end(), true));

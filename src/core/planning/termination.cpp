@@ -29,7 +29,7 @@ bool TerminationCheck::progressed(const Sample& old, const Sample& now, std::str
   what += fmt(", active frontier voxels went from %.0f to %.0f", static_cast<double>(old.active_frontiers),
               static_cast<double>(now.active_frontiers));
   if (now.frontier_clusters_retired > old.frontier_clusters_retired) return true;
-  what += ", no frontier cluster was retired by evidence";
+  what += ", no frontier cluster was retired by evidence for the first time";
   if (pursuesBackground() && old.background_share >= 0 && now.background_share >= 0) {
     const double d = now.background_share - old.background_share;
     if (d >= config_.stall_share) return true;

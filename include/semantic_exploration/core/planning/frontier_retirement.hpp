@@ -37,6 +37,7 @@
 #include <cstdint>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "semantic_exploration/core/bounds.hpp"
@@ -120,9 +121,10 @@ class FrontierRetirement {
   bool sees(const ViewPose& pose, const Eigen::Vector3d& p_W, const CollisionQuery& not_occupied) const;
 
   const FrontierRetirementConfig& config() const { return config_; }
-  /// Clusters retired by evidence so far, a running count (one that comes
-  /// back and is retired again counts twice).
-  std::size_t evidenceRetirements() const { return evidence_retirements_; }
+  /// Distinct clusters (cubes) retired by evidence so far, each counted once:
+  /// one that comes back and is retired again is no new progress, so the
+  /// count is bounded by the cubes the bounds hold.
+  std::size_t evidenceRetirements() const { return ever_retired_by_evidence_.size(); }
 
  private:
   struct Cluster {
@@ -170,7 +172,7 @@ class FrontierRetirement {
   double resolution_m_;
   std::unordered_map<std::uint64_t, Cluster> clusters_;
   long iteration_ = 0;
-  std::size_t evidence_retirements_ = 0;
+  std::unordered_set<std::uint64_t> ever_retired_by_evidence_;  ///< keys of the clusters evidenceRetirements() counts
 };
 
 }  // namespace semexp

@@ -57,7 +57,8 @@ class ObjectRetirement {
   /// Judges the flight recorded since the last call (recordView) against the
   /// objects' shares now, and brings back retired objects whose share moved.
   /// Objects no longer in the map are forgotten. Returns the objects that
-  /// were retired or came back in this call, in the order of `objects`.
+  /// came back (in the order of `objects`), then the one the judged flight
+  /// retired, if any.
   std::vector<ObjectRetirementChange> update(const std::vector<ObjectSummary>& objects);
   /// The published path was chosen to observe object `id`, whose share is
   /// share_now; judged at the next update(). Only the last call before an

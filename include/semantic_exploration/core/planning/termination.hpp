@@ -21,8 +21,10 @@
 /// stall_iterations iterations: the explored volume grew less than
 /// stall_volume_m3, the active frontier voxels did not become fewer (they
 /// do as frontiers are observed or retired) and no frontier cluster was
-/// retired by evidence (flights past noisy surfaces add frontier voxels
-/// that can hide the retirements from the count), and (where pursued) neither
+/// retired by evidence for the first time (flights past noisy surfaces add
+/// frontier voxels that can hide the retirements from the count; a cluster
+/// counts once, so retire-and-return cycles cannot hold the run open), and
+/// (where pursued) neither
 /// the background share nor any object's share grew by stall_share, and no
 /// object appeared.
 
@@ -71,8 +73,8 @@ struct TerminationInputs {
   /// Objects retired by evidence (ObjectRetirement): below the share, yet not holding "explored".
   std::vector<std::uint32_t> retired_object_ids;
   double explored_volume_m3 = -1.0;    ///< < 0 unknown
-  /// Frontier clusters retired by evidence so far, a running count
-  /// (FrontierRetirement::evidenceRetirements).
+  /// Distinct frontier clusters retired by evidence so far, each counted
+  /// once (FrontierRetirement::evidenceRetirements).
   std::size_t frontier_clusters_retired = 0;
 };
 
