@@ -43,7 +43,16 @@ def _ensure_ray_tracer():
     sys.exit(1)
 
 
+def one_blas_thread():
+    """One BLAS thread, to be set before numpy loads. The simulator's matrices are 3x3 and 4x4,
+    and after each call OpenBLAS's worker thread spins in sched_yield: with the default (a thread
+    per core) that thread kept a second core busy for the whole run (docs/BENCHMARKS.md, "End to
+    end"). A setting in the environment wins."""
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
 if __name__ == "__main__":
+    one_blas_thread()
     _ensure_ray_tracer()
     try:
         from semantic_exploration.sim.node import main

@@ -61,6 +61,7 @@ from std_msgs.msg import Header, String, UInt32, UInt32MultiArray
 from semantic_exploration.msg import Detection, Detections, DropCounts, FrameIntegrated
 
 from .config import ConfigError, SimConfig, from_dict
+from .direct_publish import DirectTransformBroadcaster, direct_publisher
 from .drops import DropCounter
 from .faults import FaultInjector
 from .frame_lockstep import FrameLockstep
@@ -120,19 +121,20 @@ class MavSimNode:
         self.pub_inst = rospy.Publisher("camera/instance_gt", Image, **latch)
         self.pub_cls = rospy.Publisher("camera/class_gt", Image, **latch)
         self.pub_det = rospy.Publisher("detections", Detections, **latch)
-        self.pub_pose = rospy.Publisher("mav/pose", PoseStamped, queue_size=10)
+        self.pub_pose = direct_publisher("mav/pose", PoseStamped)  # 50 Hz, written in this thread (direct_publish.py)
         self.pub_goal = rospy.Publisher("mav/goal_reached", PoseStamped, queue_size=10)
         self.pub_coll = rospy.Publisher("mav/collisions", UInt32, queue_size=1, latch=True)
         self.pub_rejected = rospy.Publisher("mav/path_rejected", String, queue_size=5)
-        # Latched: a node or recorder that connects late gets the current sim time at once.
-        self.pub_clock = rospy.Publisher("/clock", Clock, queue_size=10, latch=True)
+        # Latched: a node or recorder that connects late gets the current sim time at once. At the physics
+        # rate to every node: written in this thread, not through rospy's writer threads (direct_publish.py).
+        self.pub_clock = direct_publisher("/clock", Clock, latch=True)
         self.pub_faults = rospy.Publisher("~faults", DropCounts, queue_size=1, latch=True)
         self.faults = FaultInjector(c.faults)
         self._fault_counts_sent = None
         self.pub_drops = rospy.Publisher("/dropped_input", DropCounts, queue_size=50, latch=True)
         self.drops = DropCounter(self._publish_drops, lambda reason, n, detail: rospy.logwarn(
             "mav_sim: dropped input (%s, %d so far): %s", reason, n, detail))
-        self.tf = tf2_ros.TransformBroadcaster()
+        self.tf = DirectTransformBroadcaster()
         self.tf_static = tf2_ros.StaticTransformBroadcaster()
 
         self._lock = threading.Lock()  # the pending path and setpoint, between callbacks and the loop
