@@ -310,6 +310,7 @@ semexp::FrontierRetirementConfig loadFrontierRetirement(const ParamReader& p) {
   p.get(n + "min_view_distance_m", c.min_view_distance_m);
   p.get(n + "fov_margin_rad", c.fov_margin_rad);
   p.get(n + "recheck_iterations", c.recheck_iterations);
+  p.get(n + "max_evidence_returns", c.max_evidence_returns);
   c.validate(n);
   return c;
 }

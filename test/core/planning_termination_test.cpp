@@ -256,6 +256,50 @@ TEST(FrontierRetirement, RetiredByEvidenceAfterKViewsAndBackWhenFreeSpaceGrows) 
   EXPECT_EQ(fr.evidenceRetirements(), 2u);
 }
 
+// max_evidence_returns 1: a cluster comes back from retirement by evidence
+// once when new free space gives it more view points; retired again, it stays
+// retired however much more free space is found. With no limit it comes back
+// each time.
+TEST(FrontierRetirement, AClusterComesBackFromEvidenceAtMostMaxEvidenceReturnsTimes) {
+  for (const int max_returns : {1, -1}) {
+    FrontierRetirementConfig cfg;
+    cfg.max_failed_views = 3;
+    cfg.recheck_iterations = 1;
+    cfg.max_evidence_returns = max_returns;
+    FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
+    const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.75);
+    const auto voxels = patch(centre);
+    const auto retire = [&](const CollisionQuery& space) {
+      for (int view = 1; view <= 3; ++view) {
+        fr.update(voxels, space);
+        fr.recordViews({}, space, {centre});
+      }
+      return fr.update(voxels, space);
+    };
+    ASSERT_EQ(retire(cylinder(1.0)).retired_by_evidence, 1u) << max_returns;
+    // More free space: more view points, back (its first return).
+    EXPECT_EQ(fr.update(voxels, cylinder(2.0)).active_W.size(), 25u) << max_returns;
+    ASSERT_EQ(retire(cylinder(2.0)).retired_by_evidence, 1u) << max_returns;
+    // Still more free space: a second return only without a limit.
+    const auto s = fr.update(voxels, cylinder(2.5));
+    EXPECT_EQ(s.active_W.size(), max_returns == 1 ? 0u : 25u) << max_returns;
+    EXPECT_EQ(s.retired_by_evidence, max_returns == 1 ? 1u : 0u) << max_returns;
+  }
+}
+
+TEST(FrontierRetirementConfig, EvidenceReturnsBelowMinusOneAreRefusedByName) {
+  FrontierRetirementConfig cfg;
+  cfg.max_evidence_returns = -2;
+  try {
+    cfg.validate();
+    FAIL() << "accepted max_evidence_returns -2";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("frontier_retirement/max_evidence_returns"), std::string::npos) << e.what();
+  }
+  cfg.max_evidence_returns = 0;
+  EXPECT_NO_THROW(cfg.validate());
+}
+
 TEST(FrontierRetirement, AViewThatShrinksTheClusterIsNoFailure) {
   FrontierRetirementConfig cfg;
   cfg.max_failed_views = 2;

@@ -30,7 +30,7 @@
 /// iterations (surface found since can hide it): one retired by geometry
 /// comes back once a view point is possible, one retired by evidence once
 /// more view points are possible than when it was retired (new free space
-/// around it). Retired frontiers are not sampled and
+/// around it), at most max_evidence_returns times. Retired frontiers are not sampled and
 /// do not count towards termination.
 
 #include <Eigen/Core>
@@ -56,6 +56,11 @@ struct FrontierRetirementConfig {
   double min_view_distance_m = 0.3; ///< nearest horizontal standoff of a view point, m
   double fov_margin_rad = 0.05;     ///< a cluster must lie this far inside the vertical field of view, rad
   int recheck_iterations = 5;       ///< clusters are judged by geometry again this often, iterations
+  /// Times a cluster retired by evidence may come back when more view points
+  /// become possible; after that it stays retired by evidence (-1 = no limit).
+  /// Depth noise carving free space in front of a window grows the view
+  /// points one by one, and each return costs K more views.
+  int max_evidence_returns = -1;
 
   void validate(const std::string& ns = "frontier_retirement/") const {
     require(std::isfinite(cluster_size_m) && cluster_size_m > 0, ns + "cluster_size_m", "must be > 0 m");
@@ -67,6 +72,7 @@ struct FrontierRetirementConfig {
             "must be >= 0 m");
     require(std::isfinite(fov_margin_rad) && fov_margin_rad >= 0, ns + "fov_margin_rad", "must be >= 0 rad");
     require(recheck_iterations > 0, ns + "recheck_iterations", "must be > 0");
+    require(max_evidence_returns >= -1, ns + "max_evidence_returns", "must be >= 0, or -1 for no limit");
     // Otherwise no view point exists anywhere and every frontier would be retired at once.
     require(min_view_distance_m < view_range_m, ns + "min_view_distance_m", "must be < view_range_m");
     require(view_range_m <= 20.0, ns + "view_range_m", "must be <= 20 m (view points per cluster grow with it)");
@@ -131,6 +137,7 @@ class FrontierRetirement {
     int voxels = 0;               ///< frontier voxels now
     int failed_views = 0;
     int viewpoints_at_retirement = 0;  ///< possible view points when retired by evidence
+    int evidence_returns = 0;     ///< times it came back from retirement by evidence
     /// Per view point (viewPointPositions order around centre_at_retirement_W): possible at retirement.
     std::vector<bool> possible_at_retirement;
     Eigen::Vector3d centre_at_retirement_W = Eigen::Vector3d::Zero();
