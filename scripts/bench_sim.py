@@ -17,6 +17,16 @@ import sys
 import time
 
 
+def write_lines(lines, out=None):
+    """Prints the JSON lines of a benchmark and appends them to `out` (make bench's results/bench/*.jsonl)."""
+    for line in lines:
+        print(json.dumps(line))
+    if out:
+        os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
+        with open(out, "a") as f:
+            f.writelines(json.dumps(line) + "\n" for line in lines)
+
+
 def main(argv=None):
     try:
         import semantic_exploration.sim  # noqa: F401
@@ -79,12 +89,7 @@ def main(argv=None):
               "peer": "reference_renderer (9440b49)", "peer_value": round(ref_fps, 2)},
              {"name": "sim_render_speedup_vs_reference", "value": round(fps / ref_fps, 3), "unit": "x",
               "peer": None, "peer_value": None}]
-    for line in lines:
-        print(json.dumps(line))
-    if a.out:
-        os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
-        with open(a.out, "a") as f:
-            f.writelines(json.dumps(line) + "\n" for line in lines)
+    write_lines(lines, a.out)
     return 0
 
 

@@ -19,6 +19,8 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from bench_sim import write_lines  # noqa: E402
 
 
 def child(sim_s: float) -> None:
@@ -91,12 +93,7 @@ def main(argv=None):
               "peer_value": round(runs["default"]["sim_s"] / runs["default"]["wall_s"], 2)},
              {"name": "sim_loop_cpu_ratio_blas_default_vs_one", "value": round(ratio, 3), "unit": "x",
               "peer": None, "peer_value": None}]
-    for line in lines:
-        print(json.dumps(line))
-    if a.out:
-        os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
-        with open(a.out, "a") as f:
-            f.writelines(json.dumps(line) + "\n" for line in lines)
+    write_lines(lines, a.out)
     return 0
 
 
