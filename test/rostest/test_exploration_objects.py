@@ -8,7 +8,7 @@ lies on, within 5 cm) and each found chair at least 70% complete at 5 cm,
 against its observable surface (eval.metrics / eval.observable). With
 ~expect_setpoints the MAV flew setpoint_streamer's setpoints (mav_sim ~follow
 setpoints): setpoints were streamed and every goal was reported by the
-streamer."""
+streamer. With ~expect_explored the mission must end `explored`."""
 import json
 import os
 import shutil
@@ -45,6 +45,8 @@ class ExplorationObjects(unittest.TestCase):
         finished, iterations = wait_finished(self, status, collisions, 1500.0)
         rospy.loginfo("exploration_objects: %s after %d iterations, sim %.1f s, wall %.0f s since the test started",
                       finished.termination_reason, iterations, rospy.get_time(), time.time() - wall0)
+        if rospy.get_param("~expect_explored", False):
+            self.assertEqual(finished.termination_reason, "explored", finished.message)
         if rospy.get_param("~expect_setpoints", False):
             rospy.loginfo("exploration_objects: %d setpoints streamed, goals reported by %s", setpoints[0], set(goals))
             self.assertGreater(setpoints[0], 100)
