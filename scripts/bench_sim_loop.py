@@ -58,8 +58,9 @@ def run_child(sim_s: float, blas_threads):
                          stdout=subprocess.PIPE, text=True)
     out = p.stdout.read()
     _, status, usage = os.wait4(p.pid, 0)
-    if status != 0:
-        raise RuntimeError("bench_sim_loop child exited with status %d" % status)
+    p.returncode = os.waitstatus_to_exitcode(status)  # reaped here: Popen must not wait for it again
+    if p.returncode != 0:
+        raise RuntimeError("bench_sim_loop child exited with %d" % p.returncode)
     res = json.loads(out.strip().splitlines()[-1])
     res["cpu_s"] = usage.ru_utime + usage.ru_stime
     return res

@@ -46,7 +46,12 @@ echo "[test] gtest under -fsanitize=address,undefined (scripts/run_sanitize.sh),
 SANITIZE_START=$(date +%s)
 nice -n 19 bash "$ROOT/scripts/run_sanitize.sh" "$RESULTS/gtest/sanitize" > "$RESULTS/gtest/sanitize.log" 2>&1 &
 SANITIZE_PID=$!
-trap 'pkill -P "$SANITIZE_PID" 2> /dev/null; kill "$SANITIZE_PID" 2> /dev/null' EXIT  # not left running if this script is stopped
+kill_tree() {  # a process and all its descendants (make, compilers, test programs under timeout)
+  local c
+  for c in $(pgrep -P "$1" 2> /dev/null); do kill_tree "$c"; done
+  kill "$1" 2> /dev/null
+}
+trap 'kill_tree "$SANITIZE_PID"' EXIT  # not left running if this script is stopped
 
 # 1. gtest programs (core and ROS unit/accuracy tests).
 for t in "$BIN"/test_*; do
@@ -79,7 +84,8 @@ for f in "$ROOT"/test/rostest/*.test; do
   [ -f "$f" ] || continue
   name=$(basename "$f")
   echo "[test] rostest $name"
-  timeout 1200 rostest --results-base-dir "$RESULTS/rostest/$name" semantic_exploration "$name" \
+  # Longer than any test's own time-limit (at most 1600 s), so that a test's own failure message is what is seen.
+  timeout -s INT -k 60 1800 rostest --results-base-dir "$RESULTS/rostest/$name" semantic_exploration "$name" \
     > "$RESULTS/rostest/$name.log" 2>&1
   rc=$?
   if [ $rc -ne 0 ]; then tail -n 60 "$RESULTS/rostest/$name.log"; echo "[test] rostest $name exited $rc"; fi
@@ -91,8 +97,14 @@ stage_done rostest
 # 1b, collected: waits for the sanitizer build and programs if they are still running.
 echo "[test] waiting for the sanitizer run (pid $SANITIZE_PID)"
 wait "$SANITIZE_PID"
+sanitize_rc=$?
+trap - EXIT
 tail -n 3 "$RESULTS/gtest/sanitize.log"
 sed 's|^|sanitize/|' "$RESULTS/gtest/sanitize/exit_codes" >> "$RESULTS/gtest/exit_codes"
+# A run that failed without a failing program of its own (killed, or no program built) still fails make test.
+if [ "$sanitize_rc" -ne 0 ] && ! awk '$2 != 0 {bad = 1} END {exit !bad}' "$RESULTS/gtest/sanitize/exit_codes" 2> /dev/null; then
+  echo "sanitize/run $sanitize_rc" >> "$RESULTS/gtest/exit_codes"
+fi
 stage_done "sanitize-wait"
 SANITIZE_S=$(sed -n 's/^\[sanitize\] total time \([0-9]*\) s$/\1/p' "$RESULTS/gtest/sanitize.log")
 STAGES="$STAGES sanitize ${SANITIZE_S:-?} s in the background (from $(( SANITIZE_START - START )) s on),"

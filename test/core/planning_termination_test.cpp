@@ -287,6 +287,35 @@ TEST(FrontierRetirement, AClusterComesBackFromEvidenceAtMostMaxEvidenceReturnsTi
   }
 }
 
+// The count belongs to the cube: a cluster that came back, then had no
+// frontier voxel for an iteration (noise), has used its return when it
+// reappears and is retired again. max_evidence_returns 0: never back.
+TEST(FrontierRetirement, TheReturnCountSurvivesAnIterationWithoutVoxels) {
+  for (const int max_returns : {0, 1}) {
+    FrontierRetirementConfig cfg;
+    cfg.max_failed_views = 3;
+    cfg.recheck_iterations = 1;
+    cfg.max_evidence_returns = max_returns;
+    FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
+    const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.75);
+    const auto voxels = patch(centre);
+    const auto retire = [&](const CollisionQuery& space) {
+      for (int view = 1; view <= 3; ++view) {
+        fr.update(voxels, space);
+        fr.recordViews({}, space, {centre});
+      }
+      return fr.update(voxels, space);
+    };
+    ASSERT_EQ(retire(cylinder(1.0)).retired_by_evidence, 1u) << max_returns;
+    const auto back = fr.update(voxels, cylinder(2.0));
+    EXPECT_EQ(back.active_W.size(), max_returns == 0 ? 0u : 25u) << max_returns;
+    if (max_returns == 0) continue;
+    fr.update({}, cylinder(2.0));  // an iteration without its voxels: the cluster is dropped
+    ASSERT_EQ(retire(cylinder(2.0)).retired_by_evidence, 1u);
+    EXPECT_EQ(fr.update(voxels, cylinder(2.5)).retired_by_evidence, 1u);  // its one return is used
+  }
+}
+
 TEST(FrontierRetirementConfig, EvidenceReturnsBelowMinusOneAreRefusedByName) {
   FrontierRetirementConfig cfg;
   cfg.max_evidence_returns = -2;

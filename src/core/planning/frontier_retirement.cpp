@@ -223,10 +223,11 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
       now.more = n > c.viewpoints_at_retirement;
     }
     c.by_geometry = !now.any;
-    const bool may_return = config_.max_evidence_returns < 0 || c.evidence_returns < config_.max_evidence_returns;
+    int& returns = evidence_returns_[m.first];
+    const bool may_return = config_.max_evidence_returns < 0 || returns < config_.max_evidence_returns;
     if (now.more && may_return) {
       c.by_evidence = false;  // new free space around it: worth another look
-      ++c.evidence_returns;
+      ++returns;
       c.failed_views = 0;
       c.voxels_at_first_view = -1;
       c.possible_at_retirement.clear();

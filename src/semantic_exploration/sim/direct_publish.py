@@ -1,17 +1,18 @@
 """Publishers that write in the caller's thread, for mav_sim's small high-rate messages
-(/clock at the physics rate, world->body tf and mav/pose at tf_rate_hz).
+(/clock at the physics rate, the world->body tf at tf_rate_hz).
 
 rospy's queued publishing (queue_size=N) hands each message to one writer thread per
 subscriber and then yields the GIL (``time.sleep(0)`` in its QueuedConnection): at 100 Hz
-to some ten subscribers that was 10^5 thread hand-offs per 100 s of sim time and about a
-fifth of mav_sim's CPU, all of it spent in context switches (docs/BENCHMARKS.md, "End to
-end"). Written directly, a message costs one socket write per subscriber.
+to some ten subscribers that was 10^5 thread hand-offs per 100 s of sim time, spent in
+context switches (docs/BENCHMARKS.md, "mav_sim's hidden second core"). Written directly,
+a message costs one socket write per subscriber.
 
-The trade: a subscriber that is alive but never reads would, once its socket buffer is
-full, block the writing thread. These messages are tens of bytes, so the buffer of a
-subscriber holds many seconds of them; every ROS node drains its sockets in its own I/O
-thread, and a subscriber that exits closes its connection (rospy then drops it). Images
-stay queued (queue_size 5): a slow recorder of images may lag without holding sim time.
+The trade: a subscriber that is alive but does not read would, once its socket buffer is
+full, block the simulator's loop. A roscpp node reads its sockets in its own I/O thread;
+a rospy node runs each callback in the receiving thread, so a rospy callback that blocks
+for long holds its socket. These messages are tens of bytes, so a socket buffer holds
+seconds of them, and /clock and /tf go to rospy's own quick handlers (its clock, tf2's
+buffer). mav/pose and the images stay queued: their subscribers run callbacks of their own.
 """
 import warnings
 

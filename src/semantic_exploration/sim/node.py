@@ -121,7 +121,7 @@ class MavSimNode:
         self.pub_inst = rospy.Publisher("camera/instance_gt", Image, **latch)
         self.pub_cls = rospy.Publisher("camera/class_gt", Image, **latch)
         self.pub_det = rospy.Publisher("detections", Detections, **latch)
-        self.pub_pose = direct_publisher("mav/pose", PoseStamped)  # 50 Hz, written in this thread (direct_publish.py)
+        self.pub_pose = rospy.Publisher("mav/pose", PoseStamped, queue_size=10)
         self.pub_goal = rospy.Publisher("mav/goal_reached", PoseStamped, queue_size=10)
         self.pub_coll = rospy.Publisher("mav/collisions", UInt32, queue_size=1, latch=True)
         self.pub_rejected = rospy.Publisher("mav/path_rejected", String, queue_size=5)

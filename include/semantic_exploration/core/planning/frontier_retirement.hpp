@@ -137,7 +137,6 @@ class FrontierRetirement {
     int voxels = 0;               ///< frontier voxels now
     int failed_views = 0;
     int viewpoints_at_retirement = 0;  ///< possible view points when retired by evidence
-    int evidence_returns = 0;     ///< times it came back from retirement by evidence
     /// Per view point (viewPointPositions order around centre_at_retirement_W): possible at retirement.
     std::vector<bool> possible_at_retirement;
     Eigen::Vector3d centre_at_retirement_W = Eigen::Vector3d::Zero();
@@ -180,6 +179,11 @@ class FrontierRetirement {
   std::unordered_map<std::uint64_t, Cluster> clusters_;
   long iteration_ = 0;
   std::unordered_set<std::uint64_t> ever_retired_by_evidence_;  ///< keys of the clusters evidenceRetirements() counts
+  /// Per cube: times its cluster came back from retirement by evidence. Kept
+  /// by key, not in the Cluster, which is dropped while its cube holds no
+  /// frontier voxel: noise that empties a cube for an iteration must not
+  /// reset the count max_evidence_returns limits.
+  std::unordered_map<std::uint64_t, int> evidence_returns_;
 };
 
 }  // namespace semexp
