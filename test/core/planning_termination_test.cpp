@@ -256,26 +256,41 @@ TEST(FrontierRetirement, RetiredByEvidenceAfterKViewsAndBackWhenFreeSpaceGrows) 
   EXPECT_EQ(fr.evidenceRetirements(), 2u);
 }
 
+// One cluster level with the camera (observable by geometry), K = 3, judged
+// by geometry every iteration, and max_evidence_returns as given.
+struct ReturningCluster {
+  static FrontierRetirementConfig config(int max_returns) {
+    FrontierRetirementConfig cfg;
+    cfg.max_failed_views = 3;
+    cfg.recheck_iterations = 1;
+    cfg.max_evidence_returns = max_returns;
+    return cfg;
+  }
+  explicit ReturningCluster(int max_returns)
+      : fr(config(max_returns), camera(), box(5.0, 3.0), kClearance, 0.04), voxels(patch(centre)) {}
+  /// K views aimed at it with `space` free, then the update that judges the last.
+  FrontierRetirement::Split retire(const CollisionQuery& space) {
+    for (int view = 1; view <= 3; ++view) {
+      fr.update(voxels, space);
+      fr.recordViews({}, space, {centre});
+    }
+    return fr.update(voxels, space);
+  }
+  FrontierRetirement fr;
+  const Eigen::Vector3d centre{kAxis.x(), kAxis.y(), 1.75};
+  std::vector<Eigen::Vector3d> voxels;
+};
+
 // max_evidence_returns 1: a cluster comes back from retirement by evidence
 // once when new free space gives it more view points; retired again, it stays
 // retired however much more free space is found. With no limit it comes back
 // each time.
 TEST(FrontierRetirement, AClusterComesBackFromEvidenceAtMostMaxEvidenceReturnsTimes) {
   for (const int max_returns : {1, -1}) {
-    FrontierRetirementConfig cfg;
-    cfg.max_failed_views = 3;
-    cfg.recheck_iterations = 1;
-    cfg.max_evidence_returns = max_returns;
-    FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
-    const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.75);
-    const auto voxels = patch(centre);
-    const auto retire = [&](const CollisionQuery& space) {
-      for (int view = 1; view <= 3; ++view) {
-        fr.update(voxels, space);
-        fr.recordViews({}, space, {centre});
-      }
-      return fr.update(voxels, space);
-    };
+    ReturningCluster rc(max_returns);
+    auto& fr = rc.fr;
+    const auto& voxels = rc.voxels;
+    const auto retire = [&](const CollisionQuery& space) { return rc.retire(space); };
     ASSERT_EQ(retire(cylinder(1.0)).retired_by_evidence, 1u) << max_returns;
     // More free space: more view points, back (its first return).
     EXPECT_EQ(fr.update(voxels, cylinder(2.0)).active_W.size(), 25u) << max_returns;
@@ -292,20 +307,10 @@ TEST(FrontierRetirement, AClusterComesBackFromEvidenceAtMostMaxEvidenceReturnsTi
 // reappears and is retired again. max_evidence_returns 0: never back.
 TEST(FrontierRetirement, TheReturnCountSurvivesAnIterationWithoutVoxels) {
   for (const int max_returns : {0, 1}) {
-    FrontierRetirementConfig cfg;
-    cfg.max_failed_views = 3;
-    cfg.recheck_iterations = 1;
-    cfg.max_evidence_returns = max_returns;
-    FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
-    const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.75);
-    const auto voxels = patch(centre);
-    const auto retire = [&](const CollisionQuery& space) {
-      for (int view = 1; view <= 3; ++view) {
-        fr.update(voxels, space);
-        fr.recordViews({}, space, {centre});
-      }
-      return fr.update(voxels, space);
-    };
+    ReturningCluster rc(max_returns);
+    auto& fr = rc.fr;
+    const auto& voxels = rc.voxels;
+    const auto retire = [&](const CollisionQuery& space) { return rc.retire(space); };
     ASSERT_EQ(retire(cylinder(1.0)).retired_by_evidence, 1u) << max_returns;
     const auto back = fr.update(voxels, cylinder(2.0));
     EXPECT_EQ(back.active_W.size(), max_returns == 0 ? 0u : 25u) << max_returns;
