@@ -223,11 +223,8 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
       now.more = n > c.viewpoints_at_retirement;
     }
     c.by_geometry = !now.any;
-    int& returns = evidence_returns_[m.first];
-    const bool may_return = config_.max_evidence_returns < 0 || returns < config_.max_evidence_returns;
-    if (now.more && may_return) {
+    if (now.more && takeEvidenceReturn(m.first)) {
       c.by_evidence = false;  // new free space around it: worth another look
-      ++returns;
       c.failed_views = 0;
       c.voxels_at_first_view = -1;
       c.possible_at_retirement.clear();
@@ -242,6 +239,14 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
     for (std::size_t i : m.second) (retired ? out.retired_W : out.active_W).push_back(frontiers_W[i]);
   }
   return out;
+}
+
+bool FrontierRetirement::takeEvidenceReturn(std::uint64_t cube) {
+  if (config_.max_evidence_returns < 0) return true;  // no limit: nothing to count
+  int& returns = evidence_returns_[cube];
+  if (returns >= config_.max_evidence_returns) return false;
+  ++returns;
+  return true;
 }
 
 void FrontierRetirement::discardViews() {

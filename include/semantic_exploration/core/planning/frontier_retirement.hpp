@@ -167,6 +167,9 @@ class FrontierRetirement {
   /// (the possible view points around the same c_W earlier), judging only
   /// as many view points as the comparison needs.
   Recount recount(const Eigen::Vector3d& c_W, const std::vector<bool>& before, const CollisionQuery& not_occupied) const;
+  /// Whether the cluster of `cube`, retired by evidence, may come back now
+  /// (max_evidence_returns); counts the return when it may.
+  bool takeEvidenceReturn(std::uint64_t cube);
   /// No occupied voxel on the segment from `from_W` up to short_m (m) before `to_W`.
   bool lineOfSight(const Eigen::Vector3d& from_W, const Eigen::Vector3d& to_W, double short_m,
                    const CollisionQuery& not_occupied) const;
