@@ -290,11 +290,10 @@ TEST(FrontierRetirement, AClusterComesBackFromEvidenceAtMostMaxEvidenceReturnsTi
     ReturningCluster rc(max_returns);
     auto& fr = rc.fr;
     const auto& voxels = rc.voxels;
-    const auto retire = [&](const CollisionQuery& space) { return rc.retire(space); };
-    ASSERT_EQ(retire(cylinder(1.0)).retired_by_evidence, 1u) << max_returns;
+    ASSERT_EQ(rc.retire(cylinder(1.0)).retired_by_evidence, 1u) << max_returns;
     // More free space: more view points, back (its first return).
     EXPECT_EQ(fr.update(voxels, cylinder(2.0)).active_W.size(), 25u) << max_returns;
-    ASSERT_EQ(retire(cylinder(2.0)).retired_by_evidence, 1u) << max_returns;
+    ASSERT_EQ(rc.retire(cylinder(2.0)).retired_by_evidence, 1u) << max_returns;
     // Still more free space: a second return only without a limit.
     const auto s = fr.update(voxels, cylinder(2.5));
     EXPECT_EQ(s.active_W.size(), max_returns == 1 ? 0u : 25u) << max_returns;
@@ -310,13 +309,12 @@ TEST(FrontierRetirement, TheReturnCountSurvivesAnIterationWithoutVoxels) {
     ReturningCluster rc(max_returns);
     auto& fr = rc.fr;
     const auto& voxels = rc.voxels;
-    const auto retire = [&](const CollisionQuery& space) { return rc.retire(space); };
-    ASSERT_EQ(retire(cylinder(1.0)).retired_by_evidence, 1u) << max_returns;
+    ASSERT_EQ(rc.retire(cylinder(1.0)).retired_by_evidence, 1u) << max_returns;
     const auto back = fr.update(voxels, cylinder(2.0));
     EXPECT_EQ(back.active_W.size(), max_returns == 0 ? 0u : 25u) << max_returns;
     if (max_returns == 0) continue;
     fr.update({}, cylinder(2.0));  // an iteration without its voxels: the cluster is dropped
-    ASSERT_EQ(retire(cylinder(2.0)).retired_by_evidence, 1u);
+    ASSERT_EQ(rc.retire(cylinder(2.0)).retired_by_evidence, 1u);
     EXPECT_EQ(fr.update(voxels, cylinder(2.5)).retired_by_evidence, 1u);  // its one return is used
   }
 }
