@@ -72,9 +72,10 @@ stage_done gtest
 # real time (test_replay: 95 s of wall time for 33 s of CPU), and a lockstep
 # mission runs its nodes one after the other. Fresh-clone runs: 1,278 s one
 # after the other (pytest 425 + rostest 651 s), 1,088 s at once (pytest 699 s,
-# rostest 879 s, both slowed by the other). They do not share a master:
-# rostest starts its own on port 22422, the pytest files on free ports from the
-# kernel's ephemeral range.
+# rostest 879 s, both slowed by the other). With the two sharing one queue
+# of jobs on two lanes, the long rostests first, it took 1,113 s: the machine
+# is then short of CPU, not of parallel work. They share no master: rostest
+# starts its own on a free port, as do the pytest files that need one.
 #
 # 3. rostest integration tests (each brings up its own master), one after the other.
 run_rostests() {
