@@ -97,3 +97,16 @@ def test_wall_limit_guards_a_stuck_run_without_ending_a_slow_one(tmp_path):
     assert run_mission.parse_args(["--out", out, "--sim-limit-s", "1000"]).wall_limit_s == 3000.0
     assert run_mission.parse_args(["--out", out, "--sim-limit-s", "60"]).wall_limit_s == 1800.0
     assert run_mission.parse_args(["--out", out, "--wall-limit-s", "50"]).wall_limit_s == 50.0
+
+
+def test_an_evaluation_with_nothing_saved_leaves_no_process_behind(habitat_scene, tmp_path):
+    # A mission whose node died at start-up saved no map. The observability process started at the
+    # evaluation's start must still be collected: left running, it blocked on its result pipe and
+    # run_mission.py never exited (the interpreter joins it at exit).
+    import multiprocessing as mp
+    out = str(tmp_path / "run")
+    args = run_mission.parse_args(["--scene", habitat_scene, "--out", out])
+    _, gt = run_mission.prepare_scene(args, out)
+    res = run_mission.evaluate(out, gt, ["chair"], {})
+    assert "found" not in res and "background" not in res
+    assert mp.active_children() == []

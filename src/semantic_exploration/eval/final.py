@@ -8,6 +8,7 @@ def evaluate(out, gt, classes, saved):
     from semantic_exploration.eval import metrics
     from semantic_exploration.eval.truth import GroundTruthIndex
     res = {}
+    index = None
     try:
         doc = metrics.load_ground_truth(gt["gt_dir"])
         if not doc.get("start") and gt.get("start"):
@@ -42,6 +43,9 @@ def evaluate(out, gt, classes, saved):
             res["timeseries"] = finish_series(index, series, os.path.join(out, "timeseries.csv"), rec, b)
     except Exception as e:  # a failed evaluation must not lose the rest of the report
         res["error"] = "%s: %s" % (type(e).__name__, e)
+    finally:
+        if index is not None:  # nothing saved (a node died at start-up) used no mask: collect the process
+            index.close()
     return res
 
 

@@ -175,6 +175,14 @@ class GroundTruthIndex:
         send.close()
         self._pending = (proc, receive, sinks)
 
+    def close(self) -> None:
+        """Collects a process start_observability left running, keeping its result. Call it when done:
+        a process left behind blocks on its result pipe, and the interpreter waits for it at exit."""
+        try:
+            self._finish_observability()
+        except RuntimeError:  # its error is only of interest to a use of the masks, and there is none now
+            pass
+
     def _finish_observability(self) -> None:
         if self._pending is None:
             return
