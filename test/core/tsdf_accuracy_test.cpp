@@ -104,26 +104,32 @@ double surfaceVoxelsOffShape(const TsdfMap& map, const Shape& shape) {
   return n ? static_cast<double>(off) / static_cast<double>(n) : 1.0;
 }
 
+// Integrates `laps` rings of 12 views of `box` (radius and height above its centre in m, each lap turned by
+// 0.1 rad) with the simulator's depth noise times `noise_factor` (sigma = max(0.005, 0.002 d^2) m at 1).
+void integrateNoisyRings(TsdfMap& map, const Box& box, double radius_m, double dz_m, int laps, double noise_factor) {
+  PinholeCamera cam;
+  std::mt19937 rng(7);
+  for (int lap = 0; lap < laps; ++lap)
+    for (const auto& T_WC : ring(box.centre(), radius_m, dz_m, 12, 0.1 * lap)) {
+      cv::Mat depth, labels;
+      renderShapes(cam, T_WC, {&box}, depth, labels);
+      addQuadraticDepthNoise(depth, rng, 0.002 * noise_factor, 0.005 * noise_factor);
+      map.integrate(cam, T_WC, depth, cv::Mat(), labels > 0, true);
+    }
+}
+
 // A solid box the size of an armchair's seat, seen from about 3.2 m with the simulator's depth noise (sigma
 // 0.002 d^2, about 2 cm here). With a band of 4 cm behind the surface, a voxel 6 cm inside the box is updated
 // only by the rays that overshoot the surface by 2 sigma and more, whose SDF leans towards free: surface
 // appears inside the box. A band of 3 sigma (q = 0.006) averages all rays there and keeps the box solid.
 TEST(TsdfAccuracy, NoSurfaceInsideASolidBoxSeenWithFarNoise) {
   const Box box = Box::around(Eigen::Vector3d(0.0, 0.0, 0.21), Eigen::Vector3d(0.38, 0.38, 0.21));
-  PinholeCamera cam;
   double off[2];
   for (int with_band = 0; with_band < 2; ++with_band) {
     TsdfParams p = semexp_test::objectTsdfParams();
     p.behind_surface_quadratic_per_m = with_band ? 0.006 : 0.0;
     TsdfMap map(p);
-    std::mt19937 rng(7);
-    for (int lap = 0; lap < 10; ++lap)
-      for (const auto& T_WC : ring(box.centre(), 3.0, 1.2, 12, 0.1 * lap)) {
-        cv::Mat depth, labels;
-        renderShapes(cam, T_WC, {&box}, depth, labels);
-        addQuadraticDepthNoise(depth, rng);
-        map.integrate(cam, T_WC, depth, cv::Mat(), labels > 0, true);
-      }
+    integrateNoisyRings(map, box, 3.0, 1.2, 10, 1.0);
     off[with_band] = surfaceVoxelsOffShape(map, box);
     std::printf("band %s: %.3f of the surface voxels lie over 3 cm off the box\n", with_band ? "3 sigma" : "4 cm",
                 off[with_band]);
@@ -147,19 +153,11 @@ double meshRmse(const TsdfMap& map, const Shape& shape) {
 // doubled noise (q = 0.012) brings it back to near the clean error (0.30 cm measured).
 TEST(TsdfAccuracy, ABandOfThreeSigmaOfTheSensorsNoiseKeepsTheMeshOnTheSurface) {
   const Box box = Box::around(Eigen::Vector3d(0.0, 0.0, 0.45), Eigen::Vector3d(0.25, 0.25, 0.45));
-  PinholeCamera cam;
   auto rmse = [&](double noise_factor, double q) {
     TsdfParams p = semexp_test::objectTsdfParams();
     p.behind_surface_quadratic_per_m = q;
     TsdfMap map(p);
-    std::mt19937 rng(7);
-    for (int lap = 0; lap < 5; ++lap)
-      for (const auto& T_WC : ring(box.centre(), 2.5, 0.8, 12, 0.1 * lap)) {
-        cv::Mat depth, labels;
-        renderShapes(cam, T_WC, {&box}, depth, labels);
-        addQuadraticDepthNoise(depth, rng, 0.002 * noise_factor, 0.005 * noise_factor);
-        map.integrate(cam, T_WC, depth, cv::Mat(), labels > 0, true);
-      }
+    integrateNoisyRings(map, box, 2.5, 0.8, 5, noise_factor);
     const double e = meshRmse(map, box);
     std::printf("noise x%.0f, q %.3f 1/m: mesh RMSE %.2f cm\n", noise_factor, q, 100 * e);
     return e;
