@@ -138,14 +138,6 @@ TEST(TsdfAccuracy, NoSurfaceInsideASolidBoxSeenWithFarNoise) {
   EXPECT_LT(off[1], 0.05);  // ... and the noise-wide band removes it (0.02 measured)
 }
 
-// Root mean square distance (m) of the mesh's vertices to the surface of `shape`.
-double meshRmse(const TsdfMap& map, const Shape& shape) {
-  const semexp::Mesh mesh = map.extractMesh();
-  double sq = 0;
-  for (const auto& v : mesh.vertices_W) sq += std::pow(shape.sdf(v.cast<double>()), 2);
-  return mesh.vertices_W.empty() ? 1.0 : std::sqrt(sq / static_cast<double>(mesh.vertices_W.size()));
-}
-
 // The band behind the surface must follow the sensor's noise, not only the default's. A chair-sized solid
 // box seen from 2.5 m: with the simulator's noise (s = 0.002 1/m, sigma 1.25 cm there) q = 0.006 is 3 sigma;
 // with the noise doubled (s = 0.004, sigma 2.5 cm) it is 1.5 sigma, the overshooting rays decide the voxels
@@ -153,16 +145,17 @@ double meshRmse(const TsdfMap& map, const Shape& shape) {
 // doubled noise (q = 0.012) brings it back to near the clean error (0.30 cm measured).
 TEST(TsdfAccuracy, ABandOfThreeSigmaOfTheSensorsNoiseKeepsTheMeshOnTheSurface) {
   const Box box = Box::around(Eigen::Vector3d(0.0, 0.0, 0.45), Eigen::Vector3d(0.25, 0.25, 0.45));
-  auto rmse = [&](double noise_factor, double q) {
+  auto meshError = [&](double noise_factor, double q) {
     TsdfParams p = semexp_test::objectTsdfParams();
     p.behind_surface_quadratic_per_m = q;
     TsdfMap map(p);
     integrateNoisyRings(map, box, 2.5, 0.8, 5, noise_factor);
-    const double e = meshRmse(map, box);
+    const double e = rmse(map.extractMesh().vertices_W, box);
     std::printf("noise x%.0f, q %.3f 1/m: mesh RMSE %.2f cm\n", noise_factor, q, 100 * e);
     return e;
   };
-  const double clean = rmse(1, 0.006), doubled_narrow = rmse(2, 0.006), doubled_matched = rmse(2, 0.012);
+  const double clean = meshError(1, 0.006), doubled_narrow = meshError(2, 0.006),
+               doubled_matched = meshError(2, 0.012);
   EXPECT_LT(clean, 0.005);
   EXPECT_GT(doubled_narrow, 3 * clean);   // 1.5 sigma: biased
   EXPECT_LT(doubled_matched, 1.5 * clean);  // 3 sigma of the doubled noise: within 1.5x of clean
