@@ -152,6 +152,20 @@ bool OccupancyMap::applyBlocks(const MapBlocksData& m) {
     changed.push_back(cell);
   }
   refreshSummaries(changed, false);
+  // Frontiers: an overwritten cell may gain or lose frontier voxels, and so may its face neighbours
+  // (their unknown neighbour may now be known, or known voxels unknown again); the next
+  // updateFrontiers() re-checks them all.
+  for (const int cell : changed) {
+    frontiers_.markCandidate(cell);
+    const int bx = cell % store_.nb.x(), by = (cell / store_.nb.x()) % store_.nb.y(),
+              bz = cell / (store_.nb.x() * store_.nb.y());
+    for (int axis = 0; axis < 3; ++axis)
+      for (int sgn = -1; sgn <= 1; sgn += 2) {
+        Eigen::Vector3i n(bx, by, bz);
+        n[axis] += sgn;
+        if (n[axis] >= 0 && n[axis] < store_.nb[axis]) frontiers_.markCandidate(store_.cellIndex(n.x(), n.y(), n.z()));
+      }
+  }
   return true;
 }
 

@@ -18,6 +18,8 @@ namespace semexp_ros {
 namespace {
 
 constexpr double kColourSyncTolerance_s = 0.005;  // colour and depth of one frame share (almost) one stamp
+// Private parameter: the /run_id of the launch whose start this node's first instance marked free.
+constexpr const char* kStartFreeMarkedParam = "start_free_marked_run_id";
 
 }  // namespace
 
@@ -44,9 +46,55 @@ BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
   if (config_.integrate_colour) rgb_sub_ = nh.subscribe("camera/rgb/image_raw", 5, &BackgroundMapNode::rgbCallback, this);
   flush_timer_ = nh.createWallTimer(ros::WallDuration(std::max(0.005, 0.5 * node_config_.colour_wait_s)), &BackgroundMapNode::flushTimer, this);
   last_header_.frame_id = frames_.world;
+  // The paper's free sphere holds at the mission's start only. An instance respawned by its launch
+  // mid-flight (same /run_id) starts wherever the MAV is, perhaps 0.2 m above the floor, and a sphere
+  // there would mark the unseen floor free for the planner to fly into. The first instance records
+  // the run it marked the sphere in; a later one of the same run leaves it out and takes back the
+  // map it lost from the planner's replica instead.
+  nh.param<std::string>("/run_id", run_id_, "");
+  std::string marked_in;
+  pnh.param<std::string>(kStartFreeMarkedParam, marked_in, "");
+  respawned_ = !run_id_.empty() && marked_in == run_id_;
+  start_free_due_ = node_config_.start_free_radius_m > 0 && !respawned_;
+  if (respawned_) restoreMap(nh);
   ROS_INFO("background_map: resolution %.3f m, bounds [%.1f %.1f %.1f] - [%.1f %.1f %.1f] m, colour %s",
            config_.resolution_m, bounds_.min_m.x(), bounds_.min_m.y(), bounds_.min_m.z(), bounds_.max_m.x(),
            bounds_.max_m.y(), bounds_.max_m.z(), config_.integrate_colour ? "on" : "off");
+}
+
+// ----------------------------------------------------------------- restart
+
+void BackgroundMapNode::restoreMap(ros::NodeHandle& nh) {
+  const std::string& service = node_config_.restore_map_service;
+  if (service.empty()) {
+    ROS_WARN("background_map: restarted within run %s; restore_map_service is empty, so the map starts empty "
+             "(and without the start's free sphere, which belongs to the mission's start)", run_id_.c_str());
+    return;
+  }
+  const std::string resolved = nh.resolveName(service);
+  std::string why;
+  semantic_exploration::GetMap srv;
+  srv.request.compact = true;
+  // Bounded: the planner may itself wait (up to its service_timeout_s) on this node's services, which
+  // answer only once this constructor is done. A call given up is joined when the node shuts down.
+  restore_caller_ = std::make_unique<ServiceCaller>(nh, node_config_.restore_wait_s, drops_);
+  if (restore_caller_->call(service, srv, why) == ServiceCaller::Result::kOk) {
+    semexp::MapBlocksData blocks;
+    why = fromMapBlocksMsg(srv.response.map, blocks);
+    if (why.empty() && !map_->applyBlocks(blocks))
+      why = "its geometry (resolution, block size, origin) differs from this map's";
+    if (!why.empty()) drops_.drop("bad_restored_map", resolved + ": " + why);
+    if (why.empty()) {
+      map_->updateFrontiers();
+      ROS_WARN("background_map: restarted within run %s: took back %zu blocks (%zu uniform) of occupancy from %s "
+               "(%.1f m^3 free, %zu frontier voxels); colour and observation distances start anew",
+               run_id_.c_str(), blocks.blockCount() + blocks.uniform_values.size(), blocks.uniform_values.size(),
+               resolved.c_str(), map_->freeVolume(), map_->frontierCount());
+      return;
+    }
+  }
+  ROS_WARN("background_map: restarted within run %s: could not take the map back from %s (%s); the map starts "
+           "empty, without the start's free sphere", run_id_.c_str(), resolved.c_str(), why.c_str());
 }
 
 // ------------------------------------------------------------ frame pairing
@@ -128,12 +176,14 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
   } catch (const std::exception& e) {
     return fail({"bad_input", e.what()});
   }
-  if (frames_integrated_ == 0 && node_config_.start_free_radius_m > 0) {
+  if (start_free_due_) {
     // The paper assumes free space around the start: the camera cannot see the MAV's own position.
     map_->markFreeSphere(T_WC.translation(), node_config_.start_free_radius_m);
     ROS_INFO("background_map: unknown space within %.2f m of the first camera pose marked free",
              node_config_.start_free_radius_m);
   }
+  if (frames_integrated_ == 0 && !respawned_) ros::NodeHandle("~").setParam(kStartFreeMarkedParam, run_id_);
+  start_free_due_ = false;
   last_integration_ms_ = static_cast<float>((ros::WallTime::now() - t_int).toSec() * 1e3);
   const auto t_fr = ros::WallTime::now();
   map_->updateFrontiers();

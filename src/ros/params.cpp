@@ -112,6 +112,10 @@ BackgroundMapNodeConfig loadBackgroundMapNode(const ParamReader& p) {
   semexp::require(c.surface_share_period_s <= 60.0, n + "surface_share_period_s", "must be <= 60 s");
   p.getAtLeast(n + "colour_wait_s", c.colour_wait_s, 0.0, "s");
   p.getAtLeast(n + "start_free_radius_m", c.start_free_radius_m, 0.0, "m");
+  p.get(n + "restore_map_service", c.restore_map_service);
+  p.getAtLeast(n + "restore_wait_s", c.restore_wait_s, 0.0, "s");
+  // ServiceCaller bounds the call by it: 0 would give up before asking.
+  if (!c.restore_map_service.empty()) semexp::require(c.restore_wait_s > 0.0, n + "restore_wait_s", "must be > 0 s");
   return c;
 }
 

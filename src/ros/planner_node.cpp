@@ -46,6 +46,7 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   for (int i = 0; i < 4; ++i)
     gain_pubs_[i] = pnh.advertise<sensor_msgs::Image>(std::string("gain_images/") + gains[i], 1, true);
   plan_srv_ = pnh.advertiseService("plan_once", &PlannerNode::planOnce, this);
+  replica_srv_ = pnh.advertiseService("get_map", &PlannerNode::getReplica, this);
   update_sub_ = nh.subscribe("background_map/map_update", 50, &PlannerNode::mapUpdateCallback, this);
   frontiers_sub_ = nh.subscribe("background_map/frontiers", 1, &PlannerNode::frontiersCallback, this);
   objects_sub_ = nh.subscribe("object_map/objects", 1, &PlannerNode::objectsCallback, this);
@@ -105,6 +106,18 @@ bool PlannerNode::resync() {
   if (ok) ROS_INFO("planner: map replica resynced at sequence %lu (%zu blocks)",
                    static_cast<unsigned long>(replica_.sequence()), replica_.blockCount());
   return ok;
+}
+
+bool PlannerNode::getReplica(semantic_exploration::GetMap::Request&, semantic_exploration::GetMap::Response& res) {
+  if (replica_.empty()) {
+    ROS_WARN("planner: ~get_map refused: the replica holds no map yet");
+    return false;
+  }
+  // The replica keeps uniform blocks as one value: its snapshot is compact whatever was asked.
+  res.map = toMapBlocksMsg(replica_.snapshot(), ros::Time::now(), frames_.world);
+  ROS_INFO("planner: ~get_map: sent the replica (%zu blocks, sequence %lu)", replica_.blockCount(),
+           static_cast<unsigned long>(replica_.sequence()));
+  return true;
 }
 
 void PlannerNode::mapUpdateCallback(const semantic_exploration::MapBlocksConstPtr& msg) {

@@ -95,6 +95,56 @@ TEST(MapSnapshot, CompactAndFullSnapshotsDecodeToTheSameMap) {
     }
 }
 
+TEST(MapSnapshot, AMapRestoredFromThePlannersReplicaHasTheSameVoxelsAndFrontiers) {
+  // background_map respawned mid-flight gets its map back from the planner's replica: map ->
+  // compact snapshot -> replica -> replica snapshot -> a new map. Every voxel decodes to what the
+  // map's own snapshot holds, and the new map finds the same frontier voxels.
+  const Bounds b = semexp_test::tableRoomBounds();
+  const semexp_test::TestGrid room = semexp_test::tableRoom();
+  const PinholeCamera cam = semexp_test::halfSizeCamera();
+  const BackgroundMapConfig cfg;
+  OccupancyMap map(cfg, b);
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Isometry3d T = semexp_test::levelCameraPose({1.2 + 0.6 * k, 2.0, 1.2}, 2.1 * k);
+    map.integrate(semexp_test::renderDepth(room, cam, T), cv::Mat(), cam, T);
+  }
+  map.updateFrontiers();
+  ASSERT_GT(map.frontierCount(), 1000u);
+  MapReplica replica;
+  ASSERT_EQ(replica.apply(map.snapshot(true)), MapReplica::Result::kApplied);
+  const MapBlocksData from_replica = replica.snapshot();
+  EXPECT_TRUE(from_replica.full);
+  EXPECT_EQ(from_replica.blockCount() + from_replica.uniform_values.size(), replica.blockCount());
+  OccupancyMap restored(cfg, b);
+  ASSERT_TRUE(restored.applyBlocks(from_replica));
+  const MapBlocksData want = map.snapshot(false), got = restored.snapshot(false);
+  EXPECT_EQ(got.coords, want.coords);
+  EXPECT_EQ(got.payload, want.payload);
+  EXPECT_NEAR(restored.freeVolume(), map.freeVolume(), 1e-9);
+  restored.updateFrontiers();
+  EXPECT_EQ(restored.frontierCount(), map.frontierCount());
+  // The same replica twice gives the same bytes (blocks in key order).
+  const MapBlocksData again = replica.snapshot();
+  EXPECT_EQ(again.coords, from_replica.coords);
+  EXPECT_EQ(again.uniform_coords, from_replica.uniform_coords);
+}
+
+TEST(MapSnapshot, FrontiersFollowBlocksWrittenOverAKnownMap) {
+  // A full map overwritten by a smaller one: frontiers where the new map's known space ends, and none
+  // left in the blocks that went back to unknown.
+  const Bounds b = semexp_test::tableRoomBounds();
+  const BackgroundMapConfig cfg;
+  OccupancyMap small(cfg, b), big(cfg, b);
+  small.markFreeSphere({2.5, 2.0, 1.2}, 0.5);
+  big.markFreeSphere({2.5, 2.0, 1.2}, 1.0);
+  small.updateFrontiers();
+  big.updateFrontiers();
+  ASSERT_GT(small.frontierCount(), 0u);
+  ASSERT_TRUE(big.applyBlocks(small.snapshot(true)));
+  big.updateFrontiers();
+  EXPECT_EQ(big.frontierCount(), small.frontierCount());
+}
+
 TEST(MapSnapshot, MismatchedUniformListsAreRefused) {
   MapBlocksData m;
   m.full = true;

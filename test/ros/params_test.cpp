@@ -163,6 +163,8 @@ TEST(Params, NodeConfigsLoadAndNameTheParameterAtFault) {
   root["background_map"]["surface_share_period_s"] = 1.5;
   root["background_map"]["colour_wait_s"] = 0.1;
   root["background_map"]["start_free_radius_m"] = 0.75;
+  root["background_map"]["restore_map_service"] = "";
+  root["background_map"]["restore_wait_s"] = 1.5;
   root["depth_history"]["marker_period_s"] = 2.0;
   root["sync_max_interval_s"] = 0.03;
   const ParamReader p(root);
@@ -171,6 +173,8 @@ TEST(Params, NodeConfigsLoadAndNameTheParameterAtFault) {
   EXPECT_DOUBLE_EQ(bg.surface_share_period_s, 1.5);
   EXPECT_DOUBLE_EQ(bg.colour_wait_s, 0.1);
   EXPECT_DOUBLE_EQ(bg.start_free_radius_m, 0.75);
+  EXPECT_EQ(bg.restore_map_service, "");
+  EXPECT_DOUBLE_EQ(bg.restore_wait_s, 1.5);
   EXPECT_DOUBLE_EQ(semexp_ros::loadDepthHistoryNode(p, semexp::DepthHistoryConfig()).marker_period_s, 2.0);
   EXPECT_DOUBLE_EQ(semexp_ros::loadImageSync(p).max_interval_s, 0.03);
 
@@ -184,6 +188,10 @@ TEST(Params, NodeConfigsLoadAndNameTheParameterAtFault) {
   root["background_map"]["start_free_radius_m"] = -0.1;
   EXPECT_EQ(rejected([&] { semexp_ros::loadBackgroundMapNode(ParamReader(root)); }),
             "background_map/start_free_radius_m");
+  root["background_map"]["start_free_radius_m"] = 0.5;
+  root["background_map"]["restore_wait_s"] = -1.0;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadBackgroundMapNode(ParamReader(root)); }),
+            "background_map/restore_wait_s");
   root["sync_max_interval_s"] = "fast";
   EXPECT_EQ(rejected([&] { semexp_ros::loadImageSync(ParamReader(root)); }), "sync_max_interval_s");
   // The history's image must be the planner's raycast size.

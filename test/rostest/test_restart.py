@@ -7,6 +7,12 @@ the previous one is back, and asserts:
 - the planner resyncs its replica after each restart: its own (an empty
   replica fetches the map) and background_map's, whose map_update sequence
   starts again at 1 (the planner logs "the map restarted" and a resync);
+- background_map takes its map back from the planner's replica after its
+  restart: its map then knows at least 95% of the voxels it knew just before
+  the kill, and the voxels 0.3 m below and 0.3 m behind the MAV there (out
+  of view) are in the state they had before: the start's free sphere
+  (start_free_radius_m 0.5 m) belongs to the mission's start, and around a
+  MAV flying low it once marked the floor free for the planner to fly into;
 - object_map says in its log that it starts without the earlier objects and
   rebuilds them, and it does: it publishes objects again after its restart;
 - the mission ends with a termination reason and no collision."""
@@ -18,12 +24,16 @@ import time
 import unittest
 import xmlrpc.client
 
+import numpy as np
 import rosgraph
 import rospy
+from geometry_msgs.msg import PoseStamped
 from rosgraph_msgs.msg import Log
 from std_msgs.msg import UInt32
 
+from semantic_exploration import map_blocks
 from semantic_exploration.msg import ExplorationStatus, MapBlocks, ObjectArray
+from semantic_exploration.srv import GetMap
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
 from test_exploration import wait_finished  # noqa: E402
@@ -46,15 +56,53 @@ class Restart(unittest.TestCase):
         self.lock = threading.Lock()
         self.logs = []        # (wall time, node, message) from /rosout
         self.sequences = []   # (wall time, map_update sequence)
+        self.poses = []       # (stamp s, position, forward unit vector) of mav/pose
         self.objects = []     # (wall time, object count)
         self.status, self.collisions = [], [0]
         # rostest runs no rosout node (no /rosout_agg): listen to every node on /rosout.
         rospy.Subscriber("/rosout", Log, self._on_log, queue_size=1000)
-        rospy.Subscriber("/background_map/map_update", MapBlocks,
-                         lambda m: self._add(self.sequences, m.sequence), queue_size=100)
+        rospy.Subscriber("/background_map/map_update", MapBlocks, self._on_update, queue_size=100)
+        rospy.Subscriber("/mav/pose", PoseStamped, self._on_pose, queue_size=100)
         rospy.Subscriber("/object_map/objects", ObjectArray, lambda m: self._add(self.objects, len(m.objects)))
         rospy.Subscriber("/planner/status", ExplorationStatus, self.status.append, queue_size=100)
         rospy.Subscriber("/mav/collisions", UInt32, lambda m: self.collisions.__setitem__(0, m.data))
+
+    def _on_update(self, m):
+        self._add(self.sequences, m.sequence)
+
+    def _on_pose(self, m):
+        q = m.pose.orientation
+        yaw = np.arctan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        p = m.pose.position
+        with self.lock:
+            self.poses.append((m.header.stamp.to_sec(), np.array([p.x, p.y, p.z]),
+                               np.array([np.cos(yaw), np.sin(yaw), 0.0])))
+
+    @staticmethod
+    def _background_map():
+        rospy.wait_for_service("/background_map/get_map", 30.0)
+        get_map = rospy.ServiceProxy("/background_map/get_map", GetMap)
+        return map_blocks.decode(get_map(compact=True).map)
+
+    @staticmethod
+    def _known(blocks):
+        return sum(int((b != map_blocks.UNKNOWN_I8).sum()) for b in blocks.blocks.values())
+
+    def _probes(self):
+        """Voxels 0.3 m below and 0.3 m behind the MAV's latest pose: out of the camera's view."""
+        with self.lock:
+            _, p, forward = self.poses[-1]
+        return (("0.3 m below", p + np.array([0.0, 0.0, -0.3])), ("0.3 m behind", p - 0.3 * forward))
+
+    def _assert_map_taken_back(self, before, probes, after):
+        known_before, known_after = self._known(before), self._known(after)
+        rospy.loginfo("test_restart: background_map knew %d voxels before its restart, %d after",
+                      known_before, known_after)
+        self.assertGreater(known_before, 10000)
+        self.assertGreaterEqual(known_after, 0.95 * known_before, "the restarted map did not take its map back")
+        for what, q in probes:
+            self.assertEqual(after.state(q), before.state(q),
+                             "the voxel %s the MAV at %s changed state over the restart (a free sphere?)" % (what, q))
 
     def _add(self, series, value):
         with self.lock:
@@ -92,6 +140,8 @@ class Restart(unittest.TestCase):
         killed = {}
         for name in ORDER:
             self._wait("sim time %.0f s" % kill_at[name], lambda: rospy.get_time() >= kill_at[name], 300.0)
+            if name == "background_map":
+                map_before, probes = self._background_map(), self._probes()
             killed[name] = self._kill_and_wait(name)
             if name == "planner":  # an empty replica fetches the whole map
                 self._wait("the restarted planner's resync",
@@ -103,6 +153,8 @@ class Restart(unittest.TestCase):
                 with self.lock:
                     after = [s for t, s in self.sequences if t >= killed[name]]
                 self.assertEqual(after[0], 1, "map_update sequences after the restart: %s" % after[:5])
+                # Not its log line: said in its constructor, before /rosout may reach this node.
+                self._assert_map_taken_back(map_before, probes, self._background_map())
             if name == "object_map":
                 with self.lock:
                     before = [n for t, n in self.objects if t < killed[name]]

@@ -190,7 +190,8 @@ class OccupancyMap {
   MapBlocksData snapshot(bool uniform_as_values = false) const;
   std::uint64_t lastSequence() const { return sequence_; }
   /// Overwrites the cells named in `blocks` (dropping everything first if
-  /// blocks.full). Colour and distance of those cells are reset. Returns
+  /// blocks.full). Colour and distance of those cells are reset; their
+  /// frontiers are found again at the next updateFrontiers(). Returns
   /// false (and changes nothing) if geometry or encoding does not match.
   bool applyBlocks(const MapBlocksData& blocks);
 

@@ -17,6 +17,13 @@
 /// invalid depth pixels are counted and carve nothing. Depth frames missing
 /// from the stream (stamp gaps of the camera period) are counted as
 /// "frame_gap"; every count also goes to /dropped_input (DropCounter).
+///
+/// Respawned mid-flight by its launch (the /run_id its first instance
+/// recorded), the node marks no free sphere around the start (the MAV may fly
+/// just above the floor) and asks `restore_map_service` (the planner's
+/// `~get_map`, its replica) for the occupancy it lost; colour and observation
+/// distances start anew. If that fails (logged, and counted as the service
+/// call's failure or "bad_restored_map") the map starts empty.
 
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -24,6 +31,7 @@
 
 #include <deque>
 #include <memory>
+#include <string>
 
 #include "semantic_exploration/ComputeGains.h"
 #include "semantic_exploration/GetMap.h"
@@ -31,6 +39,7 @@
 #include "semantic_exploration/core/frontier_evidence.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 #include "semantic_exploration/ros/camera_node.hpp"
+#include "semantic_exploration/ros/service_caller.hpp"
 #include "semantic_exploration/ros/node_common.hpp"
 
 namespace semexp_ros {
@@ -45,6 +54,8 @@ class BackgroundMapNode : public CameraNode {
   void flushTimer(const ros::WallTimerEvent&);
   /// Integrates depth (with `rgb` if non-null); always reports frame_integrated.
   void processFrame(const sensor_msgs::ImageConstPtr& depth, const sensor_msgs::ImageConstPtr& rgb);
+  /// A respawned instance: the lost occupancy from restore_map_service (logged either way).
+  void restoreMap(ros::NodeHandle& nh);
   sensor_msgs::ImageConstPtr matchingRgb(const ros::Time& stamp) const;
   void publishStats(const std_msgs::Header& header);
   void publishClouds(const ros::Time& stamp);
@@ -78,6 +89,10 @@ class BackgroundMapNode : public CameraNode {
   ros::Time last_frontiers_stamp_;
   std_msgs::Header last_header_;
   std::uint64_t frames_integrated_ = 0;
+  std::string run_id_;           ///< the launch's /run_id ("" without one)
+  bool start_free_due_ = false;  ///< the first frame marks start_free_radius_m free (not after a respawn)
+  bool respawned_ = false;       ///< an earlier instance of this run marked the start free
+  std::unique_ptr<ServiceCaller> restore_caller_;  ///< restoreMap's bounded call (kept: a call given up ends later)
   std::uint64_t invalid_depth_pixels_ = 0;
   float last_integration_ms_ = 0.f, last_frontier_ms_ = 0.f;
   semexp::OccupancyMap::SurfaceObservation surface_;  ///< surface seen from <= d_bg, at the last measurement

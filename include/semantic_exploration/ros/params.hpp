@@ -67,6 +67,10 @@ struct BackgroundMapNodeConfig {
   double surface_share_period_s = 2.0;
   double colour_wait_s = 0.05;       ///< `background_map/colour_wait_s`: how long a depth frame waits for its colour image, wall s
   double start_free_radius_m = 0.5;  ///< `background_map/start_free_radius_m`: unknown space this close to the first camera pose is free, m
+  /// `background_map/restore_map_service`: where an instance respawned within its launch's run gets the map
+  /// it lost (GetMap; the planner's replica); "" = start that instance with an empty map.
+  std::string restore_map_service = "planner/get_map";
+  double restore_wait_s = 10.0;  ///< `background_map/restore_wait_s`: how long a respawned instance waits for it, wall s
 };
 
 /// Settings of the depth_history node itself.

@@ -14,7 +14,9 @@
 /// orientation) and the same path time-parameterised as `~trajectory`
 /// (trajectory_msgs/MultiDOFJointTrajectory, core/planning/trajectory.hpp), `~candidates` (CandidateViewArray), `~candidate_markers`,
 /// `~gain_images/{entropy,background,object,combined}` (32FC1, the winner's)
-/// and `~status` (ExplorationStatus); serves `~plan_once` (PlanOnce).
+/// and `~status` (ExplorationStatus); serves `~plan_once` (PlanOnce) and
+/// `~get_map` (GetMap: the replica, for a respawned background_map to take
+/// back the map it lost; refused while the replica is empty).
 ///
 /// `~plan_once` with a frame_stamp (a lockstep simulator's call in
 /// deterministic runs) plans only once that frame's inputs are here:
@@ -52,6 +54,7 @@
 #include <string>
 #include <vector>
 
+#include "semantic_exploration/GetMap.h"
 #include "semantic_exploration/MapBlocks.h"
 #include "semantic_exploration/MapStats.h"
 #include "semantic_exploration/ObjectArray.h"
@@ -77,6 +80,7 @@ class PlannerNode {
   void pathRejectedCallback(const std_msgs::StringConstPtr& msg);
   void timerCallback(const ros::TimerEvent& ev);
   bool planOnce(semantic_exploration::PlanOnce::Request& req, semantic_exploration::PlanOnce::Response& res);
+  bool getReplica(semantic_exploration::GetMap::Request& req, semantic_exploration::GetMap::Response& res);
   /// What of frame_stamp's inputs has not arrived yet ("" when all are here; see the file comment).
   std::string missingInputs(const ros::Time& frame_stamp) const;
   void publishStatus(uint8_t state, const std::string& message);
@@ -132,6 +136,7 @@ class PlannerNode {
   ros::Publisher trajectory_pub_;  ///< ~trajectory (MultiDOFJointTrajectory) of each published path
   ros::Publisher gain_pubs_[4];
   ros::ServiceServer plan_srv_;
+  ros::ServiceServer replica_srv_;
   ros::Timer timer_;
   uint32_t iteration_ = 0;
 };

@@ -16,6 +16,38 @@ std::uint64_t MapReplica::key(const Eigen::Vector3i& b) {
          static_cast<std::uint64_t>(b.z() + kOffset);
 }
 
+Eigen::Vector3i MapReplica::blockOf(std::uint64_t k) {
+  constexpr std::uint64_t kMask = (std::uint64_t{1} << 21) - 1;
+  return Eigen::Vector3i(static_cast<int>(static_cast<std::int64_t>((k >> 42) & kMask) - kOffset),
+                         static_cast<int>(static_cast<std::int64_t>((k >> 21) & kMask) - kOffset),
+                         static_cast<int>(static_cast<std::int64_t>(k & kMask) - kOffset));
+}
+
+MapBlocksData MapReplica::snapshot() const {
+  MapBlocksData out;
+  out.sequence = sequence_;
+  out.full = true;
+  out.resolution_m = resolution_m_;
+  out.block_size = block_size_;
+  out.origin_m = origin_W_;
+  std::vector<std::uint64_t> keys;
+  keys.reserve(blocks_.size());
+  for (const auto& kv : blocks_) keys.push_back(kv.first);
+  std::sort(keys.begin(), keys.end());  // the same replica gives the same bytes
+  for (const std::uint64_t k : keys) {
+    const Block& blk = blocks_.at(k);
+    const Eigen::Vector3i c = blockOf(k);
+    if (blk.values.empty()) {
+      out.uniform_coords.insert(out.uniform_coords.end(), {c.x(), c.y(), c.z()});
+      out.uniform_values.push_back(blk.uniform);
+    } else {
+      out.coords.insert(out.coords.end(), {c.x(), c.y(), c.z()});
+      out.payload.insert(out.payload.end(), blk.values.begin(), blk.values.end());
+    }
+  }
+  return out;
+}
+
 MapReplica::Result MapReplica::apply(const MapBlocksData& u) {
   if (!(std::isfinite(u.resolution_m) && u.resolution_m > 0) || u.block_size <= 0 || u.block_size > 64 ||
       !u.origin_m.allFinite()) {

@@ -38,6 +38,12 @@ class MapReplica {
   /// only if its sequence follows the last. Uniform blocks apply after the others.
   Result apply(const MapBlocksData& u);
 
+  /// The replica as a full map (full = true, the last applied sequence),
+  /// blocks in key order; a block kept as one value goes out as that value
+  /// (uniform_*). OccupancyMap::applyBlocks reads it back: how a restarted
+  /// background map gets the map it lost from the planner's copy.
+  MapBlocksData snapshot() const;
+
   std::uint64_t sequence() const { return sequence_; }
   bool empty() const { return blocks_.empty(); }
   std::size_t blockCount() const { return blocks_.size(); }
@@ -61,6 +67,7 @@ class MapReplica {
     std::int8_t at(std::size_t i) const { return values.empty() ? uniform : values[i]; }
   };
   static std::uint64_t key(const Eigen::Vector3i& b);
+  static Eigen::Vector3i blockOf(std::uint64_t key);  ///< the inverse of key()
   bool sphereCheck(const Eigen::Vector3d& p, double r, bool allow_unknown) const;
 
   int free_below_;
