@@ -1,5 +1,5 @@
 """mav_sim start-up in lockstep (issue 7): /clock at the first frame's time
-arrives before the first frame, and a lockstep node that connects to the depth
+and the latched camera_info arrive before the first frame, and a lockstep node that connects to the depth
 topic only after the first frames went out does not stall the simulator (it
 cannot report frames it never got); once connected it paces the simulator.
 
@@ -33,11 +33,12 @@ def child(work):
     """The late lockstep node; writes events.json."""
     import rospy
     from rosgraph_msgs.msg import Clock
-    from sensor_msgs.msg import Image
+    from sensor_msgs.msg import CameraInfo, Image
     from std_msgs.msg import Header
     from semantic_exploration.msg import FrameIntegrated
     rospy.init_node(NODE, disable_signals=True)
-    ev = {"clock_before_first_frame": None, "first_rgb": None, "depth": [], "rgb_after_stop": []}
+    ev = {"clock_before_first_frame": None, "first_rgb": None, "depth": [], "rgb_after_stop": [],
+          "camera_info_before_first_frame": None}
     state = {"clock": None, "stopped": False}
 
     def on_clock(m):
@@ -47,6 +48,7 @@ def child(work):
         t = m.header.stamp.to_sec()
         if ev["first_rgb"] is None:
             ev["first_rgb"], ev["clock_before_first_frame"] = t, state["clock"]
+            ev["camera_info_before_first_frame"] = state.get("info")
         if state["stopped"]:
             ev["rgb_after_stop"].append(t)
 
@@ -61,6 +63,8 @@ def child(work):
             state["stopped"] = True
 
     rospy.Subscriber("/clock", Clock, on_clock, queue_size=10)
+    rospy.Subscriber("/camera/camera_info", CameraInfo,
+                     lambda m: state.setdefault("info", m.header.stamp.to_sec()), queue_size=10)
     rospy.Subscriber("/camera/rgb/image_raw", Image, on_rgb, queue_size=50)
     deadline = time.time() + 90.0
     while ev["first_rgb"] is None and time.time() < deadline:
@@ -113,6 +117,10 @@ def test_clock_first_and_a_late_lockstep_node_does_not_stall(tmp_path):
     # frame 0 is the first frame, and the clock had reached it before it arrived
     assert ev["first_rgb"] == pytest.approx(START_S)
     assert ev["clock_before_first_frame"] is not None and ev["clock_before_first_frame"] >= START_S - 1e-9
+    # the intrinsics had arrived before it too (latched, sent on connection): a camera node refuses depth
+    # before any camera_info, and one frame image overtaking its camera_info made a deterministic run
+    # start a frame later than its twin
+    assert ev["camera_info_before_first_frame"] == pytest.approx(START_S)
     # the late node missed the first frame(s) but got FRAMES consecutive ones afterwards
     d = ev["depth"]
     assert len(d) == FRAMES, len(d)

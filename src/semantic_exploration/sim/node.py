@@ -28,8 +28,9 @@ which is logged). With ~follow setpoints and lockstep_setpoints, it also stops
 where setpoint_streamer's next setpoint is due until it has arrived
 (setpoint_lockstep.py).
 
-Start-up: before the first frame the node waits (up to lockstep_startup_timeout_s
-in lockstep mode) until every subscriber the master lists for its camera, tf and
+Start-up: before the first frame the node publishes the (latched) camera_info,
+so that a node that connects gets the intrinsics before any depth image, then
+waits (up to lockstep_startup_timeout_s in lockstep mode) until every subscriber the master lists for its camera, tf and
 /clock topics is connected, publishes /clock at the frame's time, and only then
 the frame, so that neither a mapping node nor rosbag record misses frame 0.
 A lockstep node that exists on the master but had no connection to the depth
@@ -114,10 +115,13 @@ class MavSimNode:
         latch = dict(queue_size=5)  # frames a slow subscriber (rosbag, rviz) may lag behind
         self.pub_depth = rospy.Publisher("camera/depth/image_raw", Image, **latch)
         self.pub_rgb = rospy.Publisher("camera/rgb/image_raw", Image, **latch)
-        self.pub_info = rospy.Publisher("camera/camera_info", CameraInfo, **latch)
+        # Latched: a node gets the intrinsics when it connects, before frame 0's depth image, which
+        # travels on its own connection and could otherwise arrive first (the node refuses depth
+        # before any camera_info, and a deterministic run then starts one frame later).
+        self.pub_info = rospy.Publisher("camera/camera_info", CameraInfo, latch=True, **latch)
         # Per-image copies where image_transport tools (rviz DepthCloud, image_view) look for them.
-        self.pub_info_depth = rospy.Publisher("camera/depth/camera_info", CameraInfo, **latch)
-        self.pub_info_rgb = rospy.Publisher("camera/rgb/camera_info", CameraInfo, **latch)
+        self.pub_info_depth = rospy.Publisher("camera/depth/camera_info", CameraInfo, latch=True, **latch)
+        self.pub_info_rgb = rospy.Publisher("camera/rgb/camera_info", CameraInfo, latch=True, **latch)
         self.pub_inst = rospy.Publisher("camera/instance_gt", Image, **latch)
         self.pub_cls = rospy.Publisher("camera/class_gt", Image, **latch)
         self.pub_det = rospy.Publisher("detections", Detections, **latch)
@@ -330,15 +334,19 @@ class MavSimNode:
         # a node's drop count (published after it got the frame) never runs ahead
         # of the simulator's count of the fault behind it in the run's report.
         self._publish_fault_counts(t_ns)
-        info = CameraInfo(header=hdr, **self.sim.renderer.camera_info())
-        self.pub_info.publish(info)
-        self.pub_info_depth.publish(info)
-        self.pub_info_rgb.publish(info)
+        self._publish_camera_info(t_ns)
         self.pub_depth.publish(_image(out["depth"], "32FC1", hdr))
         self.pub_rgb.publish(_image(out["rgb"], "rgb8", hdr))
         self.pub_inst.publish(_image(out["instance"], "16UC1", hdr))
         self.pub_cls.publish(_image(out["class"], "16UC1", hdr))
         self.pub_det.publish(dets)
+
+    def _publish_camera_info(self, t_ns: int) -> None:
+        info = CameraInfo(header=Header(stamp=_stamp(t_ns), frame_id=self.cfg.frames.camera),
+                          **self.sim.renderer.camera_info())
+        self.pub_info.publish(info)
+        self.pub_info_depth.publish(info)
+        self.pub_info_rgb.publish(info)
 
     def _frame_publishers(self):
         return [self.pub_depth, self.pub_rgb, self.pub_info, self.pub_info_depth, self.pub_info_rgb, self.pub_inst,
@@ -416,6 +424,7 @@ class MavSimNode:
                 first = last_frame is None
                 if c.lockstep:
                     if first:
+                        self._publish_camera_info(t_ns)  # latched: delivered as each subscriber connects
                         self._frames.wait_for_subscribers()
                     else:
                         self._frames.wait_frame(last_frame)
