@@ -13,6 +13,18 @@
 namespace semexp {
 namespace {
 
+/// The table room seen from three level poses: free space (mostly uniform blocks), walls, a table, unknown beyond.
+OccupancyMap tableRoomSeenFromThreePoses(const BackgroundMapConfig& cfg) {
+  const semexp_test::TestGrid room = semexp_test::tableRoom();
+  const PinholeCamera cam = semexp_test::halfSizeCamera();
+  OccupancyMap map(cfg, semexp_test::tableRoomBounds());
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Isometry3d T = semexp_test::levelCameraPose({1.2 + 0.6 * k, 2.0, 1.2}, 2.1 * k);
+    map.integrate(semexp_test::renderDepth(room, cam, T), cv::Mat(), cam, T);
+  }
+  return map;
+}
+
 TEST(MapSnapshot, ALargeFreeMapResyncsInAFewBytesPerBlock) {
   // 50 x 50 x 10 m at 4 cm: 3.9e8 voxels in 763,000 blocks, 400 MB in full (100 x 100 x 10 m, four
   // times that, passed roscpp's 1 GB message limit).
@@ -51,14 +63,8 @@ TEST(MapSnapshot, ALargeFreeMapResyncsInAFewBytesPerBlock) {
 TEST(MapSnapshot, CompactAndFullSnapshotsDecodeToTheSameMap) {
   // A room seen from three poses: free space (mostly uniform blocks), walls, a table, unknown beyond.
   const Bounds b = semexp_test::tableRoomBounds();
-  const semexp_test::TestGrid room = semexp_test::tableRoom();
-  const PinholeCamera cam = semexp_test::halfSizeCamera();
   const BackgroundMapConfig cfg;
-  OccupancyMap map(cfg, b);
-  for (int k = 0; k < 3; ++k) {
-    const Eigen::Isometry3d T = semexp_test::levelCameraPose({1.2 + 0.6 * k, 2.0, 1.2}, 2.1 * k);
-    map.integrate(semexp_test::renderDepth(room, cam, T), cv::Mat(), cam, T);
-  }
+  OccupancyMap map = tableRoomSeenFromThreePoses(cfg);
   map.markFreeSphere({2.5, 2.0, 1.6}, 0.6);  // a uniform free region as the start leaves it
   const MapBlocksData full = map.snapshot(false), compact = map.snapshot(true);
   ASSERT_GT(compact.uniform_values.size(), 50u);
@@ -100,14 +106,8 @@ TEST(MapSnapshot, AMapRestoredFromThePlannersReplicaHasTheSameVoxelsAndFrontiers
   // compact snapshot -> replica -> replica snapshot -> a new map. Every voxel decodes to what the
   // map's own snapshot holds, and the new map finds the same frontier voxels.
   const Bounds b = semexp_test::tableRoomBounds();
-  const semexp_test::TestGrid room = semexp_test::tableRoom();
-  const PinholeCamera cam = semexp_test::halfSizeCamera();
   const BackgroundMapConfig cfg;
-  OccupancyMap map(cfg, b);
-  for (int k = 0; k < 3; ++k) {
-    const Eigen::Isometry3d T = semexp_test::levelCameraPose({1.2 + 0.6 * k, 2.0, 1.2}, 2.1 * k);
-    map.integrate(semexp_test::renderDepth(room, cam, T), cv::Mat(), cam, T);
-  }
+  OccupancyMap map = tableRoomSeenFromThreePoses(cfg);
   map.updateFrontiers();
   ASSERT_GT(map.frontierCount(), 1000u);
   MapReplica replica;
