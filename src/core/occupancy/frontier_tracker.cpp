@@ -2,9 +2,11 @@
 // with an unknown 6-neighbour, paper IV-A.1).
 //
 // Why re-checking the changed cells plus the previous frontiers next to them
-// is exact: voxels never become unknown again, so a voxel whose own cell did
-// not change can only lose frontier status (its unknown neighbour, in an
-// adjacent changed cell, got observed), never gain it.
+// is exact: integration never makes a voxel unknown again, so a voxel whose
+// own cell did not change can only lose frontier status (its unknown
+// neighbour, in an adjacent changed cell, got observed), never gain it.
+// OccupancyMap::applyBlocks may write unknown over known voxels; it marks the
+// written cells' face neighbours as candidates too.
 #include "semantic_exploration/core/occupancy/frontier_tracker.hpp"
 
 #include <algorithm>
