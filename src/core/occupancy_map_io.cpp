@@ -157,11 +157,10 @@ bool OccupancyMap::applyBlocks(const MapBlocksData& m) {
   // updateFrontiers() re-checks them all.
   for (const int cell : changed) {
     frontiers_.markCandidate(cell);
-    const int bx = cell % store_.nb.x(), by = (cell / store_.nb.x()) % store_.nb.y(),
-              bz = cell / (store_.nb.x() * store_.nb.y());
+    const Eigen::Vector3i bc = store_.cellCoords(cell);
     for (int axis = 0; axis < 3; ++axis)
       for (int sgn = -1; sgn <= 1; sgn += 2) {
-        Eigen::Vector3i n(bx, by, bz);
+        Eigen::Vector3i n = bc;
         n[axis] += sgn;
         if (n[axis] >= 0 && n[axis] < store_.nb[axis]) frontiers_.markCandidate(store_.cellIndex(n.x(), n.y(), n.z()));
       }

@@ -55,7 +55,6 @@ BackgroundMapNode::BackgroundMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
   std::string marked_in;
   pnh.param<std::string>(kStartFreeMarkedParam, marked_in, "");
   respawned_ = !run_id_.empty() && marked_in == run_id_;
-  start_free_due_ = node_config_.start_free_radius_m > 0 && !respawned_;
   if (respawned_) restoreMap(nh);
   ROS_INFO("background_map: resolution %.3f m, bounds [%.1f %.1f %.1f] - [%.1f %.1f %.1f] m, colour %s",
            config_.resolution_m, bounds_.min_m.x(), bounds_.min_m.y(), bounds_.min_m.z(), bounds_.max_m.x(),
@@ -83,8 +82,9 @@ void BackgroundMapNode::restoreMap(ros::NodeHandle& nh) {
     why = fromMapBlocksMsg(srv.response.map, blocks);
     if (why.empty() && !map_->applyBlocks(blocks))
       why = "its geometry (resolution, block size, origin) differs from this map's";
-    if (!why.empty()) drops_.drop("bad_restored_map", resolved + ": " + why);
-    if (why.empty()) {
+    if (!why.empty()) {
+      drops_.drop("bad_restored_map", resolved + ": " + why);
+    } else {
       map_->updateFrontiers();
       ROS_WARN("background_map: restarted within run %s: took back %zu blocks (%zu uniform) of occupancy from %s "
                "(%.1f m^3 free, %zu frontier voxels); colour and observation distances start anew",
@@ -176,14 +176,15 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
   } catch (const std::exception& e) {
     return fail({"bad_input", e.what()});
   }
-  if (start_free_due_) {
-    // The paper assumes free space around the start: the camera cannot see the MAV's own position.
-    map_->markFreeSphere(T_WC.translation(), node_config_.start_free_radius_m);
-    ROS_INFO("background_map: unknown space within %.2f m of the first camera pose marked free",
-             node_config_.start_free_radius_m);
+  if (frames_integrated_ == 0 && !respawned_) {
+    if (node_config_.start_free_radius_m > 0) {
+      // The paper assumes free space around the start: the camera cannot see the MAV's own position.
+      map_->markFreeSphere(T_WC.translation(), node_config_.start_free_radius_m);
+      ROS_INFO("background_map: unknown space within %.2f m of the first camera pose marked free",
+               node_config_.start_free_radius_m);
+    }
+    ros::NodeHandle("~").setParam(kStartFreeMarkedParam, run_id_);
   }
-  if (frames_integrated_ == 0 && !respawned_) ros::NodeHandle("~").setParam(kStartFreeMarkedParam, run_id_);
-  start_free_due_ = false;
   last_integration_ms_ = static_cast<float>((ros::WallTime::now() - t_int).toSec() * 1e3);
   const auto t_fr = ros::WallTime::now();
   map_->updateFrontiers();

@@ -90,8 +90,7 @@ class BackgroundMapNode : public CameraNode {
   std_msgs::Header last_header_;
   std::uint64_t frames_integrated_ = 0;
   std::string run_id_;           ///< the launch's /run_id ("" without one)
-  bool start_free_due_ = false;  ///< the first frame marks start_free_radius_m free (not after a respawn)
-  bool respawned_ = false;       ///< an earlier instance of this run marked the start free
+  bool respawned_ = false;  ///< an earlier instance of this run marked the start free: no sphere, map restored
   std::unique_ptr<ServiceCaller> restore_caller_;  ///< restoreMap's bounded call (kept: a call given up ends later)
   std::uint64_t invalid_depth_pixels_ = 0;
   float last_integration_ms_ = 0.f, last_frontier_ms_ = 0.f;
