@@ -195,6 +195,12 @@ void PlannerNode::timerCallback(const ros::TimerEvent&) {
 bool PlannerNode::planOnce(semantic_exploration::PlanOnce::Request& req,
                            semantic_exploration::PlanOnce::Response& res) {
   res.success = res.pending = false;
+  // A finished exploration stays finished: a lockstep simulator keeps asking
+  // while its MAV hovers, and planning again would fly on after "explored".
+  if (finished_) {
+    res.message = "not planned: the exploration finished: " + finish_summary_;
+    return true;
+  }
   std::string missing = req.frame_stamp.isZero() ? "" : missingInputs(req.frame_stamp);
   Eigen::Isometry3d T_WB;
   if (missing.empty() && !req.pose_stamp.isZero()) {
@@ -304,9 +310,9 @@ bool PlannerNode::iterate(std::string& message, const ros::Time& stamp, const ro
 
   if (r.finished) {
     finished_ = true;
+    finish_summary_ = r.termination_reason + " (" + r.message + ")";
     state_ = ExplorationStatus::STATE_FINISHED;
-    ROS_INFO("planner: exploration finished after %u iterations: %s (%s)", iteration_,
-             r.termination_reason.c_str(), r.message.c_str());
+    ROS_INFO("planner: exploration finished after %u iterations: %s", iteration_, finish_summary_.c_str());
   } else {
     state_ = published ? ExplorationStatus::STATE_EXECUTING : ExplorationStatus::STATE_WAITING;
     if (!published) ROS_WARN("planner: iteration %u: %s", iteration_, r.message.c_str());

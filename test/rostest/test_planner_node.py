@@ -252,6 +252,18 @@ class PlannerNodeTest(unittest.TestCase):
         self.assertTrue(fin.frontiers_done and fin.background_done and fin.objects_done)
         self.assertAlmostEqual(fin.background_observed_share, 0.95, places=5)
         self.assertEqual(fin.active_frontiers, 0)
+        # Finished stays finished: frontiers that come back (noise, a lockstep
+        # simulator asking again while the MAV hovers) are not planned for.
+        iterations = max(s.iteration for s in self.status)
+        n_paths = len(self.paths)
+        self.frontier_pub.publish(cloud([(3.95, y, 1.0) for y in (0.55, 1.05, 1.55, 2.05)]))
+        time.sleep(0.5)
+        res = self.plan_once()
+        self.assertFalse(res.success or res.pending)
+        self.assertIn("finished: explored", res.message)
+        time.sleep(0.5)
+        self.assertEqual(len(self.paths), n_paths, "planned after the exploration finished")
+        self.assertEqual(max(s.iteration for s in self.status), iterations)
 
     def test_4_depth_history_marks_invalid_pixel(self):
         # Table I camera; pixel (u 159, v 119) is half a pixel left of and above

@@ -125,6 +125,7 @@ class PlannerNode {
 
   uint8_t state_ = 0;
   bool finished_ = false;
+  std::string finish_summary_;  ///< "<termination_reason> (<why>)" once finished_, for plan_once's answer
   bool started_ = false;
   ros::Time start_time_;
   ros::Time executing_since_;
