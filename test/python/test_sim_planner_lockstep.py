@@ -115,3 +115,5 @@ def test_settings_are_checked():
         from_dict({"lockstep_planner_retry_s": 0.0}).validate()
     with pytest.raises(ConfigError, match="lockstep_planner"):
         from_dict({"lockstep_planner": "yes"}).validate()
+    with pytest.raises(ConfigError, match="lockstep_planner.*needs lockstep"):
+        from_dict({"lockstep_planner": True}).validate()

@@ -232,6 +232,11 @@ class SimConfig:
         _req(_finite(self.lockstep_startup_timeout_s) and self.lockstep_startup_timeout_s >= 0,
              "lockstep_startup_timeout_s", "must be >= 0 s")
         _req(isinstance(self.lockstep_planner, bool), "lockstep_planner", "must be true or false")
+        # Without lockstep the simulator ignores it (sim.launch deterministic:=true lockstep:=false): the run is
+        # not repeatable, and after an iteration without a path the planner of a deterministic run (its own
+        # retries off) leaves the MAV hovering.
+        _req(not self.lockstep_planner or self.lockstep, "lockstep_planner",
+             "needs lockstep: true (sim.launch deterministic:=true turns both on; do not set lockstep:=false with it)")
         _req(_finite(self.lockstep_planner_retry_s) and self.lockstep_planner_retry_s > 0, "lockstep_planner_retry_s",
              "must be > 0 s")
         _req(isinstance(self.lockstep_setpoints, bool), "lockstep_setpoints", "must be true or false")
