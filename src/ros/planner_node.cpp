@@ -195,8 +195,8 @@ void PlannerNode::timerCallback(const ros::TimerEvent&) {
 bool PlannerNode::planOnce(semantic_exploration::PlanOnce::Request& req,
                            semantic_exploration::PlanOnce::Response& res) {
   res.success = res.pending = false;
-  // A finished exploration stays finished: a lockstep simulator keeps asking
-  // while its MAV hovers, and planning again would fly on after "explored".
+  // A finished exploration (any termination reason) stays finished: a lockstep
+  // simulator keeps asking while its MAV hovers, and planning again would fly on.
   if (finished_) {
     res.message = "not planned: the exploration finished: " + finish_summary_;
     return true;
