@@ -51,7 +51,8 @@ from sensor_msgs.msg import Image
 
 # test_planner_node.py lies beside this file's real path (a catkin devel-space relay runs this file from elsewhere).
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
-from test_planner_node import R, START, assert_path_safe, blocks_msg, cloud, gain_image, room  # noqa: E402
+from test_planner_node import (FRONTIER_POINTS, R, START, assert_path_safe, blocks_msg, cloud,  # noqa: E402
+                               gain_image, room)
 
 PKG = "semantic_exploration"
 HANG_CALLS = 3  # compute_gains calls that hang
@@ -88,7 +89,7 @@ class PlannerBadInputTest(unittest.TestCase):
         cls.frontier_pub = rospy.Publisher("/background_map/frontiers", PointCloud2, queue_size=1, latch=True)
         cls.tf = tf2_ros.StaticTransformBroadcaster()
         cls.move_to(START)
-        cls.frontier_pub.publish(cloud([(3.95, y, 1.0) for y in (0.55, 1.05, 1.55, 2.05)]))
+        cls.frontier_pub.publish(cloud(FRONTIER_POINTS))
         rospy.wait_for_service("/planner/plan_once", timeout=30.0)
         # First an empty map (a full update without blocks), then the room.
         cls.map_pub.publish(blocks_msg(np.zeros((0, 0, 0), dtype=np.int8), 1, True))
@@ -232,7 +233,7 @@ class PlannerBadInputTest(unittest.TestCase):
         drops = {}
         sub = rospy.Subscriber("/dropped_input", DropCounts,
                                lambda m: drops.update(dict(zip(m.reasons, m.counts))) if m.node == "/planner" else None)
-        good = cloud([(3.95, y, 1.0) for y in (0.55, 1.05, 1.55, 2.05)])
+        good = cloud(FRONTIER_POINTS)
         zero_step = cloud([(3.95, 1.0, 1.0)])
         zero_step.point_step, zero_step.row_step = 0, 0
         long_data = cloud([(3.95, 1.0, 1.0)])

@@ -30,6 +30,8 @@ RES = 0.1
 BS = 8
 R = 0.125
 START = (1.0, 1.0, 1.0)
+# Frontier voxels just inside the unknown half beyond x = 4 m, at the MAV's height.
+FRONTIER_POINTS = [(3.95, y, 1.0) for y in (0.55, 1.05, 1.55, 2.05)]
 
 
 def room():
@@ -138,7 +140,7 @@ class PlannerNodeTest(unittest.TestCase):
         cls.tf.sendTransform([t, c])
         cls.map_pub.publish(blocks_msg(cls.grid, 1, True))
         # Frontiers along the unknown face x = 4 m, behind the wall.
-        cls.frontier_pub.publish(cloud([(3.95, y, 1.0) for y in (0.55, 1.05, 1.55, 2.05)]))
+        cls.frontier_pub.publish(cloud(FRONTIER_POINTS))
         rospy.wait_for_service("/planner/plan_once", timeout=30.0)
         time.sleep(1.0)  # let the latched messages arrive
 
@@ -225,7 +227,7 @@ class PlannerNodeTest(unittest.TestCase):
         self.assertTrue(self.wait_for(lambda: "map_update 8" in ask().message), ask())
         self.map_pub.publish(blocks_msg(self.grid, 8, False))
         self.assertTrue(self.wait_for(lambda: "background_map/frontiers" in ask().message), ask())
-        frontiers = cloud([(3.95, y, 1.0) for y in (0.55, 1.05, 1.55, 2.05)])
+        frontiers = cloud(FRONTIER_POINTS)
         frontiers.header.stamp = frame
         time.sleep(0.5)
         self.assertEqual(len(self.paths), n_paths, "a pending answer planned")
@@ -256,7 +258,7 @@ class PlannerNodeTest(unittest.TestCase):
         # simulator asking again while the MAV hovers) are not planned for.
         iterations = max(s.iteration for s in self.status)
         n_paths = len(self.paths)
-        self.frontier_pub.publish(cloud([(3.95, y, 1.0) for y in (0.55, 1.05, 1.55, 2.05)]))
+        self.frontier_pub.publish(cloud(FRONTIER_POINTS))
         time.sleep(0.5)
         res = self.plan_once()
         self.assertFalse(res.success or res.pending)
