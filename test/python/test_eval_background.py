@@ -68,7 +68,13 @@ def _voxel_centres(mesh, r, origin):
         keep = i + j <= k
         u, w = i[keep] / k, j[keep] / k
         pts.append(a + u[:, None] * (b - a) + w[:, None] * (c - a))
-    cells = np.unique(np.floor((np.vstack(pts) - origin) / r).astype(np.int64), axis=0)
+    cells = np.floor((np.vstack(pts) - origin) / r).astype(np.int64)
+    # One integer key per cell, in the cells' lexicographic order: np.unique on it sorts millions of lattice
+    # points many times faster than np.unique(axis=0) on the rows, with the same result.
+    lo = cells.min(axis=0)
+    span = cells.max(axis=0) - lo + 1
+    key = np.unique(((cells[:, 0] - lo[0]) * span[1] + (cells[:, 1] - lo[1])) * span[2] + (cells[:, 2] - lo[2]))
+    cells = np.stack([key // (span[1] * span[2]), key // span[2] % span[1], key % span[2]], axis=1) + lo
     return origin + (cells + 0.5) * r
 
 
@@ -99,11 +105,14 @@ def test_perfect_voxel_map_is_within_the_bound_and_complete(gt):
 
 
 def test_reconstruction_offset_by_3_cm(gt):
-    # Every surface sampled 5 mm apart and moved 3 cm along its outward
-    # normal (into the room for the walls' inner faces): RMSE 3 cm, less only
-    # within 3 cm of concave edges, where a moved point comes nearer the other face.
+    # Every surface sampled at one point per cm^2 (uniform random: a gap that
+    # leaves a truth sample 5 cm from every moved point, 4 cm across the face,
+    # has probability exp(-50)) and moved 3 cm along its outward normal (into
+    # the room for the walls' inner faces): RMSE 3 cm, less only within 3 cm
+    # of concave edges, where a moved point comes nearer the other face.
+    # trimesh's even sampling would cost three times the scoring here.
     mesh = _scene_mesh(gt)
-    pts, fi = trimesh.sample.sample_surface_even(mesh, int(mesh.area / 0.005 ** 2), seed=3)
+    pts, fi = trimesh.sample.sample_surface(mesh, int(mesh.area / 0.01 ** 2), seed=3)
     moved = pts + 0.03 * mesh.face_normals[fi]
     s = metrics.evaluate_background(gt, moved)
     assert s.rmse_m == pytest.approx(0.03, abs=0.003)
