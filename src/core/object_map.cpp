@@ -202,6 +202,22 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
       const Eigen::AlignedBox3d both = bx.intersection(by);
       return !both.isEmpty() && both.volume() >= config_.merge_fraction * by.volume();
     };
+    // One of y and x is a piece of the other that reaches past its box (the top of a chair's back first
+    // detected alone, whose rendered pixels would otherwise keep the chair's object from growing there): within
+    // x's mask their surfaces lie closer than split_gap_m (separateMasks, the split rule's measure, mirrored),
+    // and one holds at most piece_max_share of the other's tracked surface voxels. Neighbouring objects of a
+    // class touch too, but are of a size (traced in docs/BENCHMARKS.md). Rims bled onto surfaces behind are
+    // left out, as in `apart`.
+    const auto piece = [&](std::uint32_t y, std::uint32_t x, const cv::Mat& mask) {
+      if (config_.split_gap_m <= 0 || config_.piece_max_share <= 0) return false;
+      const double ny = static_cast<double>(summary(y, true).voxel_count);
+      const double nx = static_cast<double>(summary(x, true).voxel_count);
+      if (ny == 0 || nx == 0 || std::min(ny, nx) > config_.piece_max_share * std::max(ny, nx)) return false;
+      cv::Mat mask_y = mask & (rendered == static_cast<int>(y)), mask_x = mask & (rendered == static_cast<int>(x));
+      markDepthEdges(mask_y, depth_m, camera, config_.depthEdgeParams(), TsdfMap::kMaskUnknown);
+      markDepthEdges(mask_x, depth_m, camera, config_.depthEdgeParams(), TsdfMap::kMaskUnknown);
+      return separateMasks(mask_y, mask_x, depth_m, camera).gap_m < config_.split_gap_m;  // false for NaN
+    };
     std::map<std::uint32_t, int> rendered_pixels;
     for (int v = 0; v < rendered.rows; ++v) {
       const std::uint16_t* row = rendered.ptr<std::uint16_t>(v);
@@ -217,9 +233,9 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
         if (ox.class_id != oy.class_id || ox.resolution_m != oy.resolution_m) continue;
         const int inside = cv::countNonZero((rendered == static_cast<int>(y)) & kv.second);
         if (inside < config_.merge_fraction * rp.second) continue;
-        // A detector may also merge two neighbouring objects into one mask:
-        // only merge if y's surface also lies mostly inside x's box in 3D.
-        if (!inside_box(y, kv.first, false)) continue;
+        // A detector may also merge two neighbouring objects into one mask: only merge if y's surface also lies
+        // mostly inside x's box in 3D, or one of the two is a piece of the other.
+        if (!inside_box(y, kv.first, false) && !piece(y, kv.first, kv.second)) continue;
         merged_into[y] = kv.first;
         break;
       }

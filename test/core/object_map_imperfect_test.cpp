@@ -185,6 +185,95 @@ TEST(ObjectMapImperfect, DetectionMissedInEverySecondFrameIsOneObject) {
   EXPECT_LT(rmse(mesh.vertices_W, c), 0.02);
 }
 
+// The pixels of `mask` whose depth puts them above (z_W > z_m) or below the height z_m.
+cv::Mat aboveOrBelow(const cv::Mat& mask, const cv::Mat& depth_m, const PinholeCamera& cam, const Eigen::Isometry3d& T_WC,
+                     double z_m, bool above) {
+  cv::Mat out = cv::Mat::zeros(mask.size(), CV_8UC1);
+  for (int v = 0; v < mask.rows; ++v)
+    for (int u = 0; u < mask.cols; ++u) {
+      const float d = depth_m.at<float>(v, u);
+      if (!mask.at<std::uint8_t>(v, u) || !(d > 0)) continue;
+      const Eigen::Vector3d p_C((u - cam.cx) / cam.fx * d, (v - cam.cy) / cam.fy * d, d);
+      if (((T_WC * p_C).z() > z_m) == above) out.at<std::uint8_t>(v, u) = 255;
+    }
+  return out;
+}
+
+// A chair first detected without the top of its back (object 1: the back
+// was hidden, say, by a table), then from a view where only that top showed:
+// the detection matches nothing rendered and makes object 2. In the frames
+// after, the whole chair's mask matches object 1, and object 2 renders inside
+// it but sticks out of object 1's box, so the box rule does not merge it,
+// while its pixels keep object 1 from growing there. Its surface touches the
+// rest of the mask's, and it holds a small share of object 1's voxels: it is part of object 1.
+TEST(ObjectMapImperfect, PieceOutsideTheObjectsBoxThatTouchesItIsMergedIntoIt) {
+  PinholeCamera cam;
+  ObjectMap map{objectMapConfigWithPrior(), ClassTable()};
+  const BoxUnion c = chair(0.0, 0.0);
+  const auto poses = arc(kTarget, 1.8, 40.0, 9);
+  for (size_t i = 0; i < poses.size(); ++i) {
+    cv::Mat depth, labels;
+    renderShapes(cam, poses[i], {&c}, depth, labels);
+    cv::Mat mask = labels == 1;
+    if (i == 0) mask = aboveOrBelow(mask, depth, cam, poses[i], 0.8, false);
+    if (i == 1) mask = aboveOrBelow(mask, depth, cam, poses[i], 0.8, true);
+    ASSERT_GT(cv::countNonZero(mask), 500) << "frame " << i;
+    const FrameIntegration r = runFrame(map, cam, poses[i], depth, instances({{mask, 1}}, depth.size()), {1}, kChair);
+    if (i == 1) {
+      ASSERT_EQ(r.created, std::vector<std::uint32_t>{2u}) << "the top alone did not make an object of its own";
+    }
+  }
+  ASSERT_EQ(map.objects().size(), 1u);
+  const MappedObject& o = *map.objects().begin()->second;
+  const Mesh mesh = o.tsdf.extractMesh();
+  EXPECT_LT(rmse(mesh.vertices_W, c), 0.02);
+  // The merged object holds the top of the back.
+  float top = -1.f;
+  for (const auto& v : mesh.vertices_W) top = std::max(top, v.z());
+  EXPECT_GT(top, 0.9f);
+}
+
+// Two chairs side by side 1 cm apart (their seats nearly touch), each
+// detected with its own mask but in one frame, where a single mask bled over
+// both is matched to chair a's object. Chair b's object renders inside that
+// mask and reaches past a's box, and their surfaces touch: only their sizes
+// tell them from a piece and its object (object_map/piece_max_share).
+TEST(ObjectMapImperfect, TouchingNeighbourUnderABledMaskIsNotMergedAsAPiece) {
+  PinholeCamera cam;
+  const BoxUnion a = chair(0.0, -0.225), b = chair(0.0, 0.225);
+  const auto poses = arc(kTarget, 1.8, 40.0, 9);
+  for (const double share : {0.3, 0.99}) {
+    SCOPED_TRACE("piece_max_share " + std::to_string(share));
+    ObjectMapConfig config = objectMapConfigWithPrior();
+    config.piece_max_share = share;
+    ObjectMap map{config, ClassTable()};
+    size_t merged = 0;
+    for (size_t i = 0; i < poses.size(); ++i) {
+      cv::Mat depth, labels;
+      renderShapes(cam, poses[i], {&a, &b, &kWall}, depth, labels);
+      ASSERT_GT(cv::countNonZero(labels == 1), 1500);
+      ASSERT_GT(cv::countNonZero(labels == 2), 1500);
+      const cv::Mat masks = i == 4 ? instances({{bled(labels, 1, 5) | bled(labels, 2, 5), 1}}, depth.size())
+                                   : instances({{labels == 1, 1}, {labels == 2, 2}}, depth.size());
+      const FrameIntegration r = runFrame(map, cam, poses[i], depth, masks, i == 4 ? std::vector<std::uint16_t>{1}
+                                                                                   : std::vector<std::uint16_t>{1, 2},
+                                          kChair);
+      merged += r.merged.size();
+      if (i == 3) {
+        ASSERT_EQ(map.objects().size(), 2u) << "each chair has its object before the bled frame";
+      }
+    }
+    if (share < 0.5) {
+      EXPECT_EQ(merged, 0u);
+      EXPECT_EQ(map.objects().size(), 2u);
+    } else {
+      // A share that admits objects of a size takes the two chairs for one: the sizes are what keeps them apart.
+      EXPECT_EQ(merged, 1u);
+      EXPECT_EQ(map.objects().size(), 1u);
+    }
+  }
+}
+
 // Two chairs side by side, 16 cm apart, in front of the wall. One frame has a
 // single mask over both (bled 5 px, across the gap); the others one mask per
 // chair. The bled frame comes first (one object is made of both chairs) or

@@ -41,6 +41,14 @@ struct ObjectMapConfig {
   /// object detected only once and not rendered in the frame whose surface
   /// box lies this much inside a larger detected object's box.
   double merge_fraction = 0.8;
+  /// A visible undetected object rendered merge_fraction inside a detected
+  /// one's mask whose box reaches past that object's box is still merged
+  /// when one of the two is a piece of the other: it holds at most this share
+  /// of the other's tracked surface voxels, and within the mask their
+  /// surfaces lie less than split_gap_m apart. Pieces held 2-19% of their
+  /// chair's voxels in the missions traced, neighbouring chairs 60-120% of
+  /// each other's (docs/BENCHMARKS.md). Fraction; 0 = off.
+  double piece_max_share = 0.3;
   /// A new object is made only from a detection that keeps at least this many
   /// mask pixels with valid depth outside the (grown) renders of known objects,
   /// px; fewer (a rim round a known object) would make a spurious object of a
@@ -122,6 +130,8 @@ struct ObjectMapConfig {
             "must be >= 0 m");
     require(std::isfinite(merge_fraction) && merge_fraction > 0.5 && merge_fraction <= 1, ns + "merge_fraction",
             "must be in (0.5, 1]");
+    require(std::isfinite(piece_max_share) && piece_max_share >= 0 && piece_max_share < 1, ns + "piece_max_share",
+            "must be in [0, 1) (1 would take any two touching objects for one)");
     require(std::isfinite(render_depth_tolerance_rel) && render_depth_tolerance_rel >= 0 && render_depth_tolerance_rel < 1,
             ns + "render_depth_tolerance_rel", "must be in [0, 1)");
     require(min_new_object_pixels >= 1, ns + "min_new_object_pixels", "must be >= 1 px");
