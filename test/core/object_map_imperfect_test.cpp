@@ -208,29 +208,44 @@ cv::Mat aboveOrBelow(const cv::Mat& mask, const cv::Mat& depth_m, const PinholeC
 // rest of the mask's, and it holds a small share of object 1's voxels: it is part of object 1.
 TEST(ObjectMapImperfect, PieceOutsideTheObjectsBoxThatTouchesItIsMergedIntoIt) {
   PinholeCamera cam;
-  ObjectMap map{objectMapConfigWithPrior(), ClassTable()};
   const BoxUnion c = chair(0.0, 0.0);
   const auto poses = arc(kTarget, 1.8, 40.0, 9);
-  for (size_t i = 0; i < poses.size(); ++i) {
-    cv::Mat depth, labels;
-    renderShapes(cam, poses[i], {&c}, depth, labels);
-    cv::Mat mask = labels == 1;
-    if (i == 0) mask = aboveOrBelow(mask, depth, cam, poses[i], 0.8, false);
-    if (i == 1) mask = aboveOrBelow(mask, depth, cam, poses[i], 0.8, true);
-    ASSERT_GT(cv::countNonZero(mask), 500) << "frame " << i;
-    const FrameIntegration r = runFrame(map, cam, poses[i], depth, instances({{mask, 1}}, depth.size()), {1}, kChair);
-    if (i == 1) {
-      ASSERT_EQ(r.created, std::vector<std::uint32_t>{2u}) << "the top alone did not make an object of its own";
+  // With the rule off (share 0) the same frames leave the top an object of its own: the box rule does not merge it.
+  for (const double share : {0.3, 0.0}) {
+    SCOPED_TRACE("piece_max_share " + std::to_string(share));
+    ObjectMapConfig config = objectMapConfigWithPrior();
+    config.piece_max_share = share;
+    ObjectMap map{config, ClassTable()};
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> merged;
+    for (size_t i = 0; i < poses.size(); ++i) {
+      cv::Mat depth, labels;
+      renderShapes(cam, poses[i], {&c}, depth, labels);
+      cv::Mat mask = labels == 1;
+      if (i == 0) mask = aboveOrBelow(mask, depth, cam, poses[i], 0.8, false);
+      if (i == 1) mask = aboveOrBelow(mask, depth, cam, poses[i], 0.8, true);
+      ASSERT_GT(cv::countNonZero(mask), 500) << "frame " << i;
+      const FrameIntegration r = runFrame(map, cam, poses[i], depth, instances({{mask, 1}}, depth.size()), {1}, kChair);
+      if (i == 1) {
+        ASSERT_EQ(r.created, std::vector<std::uint32_t>{2u}) << "the top alone did not make an object of its own";
+      }
+      merged.insert(merged.end(), r.merged.begin(), r.merged.end());
     }
+    if (share == 0.0) {
+      EXPECT_TRUE(merged.empty());
+      EXPECT_EQ(map.objects().size(), 2u);
+      continue;
+    }
+    // The top (object 2) joined the chair's object (1), not the other way round.
+    ASSERT_EQ(merged, (std::vector<std::pair<std::uint32_t, std::uint32_t>>{{2u, 1u}}));
+    ASSERT_EQ(map.objects().size(), 1u);
+    const MappedObject& o = *map.objects().begin()->second;
+    const Mesh mesh = o.tsdf.extractMesh();
+    EXPECT_LT(rmse(mesh.vertices_W, c), 0.02);
+    // The merged object holds the top of the back.
+    float top = -1.f;
+    for (const auto& v : mesh.vertices_W) top = std::max(top, v.z());
+    EXPECT_GT(top, 0.9f);
   }
-  ASSERT_EQ(map.objects().size(), 1u);
-  const MappedObject& o = *map.objects().begin()->second;
-  const Mesh mesh = o.tsdf.extractMesh();
-  EXPECT_LT(rmse(mesh.vertices_W, c), 0.02);
-  // The merged object holds the top of the back.
-  float top = -1.f;
-  for (const auto& v : mesh.vertices_W) top = std::max(top, v.z());
-  EXPECT_GT(top, 0.9f);
 }
 
 // Two chairs side by side 1 cm apart (their seats nearly touch), each

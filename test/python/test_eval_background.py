@@ -106,7 +106,7 @@ def test_perfect_voxel_map_is_within_the_bound_and_complete(gt):
 
 def test_reconstruction_offset_by_3_cm(gt):
     # Every surface sampled at one point per cm^2 (uniform random: a gap that
-    # leaves a truth sample 5 cm from every moved point, 4 cm across the face,
+    # leaves a truth sample 5 cm from every moved point, no point within 4 cm in the face,
     # has probability exp(-50)) and moved 3 cm along its outward normal (into
     # the room for the walls' inner faces): RMSE 3 cm, less only within 3 cm
     # of concave edges, where a moved point comes nearer the other face.

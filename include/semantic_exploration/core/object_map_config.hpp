@@ -45,9 +45,11 @@ struct ObjectMapConfig {
   /// one's mask whose box reaches past that object's box is still merged
   /// when one of the two is a piece of the other: it holds at most this share
   /// of the other's tracked surface voxels, and within the mask their
-  /// surfaces lie less than split_gap_m apart. Pieces held 2-19% of their
-  /// chair's voxels in the missions traced, neighbouring chairs 60-120% of
-  /// each other's (docs/BENCHMARKS.md). Fraction; 0 = off.
+  /// surfaces lie less than split_gap_m apart. The tracked voxel count is a
+  /// proxy for size: it counts what has been seen of each so far. In the
+  /// missions traced, pieces held 2-19% of the other object's count and
+  /// neighbouring chairs 61-88% (smaller / larger; docs/BENCHMARKS.md).
+  /// Fraction; 0 = off (so is split_gap_m 0).
   double piece_max_share = 0.3;
   /// A new object is made only from a detection that keeps at least this many
   /// mask pixels with valid depth outside the (grown) renders of known objects,
