@@ -199,6 +199,13 @@ cv::Mat aboveOrBelow(const cv::Mat& mask, const cv::Mat& depth_m, const PinholeC
   return out;
 }
 
+// The object map with the foreground prior and object_map/piece_max_share = share.
+ObjectMapConfig withPieceShare(double share) {
+  ObjectMapConfig config = objectMapConfigWithPrior();
+  config.piece_max_share = share;
+  return config;
+}
+
 // A chair first detected without the top of its back (object 1: the back
 // was hidden, say, by a table), then from a view where only that top showed:
 // the detection matches nothing rendered and makes object 2. In the frames
@@ -213,9 +220,7 @@ TEST(ObjectMapImperfect, PieceOutsideTheObjectsBoxThatTouchesItIsMergedIntoIt) {
   // With the rule off (share 0) the same frames leave the top an object of its own: the box rule does not merge it.
   for (const double share : {0.3, 0.0}) {
     SCOPED_TRACE("piece_max_share " + std::to_string(share));
-    ObjectMapConfig config = objectMapConfigWithPrior();
-    config.piece_max_share = share;
-    ObjectMap map{config, ClassTable()};
+    ObjectMap map{withPieceShare(share), ClassTable()};
     std::vector<std::pair<std::uint32_t, std::uint32_t>> merged;
     for (size_t i = 0; i < poses.size(); ++i) {
       cv::Mat depth, labels;
@@ -259,9 +264,7 @@ TEST(ObjectMapImperfect, TouchingNeighbourUnderABledMaskIsNotMergedAsAPiece) {
   const auto poses = arc(kTarget, 1.8, 40.0, 9);
   for (const double share : {0.3, 0.99}) {
     SCOPED_TRACE("piece_max_share " + std::to_string(share));
-    ObjectMapConfig config = objectMapConfigWithPrior();
-    config.piece_max_share = share;
-    ObjectMap map{config, ClassTable()};
+    ObjectMap map{withPieceShare(share), ClassTable()};
     size_t merged = 0;
     for (size_t i = 0; i < poses.size(); ++i) {
       cv::Mat depth, labels;
