@@ -116,11 +116,15 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
     float offset_m;
   };
   std::map<std::uint32_t, SplitFrom> split_from;
-  const auto apart = [&](const cv::Mat& a, const cv::Mat& b, Eigen::Vector3f& normal_W, float& offset_m) {
-    cv::Mat ea = a.clone(), eb = b.clone();  // rims bled onto surfaces behind would join the two
+  // separateMasks(a, b) with the rims of each bled onto surfaces behind left out (they would join the two).
+  const auto separation = [&](const cv::Mat& a, const cv::Mat& b) {
+    cv::Mat ea = a.clone(), eb = b.clone();
     markDepthEdges(ea, depth_m, camera, config_.depthEdgeParams(), TsdfMap::kMaskUnknown);
     markDepthEdges(eb, depth_m, camera, config_.depthEdgeParams(), TsdfMap::kMaskUnknown);
-    const MaskSeparation s = separateMasks(eb, ea, depth_m, camera);  // normal towards the new detection
+    return separateMasks(ea, eb, depth_m, camera);
+  };
+  const auto apart = [&](const cv::Mat& a, const cv::Mat& b, Eigen::Vector3f& normal_W, float& offset_m) {
+    const MaskSeparation s = separation(b, a);  // normal towards the new detection
     normal_W = T_WC.linear().cast<float>() * s.normal_C;
     offset_m = static_cast<float>(s.plane_m + normal_W.cast<double>().dot(T_WC.translation()));
     return s.gap_m >= config_.split_gap_m;  // false for NaN (too few points to tell)
@@ -206,17 +210,14 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
     // detected alone, whose rendered pixels would otherwise keep the chair's object from growing there): within
     // x's mask their surfaces lie closer than split_gap_m (separateMasks, the split rule's measure, mirrored),
     // and one holds at most piece_max_share of the other's tracked surface voxels. Neighbouring objects of a
-    // class touch too, but are of a size (traced in docs/BENCHMARKS.md). Rims bled onto surfaces behind are
-    // left out, as in `apart`.
+    // class touch too, but are of a size (traced in docs/BENCHMARKS.md).
     const auto piece = [&](std::uint32_t y, std::uint32_t x, const cv::Mat& mask) {
       if (config_.split_gap_m <= 0 || config_.piece_max_share <= 0) return false;
       const double ny = static_cast<double>(summary(y, true).voxel_count);
       const double nx = static_cast<double>(summary(x, true).voxel_count);
       if (ny == 0 || nx == 0 || std::min(ny, nx) > config_.piece_max_share * std::max(ny, nx)) return false;
-      cv::Mat mask_y = mask & (rendered == static_cast<int>(y)), mask_x = mask & (rendered == static_cast<int>(x));
-      markDepthEdges(mask_y, depth_m, camera, config_.depthEdgeParams(), TsdfMap::kMaskUnknown);
-      markDepthEdges(mask_x, depth_m, camera, config_.depthEdgeParams(), TsdfMap::kMaskUnknown);
-      return separateMasks(mask_y, mask_x, depth_m, camera).gap_m < config_.split_gap_m;  // false for NaN
+      return separation(mask & (rendered == static_cast<int>(y)), mask & (rendered == static_cast<int>(x))).gap_m <
+             config_.split_gap_m;  // false for NaN
     };
     std::map<std::uint32_t, int> rendered_pixels;
     for (int v = 0; v < rendered.rows; ++v) {
