@@ -209,48 +209,116 @@ ObjectMapConfig withPieceShare(double share) {
 // A chair first detected without the top of its back (object 1: the back
 // was hidden, say, by a table), then from a view where only that top showed:
 // the detection matches nothing rendered and makes object 2. In the frames
-// after, the whole chair's mask matches object 1, and object 2 renders inside
-// it but sticks out of object 1's box, so the box rule does not merge it,
-// while its pixels keep object 1 from growing there. Its surface touches the
-// rest of the mask's, and it holds a small share of object 1's voxels: it is part of object 1.
-TEST(ObjectMapImperfect, PieceOutsideTheObjectsBoxThatTouchesItIsMergedIntoIt) {
+// after, the whole chair is detected: matched to object 1 as a matcher would,
+// or (match_to_piece) to object 2, the piece. The other object renders inside
+// the mask but sticks out of the detected one's box, so the box rule does not
+// merge them, while its pixels keep the detected object from growing there.
+// Their surfaces touch, and the top holds a small share of the chair's voxels.
+struct PieceRun {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> merged;  // (merged, into) over all frames
+  std::vector<std::uint32_t> ids;                               // the objects left
+  double rmse_m = NAN, top_m = -1.0;                            // the mesh of the first object left
+};
+PieceRun chairFoundInTwoPieces(double piece_max_share, bool match_to_piece) {
   PinholeCamera cam;
   const BoxUnion c = chair(0.0, 0.0);
+  ObjectMap map{withPieceShare(piece_max_share), ClassTable()};
+  PieceRun run;
   const auto poses = arc(kTarget, 1.8, 40.0, 9);
-  // With the rule off (share 0) the same frames leave the top an object of its own: the box rule does not merge it.
-  for (const double share : {0.3, 0.0}) {
-    SCOPED_TRACE("piece_max_share " + std::to_string(share));
-    ObjectMap map{withPieceShare(share), ClassTable()};
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> merged;
-    for (size_t i = 0; i < poses.size(); ++i) {
-      cv::Mat depth, labels;
-      renderShapes(cam, poses[i], {&c}, depth, labels);
-      cv::Mat mask = labels == 1;
-      if (i == 0) mask = aboveOrBelow(mask, depth, cam, poses[i], 0.8, false);
-      if (i == 1) mask = aboveOrBelow(mask, depth, cam, poses[i], 0.8, true);
-      ASSERT_GT(cv::countNonZero(mask), 500) << "frame " << i;
-      const FrameIntegration r = runFrame(map, cam, poses[i], depth, instances({{mask, 1}}, depth.size()), {1}, kChair);
-      if (i == 1) {
-        ASSERT_EQ(r.created, std::vector<std::uint32_t>{2u}) << "the top alone did not make an object of its own";
-      }
-      merged.insert(merged.end(), r.merged.begin(), r.merged.end());
+  for (size_t i = 0; i < poses.size(); ++i) {
+    cv::Mat depth, labels;
+    renderShapes(cam, poses[i], {&c}, depth, labels);
+    cv::Mat mask = labels == 1;
+    if (i == 0) mask = aboveOrBelow(mask, depth, cam, poses[i], 0.8, false);
+    if (i == 1) mask = aboveOrBelow(mask, depth, cam, poses[i], 0.8, true);
+    EXPECT_GT(cv::countNonZero(mask), 500) << "frame " << i;
+    const cv::Mat image = instances({{mask, 1}}, depth.size());
+    FrameIntegration r;
+    if (i >= 2 && match_to_piece && map.object(2)) {
+      cv::Mat rendered;
+      map.render(cam, poses[i], depth, rendered);
+      r = map.integrateFrame(cam, poses[i], depth, cv::Mat(), image, {{1, 2u, kChair}}, &rendered);
+    } else {
+      r = runFrame(map, cam, poses[i], depth, image, {1}, kChair);
     }
-    if (share == 0.0) {
-      EXPECT_TRUE(merged.empty());
-      EXPECT_EQ(map.objects().size(), 2u);
-      continue;
+    if (i == 1) {
+      EXPECT_EQ(r.created, std::vector<std::uint32_t>{2u}) << "the top alone did not make an object of its own";
     }
-    // The top (object 2) joined the chair's object (1), not the other way round.
-    ASSERT_EQ(merged, (std::vector<std::pair<std::uint32_t, std::uint32_t>>{{2u, 1u}}));
-    ASSERT_EQ(map.objects().size(), 1u);
-    const MappedObject& o = *map.objects().begin()->second;
-    const Mesh mesh = o.tsdf.extractMesh();
-    EXPECT_LT(rmse(mesh.vertices_W, c), 0.02);
-    // The merged object holds the top of the back.
-    float top = -1.f;
-    for (const auto& v : mesh.vertices_W) top = std::max(top, v.z());
-    EXPECT_GT(top, 0.9f);
+    run.merged.insert(run.merged.end(), r.merged.begin(), r.merged.end());
   }
+  for (const auto& kv : map.objects()) run.ids.push_back(kv.first);
+  if (run.ids.empty()) return run;
+  const Mesh mesh = map.objects().begin()->second->tsdf.extractMesh();
+  run.rmse_m = rmse(mesh.vertices_W, c);
+  for (const auto& v : mesh.vertices_W) run.top_m = std::max(run.top_m, static_cast<double>(v.z()));
+  return run;
+}
+
+TEST(ObjectMapImperfect, PieceOutsideTheObjectsBoxThatTouchesItIsMergedIntoIt) {
+  const PieceRun on = chairFoundInTwoPieces(0.3, false);
+  // The top (object 2) joined the chair's object (1), not the other way round.
+  ASSERT_EQ(on.merged, (std::vector<std::pair<std::uint32_t, std::uint32_t>>{{2u, 1u}}));
+  ASSERT_EQ(on.ids, std::vector<std::uint32_t>{1u});
+  EXPECT_LT(on.rmse_m, 0.02);
+  EXPECT_GT(on.top_m, 0.9) << "the merged object holds the top of the back";
+  // With the rule off (share 0) the same frames leave the top an object of its own: the box rule does not merge it.
+  const PieceRun off = chairFoundInTwoPieces(0.0, false);
+  EXPECT_TRUE(off.merged.empty());
+  EXPECT_EQ(off.ids, (std::vector<std::uint32_t>{1u, 2u}));
+}
+
+// The same frames with the whole chair's detections matched to the piece: the
+// chair's object is the larger one and keeps its id; the piece joins it.
+TEST(ObjectMapImperfect, WholeObjectsDetectionMatchedToItsPieceKeepsTheWholeObjectsId) {
+  const PieceRun r = chairFoundInTwoPieces(0.3, true);
+  ASSERT_EQ(r.merged, (std::vector<std::pair<std::uint32_t, std::uint32_t>>{{2u, 1u}}));
+  ASSERT_EQ(r.ids, std::vector<std::uint32_t>{1u});
+  EXPECT_LT(r.rmse_m, 0.02);
+  EXPECT_GT(r.top_m, 0.9);
+}
+
+// A bench 1.7 m long and a 14 cm cube `gap_m` in front of it (towards the
+// cameras), 0.45 m in from the bench's left end, each detected alone in four
+// frames, then under one mask bled over both, which matches the bench. The
+// cube renders inside that mask, past the bench's box, and is small. From the
+// cube the bench reaches both ways along the line between their centroids,
+// so the mask gap (separateMasks) is negative whether the cube touches the
+// bench or stands apart (-0.39 and -0.06 m when this test was written): the
+// distance between their surfaces in 3D tells them apart.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> cubeInFrontOfABench(double gap_m) {
+  PinholeCamera cam;
+  const Box bench(Eigen::Vector3d(0.0, -0.8, 0.4), Eigen::Vector3d(0.1, 0.9, 0.7));
+  const Box cube = Box::around(Eigen::Vector3d(-gap_m - 0.07, -0.35, 0.55), Eigen::Vector3d(0.07, 0.07, 0.07));
+  ObjectMap map{objectMapConfigWithPrior(), ClassTable()};
+  const auto poses = arc(Eigen::Vector3d(0.0, 0.05, 0.55), 1.8, 30.0, 5);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> merged;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    cv::Mat depth, labels;
+    renderShapes(cam, poses[i], {&bench, &cube}, depth, labels);
+    EXPECT_GT(cv::countNonZero(labels == 2), 150) << "frame " << i;
+    const bool bled_frame = i + 1 == poses.size();
+    const cv::Mat masks = bled_frame ? instances({{bled(labels, 1, 5) | bled(labels, 2, 5), 1}}, depth.size())
+                                     : instances({{labels == 1, 1}, {labels == 2, 2}}, depth.size());
+    const FrameIntegration r = runFrame(map, cam, poses[i], depth, masks,
+                                        bled_frame ? std::vector<std::uint16_t>{1} : std::vector<std::uint16_t>{1, 2},
+                                        kChair);
+    if (bled_frame) {
+      EXPECT_EQ(r.detected, std::vector<std::uint32_t>{1u}) << "the bled mask matched the bench's object";
+      const bool cube_seen = std::find(r.undetected.begin(), r.undetected.end(), 2u) != r.undetected.end();
+      EXPECT_TRUE(cube_seen || !r.merged.empty()) << "the cube renders (undetected or merged)";
+    } else {
+      EXPECT_EQ(map.objects().size(), 2u) << "frame " << i;
+    }
+    merged.insert(merged.end(), r.merged.begin(), r.merged.end());
+  }
+  return merged;
+}
+
+TEST(ObjectMapImperfect, SmallObjectApartFromTheDetectedOneIsNotMergedAsAPiece) {
+  // 20 cm apart in 3D: two objects.
+  EXPECT_TRUE(cubeInFrontOfABench(0.2).empty());
+  // Touching: a piece of the bench (the control that the scene reaches the rule at all).
+  EXPECT_EQ(cubeInFrontOfABench(0.0), (std::vector<std::pair<std::uint32_t, std::uint32_t>>{{2u, 1u}}));
 }
 
 // Two chairs side by side 1 cm apart (their seats nearly touch), each

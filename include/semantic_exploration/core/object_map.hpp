@@ -20,6 +20,7 @@
 #include "semantic_exploration/core/class_table.hpp"
 #include "semantic_exploration/core/object_id_pool.hpp"
 #include "semantic_exploration/core/object_map_config.hpp"
+#include "semantic_exploration/core/object_masks.hpp"
 #include "semantic_exploration/core/spherical_grid.hpp"
 #include "semantic_exploration/core/tsdf.hpp"
 
@@ -106,7 +107,11 @@ class ObjectMap {
   ///    the object (ObjectMapConfig::mask_depth_edge_m).
   ///    A visible undetected object of the same class whose render lies
   ///    mostly inside such a mask (merge_fraction) is the same object seen
-  ///    in pieces before: it is merged into the detected one.
+  ///    in pieces before if its surface also lies inside the detected one's
+  ///    box, or if one of the two is a small piece of the other touching it
+  ///    (ObjectMapConfig::piece_max_share): the two are merged. The merged
+  ///    object keeps the detected one's id, unless the detected one is the
+  ///    piece: then the larger keeps its own.
   /// 3. Every other rendered object updates SDF and colour through its
   ///    rendered mask, without the foreground probability.
   /// @param depth_m CV_32FC1 m; rgb CV_8UC3 or empty; instance_image CV_16UC1 (same size)
@@ -164,6 +169,18 @@ class ObjectMap {
  private:
   /// The TSDF geometry of a new object of class_id (the class's resolution, the config's truncation and bands).
   TsdfParams tsdfParams(int class_id) const;
+  /// separateMasks(a, b) with the rims each mask bled onto surfaces behind it left out (they would join the two).
+  MaskSeparation separation(const cv::Mat& a, const cv::Mat& b, const PinholeCamera& camera,
+                            const cv::Mat& depth_m) const;
+  /// Step 2's merges (object_map_merge.cpp): finds the objects not detected in this frame that are the same
+  /// object as a detected one (inside its box, or a piece of it), merges them and lists them in result.merged.
+  /// Where the detected object is the piece, the other keeps its id and takes over its mask in `masks`.
+  /// @param masks detected object id -> the union of its detections' masks in this frame
+  /// @return merged id -> the id it was merged into (every key is gone from the map)
+  std::map<std::uint32_t, std::uint32_t> mergeSameObjects(const PinholeCamera& camera, const cv::Mat& depth_m,
+                                                          const cv::Mat& rendered,
+                                                          std::map<std::uint32_t, cv::Mat>& masks,
+                                                          FrameIntegration& result);
   ObjectMapConfig config_;
   ClassTable classes_;
   std::map<std::uint32_t, std::unique_ptr<MappedObject>> objects_;

@@ -44,8 +44,9 @@ struct ObjectMapConfig {
   /// A visible undetected object rendered merge_fraction inside a detected
   /// one's mask whose box reaches past that object's box is still merged
   /// when one of the two is a piece of the other: it holds at most this share
-  /// of the other's tracked surface voxels, and within the mask their
-  /// surfaces lie less than split_gap_m apart. The tracked voxel count is a
+  /// of the other's tracked surface voxels, and their surfaces lie less than
+  /// split_gap_m apart both within the mask and in 3D (nearest tracked
+  /// surface voxels). The larger of the two keeps its id. The tracked voxel count is a
   /// proxy for size: it counts what has been seen of each so far. In the
   /// missions traced, pieces held 2-19% of the other object's count and
   /// neighbouring chairs 61-88% (smaller / larger; docs/BENCHMARKS.md).
