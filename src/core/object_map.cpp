@@ -162,9 +162,11 @@ FrameIntegration ObjectMap::integrateFrame(const PinholeCamera& camera, const Ei
   }
   // Merge visible undetected objects whose render lies mostly inside a detection of the same class: they are
   // pieces of the detected object, or it of them.
-  const std::map<std::uint32_t, std::uint32_t> merged_into = mergeSameObjects(camera, depth_m, rendered, masks, result);
-  for (auto& sp : split_from)
-    if (const auto m = merged_into.find(sp.second.id); m != merged_into.end()) sp.second.id = m->second;
+  // An object split in this frame keeps its id: its split-off part is rendered as it until it forgets that side.
+  std::set<std::uint32_t> split_sources;
+  for (const auto& sp : split_from) split_sources.insert(sp.second.id);
+  const std::map<std::uint32_t, std::uint32_t> merged_into =
+      mergeSameObjects(camera, depth_m, rendered, masks, split_sources, result);
   for (auto& kv : masks) {
     // Pixels where another known object is rendered belong to that object
     // (a detection spanning two objects only feeds the one it was matched to).

@@ -4,26 +4,28 @@
 #include "semantic_exploration/core/object_map.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 #include <unordered_set>
 
 namespace semexp {
 
-namespace {
-/// Distance between the nearest centres of a's and b's tracked surface voxels, m; infinity if none lie under
-/// max_m apart. Both maps are of one class, so of one voxel grid.
 double trackedSurfaceDistance(const TsdfMap& a, const TsdfMap& b, double max_m) {
+  const double res_m = a.params().resolution_m;
+  if (res_m != b.params().resolution_m || a.params().block_size != b.params().block_size)
+    throw std::invalid_argument("trackedSurfaceDistance: the two maps must share one voxel grid");
   std::unordered_set<Eigen::Vector3i, VoxelIndexHash> surface_b;
   b.forEachVoxel([&](const Eigen::Vector3i& index, const TsdfVoxel& vx) {
     if (b.isSurfaceVoxel(vx, true)) surface_b.insert(index);
   });
-  const double res_m = b.params().resolution_m;
-  const int r = static_cast<int>(std::floor(max_m / res_m));
-  int best_sq = std::numeric_limits<int>::max();  // in voxels squared
+  const int r = static_cast<int>(std::ceil(max_m / res_m));
+  const int max_sq = std::numeric_limits<int>::max();
+  int best_sq = max_sq;  // in voxels squared
   a.forEachVoxel([&](const Eigen::Vector3i& index, const TsdfVoxel& vx) {
-    if (best_sq == 0 || !a.isSurfaceVoxel(vx, true)) return;
+    if (best_sq == 0 || surface_b.empty() || !a.isSurfaceVoxel(vx, true)) return;
     for (int dz = -r; dz <= r; ++dz)
       for (int dy = -r; dy <= r; ++dy)
         for (int dx = -r; dx <= r; ++dx) {
@@ -31,11 +33,10 @@ double trackedSurfaceDistance(const TsdfMap& a, const TsdfMap& b, double max_m) 
           if (d_sq < best_sq && surface_b.count(index + Eigen::Vector3i(dx, dy, dz))) best_sq = d_sq;
         }
   });
-  const double d_m = best_sq == std::numeric_limits<int>::max() ? std::numeric_limits<double>::infinity()
-                                                                : std::sqrt(static_cast<double>(best_sq)) * res_m;
+  const double d_m = best_sq == max_sq ? std::numeric_limits<double>::infinity()
+                                       : std::sqrt(static_cast<double>(best_sq)) * res_m;
   return d_m < max_m ? d_m : std::numeric_limits<double>::infinity();
 }
-}  // namespace
 
 MaskSeparation ObjectMap::separation(const cv::Mat& a, const cv::Mat& b, const PinholeCamera& camera,
                                      const cv::Mat& depth_m) const {
@@ -48,6 +49,7 @@ MaskSeparation ObjectMap::separation(const cv::Mat& a, const cv::Mat& b, const P
 std::map<std::uint32_t, std::uint32_t> ObjectMap::mergeSameObjects(const PinholeCamera& camera, const cv::Mat& depth_m,
                                                                    const cv::Mat& rendered,
                                                                    std::map<std::uint32_t, cv::Mat>& masks,
+                                                                   const std::set<std::uint32_t>& keep_ids,
                                                                    FrameIntegration& result) {
   // Summaries walk all of an object's blocks: once per object, surface and frame (nothing merges before the
   // end). tracked: the tracked surface; else the object as published (ObjectMap::summarize).
@@ -80,29 +82,34 @@ std::map<std::uint32_t, std::uint32_t> ObjectMap::mergeSameObjects(const Pinhole
   // One of y and x is a piece of the other that reaches past its box (the top of a chair's back first
   // detected alone, whose rendered pixels would otherwise keep the chair's object from growing there): one
   // holds at most piece_max_share of the other's tracked surface voxels, and their surfaces touch: within x's
-  // mask they lie under split_gap_m apart (separateMasks, the split rule's measure, mirrored), and so do their
-  // nearest tracked surface voxels in 3D. The mask gap alone is negative, so "touching", wherever the larger
-  // object reaches past the piece on both sides of the line between their centroids, however far in front of
-  // it the piece stands. Neighbouring objects of a class touch too, but are of a size (traced in
-  // docs/BENCHMARKS.md).
+  // mask they lie under split_gap_m apart (separateMasks, the split rule's measure, mirrored), and their
+  // nearest tracked surface voxels under piece_max_distance_m. The mask gap is negative, so "touching",
+  // wherever the larger object reaches past the piece on both sides of the line between their centroids
+  // (a small object 20 cm in front of a bench did in the tests). Neighbouring objects of a class touch too,
+  // but are of a size (traced in docs/BENCHMARKS.md).
   const auto piece = [&](std::uint32_t y, std::uint32_t x, const cv::Mat& mask) {
     if (config_.split_gap_m <= 0 || config_.piece_max_share <= 0) return false;
-    const double ny = static_cast<double>(summary(y, true).voxel_count);
-    const double nx = static_cast<double>(summary(x, true).voxel_count);
+    const TsdfSummary &sy = summary(y, true), &sx = summary(x, true);
+    const double ny = static_cast<double>(sy.voxel_count), nx = static_cast<double>(sx.voxel_count);
     if (ny == 0 || nx == 0 || std::min(ny, nx) > config_.piece_max_share * std::max(ny, nx)) return false;
+    // Boxes of the tracked surfaces farther apart than the 3D test allows (plus a voxel of rounding): no need to
+    // look at the voxels.
+    const Eigen::Vector3d apart_m = (sy.bbox_min_W - sx.bbox_max_W).cwiseMax(sx.bbox_min_W - sy.bbox_max_W).cwiseMax(0.0);
+    if (apart_m.norm() > config_.piece_max_distance_m + objects_.at(x)->resolution_m) return false;
     const double gap_m = separation(mask & (rendered == static_cast<int>(y)), mask & (rendered == static_cast<int>(x)),
                                     camera, depth_m)
                              .gap_m;
     if (!(gap_m < config_.split_gap_m)) return false;  // NaN: too few points to tell
     const TsdfMap &ty = objects_.at(y)->tsdf, &tx = objects_.at(x)->tsdf;
-    return std::isfinite(ny <= nx ? trackedSurfaceDistance(ty, tx, config_.split_gap_m)
-                                  : trackedSurfaceDistance(tx, ty, config_.split_gap_m));
+    return std::isfinite(ny <= nx ? trackedSurfaceDistance(ty, tx, config_.piece_max_distance_m)
+                                  : trackedSurfaceDistance(tx, ty, config_.piece_max_distance_m));
   };
   std::map<std::uint32_t, std::uint32_t> merged_into;
-  // y is the same object as the detected x: normally y goes into x. Where x is the piece, x goes into y, which
-  // takes over x's mask (and whatever was merged into x so far): the larger object's id stays.
+  // y is the same object as the detected x: normally y goes into x. Where x is the piece (and not in keep_ids),
+  // x goes into y, which takes over x's mask (and whatever was merged into x so far): the larger object's id
+  // stays.
   const auto merge = [&](std::uint32_t y, std::uint32_t x, bool x_into_y) {
-    if (!x_into_y) {
+    if (!x_into_y || keep_ids.count(x)) {
       merged_into[y] = x;
       return;
     }
@@ -111,7 +118,9 @@ std::map<std::uint32_t, std::uint32_t> ObjectMap::mergeSameObjects(const Pinhole
     merged_into[x] = y;
     auto node = masks.extract(x);
     node.key() = y;
-    masks.insert(std::move(node));
+    const bool inserted = masks.insert(std::move(node)).inserted;
+    assert(inserted);  // y was not detected: no mask of its own
+    (void)inserted;
   };
   std::map<std::uint32_t, int> rendered_pixels;
   for (int v = 0; v < rendered.rows; ++v) {
@@ -134,7 +143,7 @@ std::map<std::uint32_t, std::uint32_t> ObjectMap::mergeSameObjects(const Pinhole
       if (inside_box(y, x, false)) {
         merge(y, x, false);
       } else if (piece(y, x, kv.second)) {
-        merge(y, x, summary(x, true).voxel_count < summary(y, true).voxel_count);
+        merge(y, x, summary(x, true).voxel_count < summary(y, true).voxel_count);  // a tie: the detected one's id
       } else {
         continue;
       }

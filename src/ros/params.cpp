@@ -133,6 +133,7 @@ semexp::ObjectMapConfig loadObjectMap(const ParamReader& p) {
   p.get(n + "render_depth_tolerance_rel", c.render_depth_tolerance_rel);
   p.get(n + "merge_fraction", c.merge_fraction);
   p.get(n + "piece_max_share", c.piece_max_share);
+  p.get(n + "piece_max_distance_m", c.piece_max_distance_m);
   p.get(n + "min_new_object_pixels", c.min_new_object_pixels);
   p.get(n + "mask_depth_edge_m", c.mask_depth_edge_m);
   p.get(n + "mask_depth_edge_rel", c.mask_depth_edge_rel);

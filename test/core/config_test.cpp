@@ -155,6 +155,9 @@ TEST(Config, OtherBadValues) {
   om.full_weight_depth_m = -0.5;
   EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/full_weight_depth_m");
   om = ObjectMapConfig();
+  om.piece_max_distance_m = 0.0;
+  EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/piece_max_distance_m");
+  om = ObjectMapConfig();
   om.foreground_prior = 1.2;
   EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/foreground_prior");
   om = ObjectMapConfig();

@@ -378,6 +378,22 @@ TEST(ObjectMap, GainImagesFollowEquationOne) {
   EXPECT_DOUBLE_EQ(objectDistanceGain(2.0, 2.5, 0.5, 10.0), 0.0);
 }
 
+// A (r 0.25 m) and B (r 0.2 m) have centres 0.9 m apart: their surfaces lie 0.45 m apart, and the nearest
+// centres of their surface voxels (2 cm, |sdf| under one voxel) within a voxel either side of that.
+TEST(ObjectMap, TrackedSurfaceDistanceBetweenTwoSpheres) {
+  PinholeCamera cam;
+  const ObjectMap map = twoObjects(cam);
+  const TsdfMap &a = map.object(1)->tsdf, &b = map.object(2)->tsdf;
+  const double d = trackedSurfaceDistance(a, b, 0.6);
+  EXPECT_NEAR(d, 0.45, 0.04);
+  EXPECT_DOUBLE_EQ(trackedSurfaceDistance(b, a, 0.6), d);  // the same pairs of voxels either way
+  EXPECT_TRUE(std::isinf(trackedSurfaceDistance(a, b, 0.4)));  // none under max_m
+  EXPECT_DOUBLE_EQ(trackedSurfaceDistance(a, a, 0.1), 0.0);
+  TsdfParams coarse = a.params();
+  coarse.resolution_m = 0.04;
+  EXPECT_THROW(trackedSurfaceDistance(a, TsdfMap(coarse), 0.6), std::invalid_argument);
+}
+
 TEST(ObjectMap, SaveWritesMeshesAndIndex) {
   PinholeCamera cam;
   const ObjectMap map = twoObjects(cam);

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <set>
 #include <opencv2/core.hpp>
 #include <string>
 #include <utility>
@@ -40,6 +41,13 @@ struct MappedObject {
   MappedObject(std::uint32_t id_, int class_id_, std::string name, const TsdfParams& params)
       : id(id_), class_id(class_id_), class_name(std::move(name)), resolution_m(params.resolution_m), tsdf(params) {}
 };
+
+/// Distance between the nearest centres of a's and b's tracked surface voxels
+/// (TsdfParams::trackedForeground()), m; infinity if none lie under max_m
+/// apart or either has none. Cost: (2 ceil(max_m / resolution) + 1)^3 lookups
+/// per surface voxel of a: give the smaller map as a.
+/// @throws std::invalid_argument if the maps do not share one voxel grid (resolution and block size)
+double trackedSurfaceDistance(const TsdfMap& a, const TsdfMap& b, double max_m);
 
 /// A detection of the current frame after matching.
 struct ObjectDetection {
@@ -111,7 +119,7 @@ class ObjectMap {
   ///    box, or if one of the two is a small piece of the other touching it
   ///    (ObjectMapConfig::piece_max_share): the two are merged. The merged
   ///    object keeps the detected one's id, unless the detected one is the
-  ///    piece: then the larger keeps its own.
+  ///    piece (and was not split in this frame): then the larger keeps its own.
   /// 3. Every other rendered object updates SDF and colour through its
   ///    rendered mask, without the foreground probability.
   /// @param depth_m CV_32FC1 m; rgb CV_8UC3 or empty; instance_image CV_16UC1 (same size)
@@ -176,10 +184,12 @@ class ObjectMap {
   /// object as a detected one (inside its box, or a piece of it), merges them and lists them in result.merged.
   /// Where the detected object is the piece, the other keeps its id and takes over its mask in `masks`.
   /// @param masks detected object id -> the union of its detections' masks in this frame
+  /// @param keep_ids detected objects that keep their id in any case (those split in this frame)
   /// @return merged id -> the id it was merged into (every key is gone from the map)
   std::map<std::uint32_t, std::uint32_t> mergeSameObjects(const PinholeCamera& camera, const cv::Mat& depth_m,
                                                           const cv::Mat& rendered,
                                                           std::map<std::uint32_t, cv::Mat>& masks,
+                                                          const std::set<std::uint32_t>& keep_ids,
                                                           FrameIntegration& result);
   ObjectMapConfig config_;
   ClassTable classes_;

@@ -44,14 +44,23 @@ struct ObjectMapConfig {
   /// A visible undetected object rendered merge_fraction inside a detected
   /// one's mask whose box reaches past that object's box is still merged
   /// when one of the two is a piece of the other: it holds at most this share
-  /// of the other's tracked surface voxels, and their surfaces lie less than
-  /// split_gap_m apart both within the mask and in 3D (nearest tracked
-  /// surface voxels). The larger of the two keeps its id. The tracked voxel count is a
+  /// of the other's tracked surface voxels, their surfaces within the mask
+  /// lie less than split_gap_m apart, and their nearest tracked surface
+  /// voxels less than piece_max_distance_m. Where the detected object is the
+  /// piece, the larger keeps its id. The tracked voxel count is a
   /// proxy for size: it counts what has been seen of each so far. In the
   /// missions traced, pieces held 2-19% of the other object's count and
   /// neighbouring chairs 61-88% (smaller / larger; docs/BENCHMARKS.md).
   /// Fraction; 0 = off (so is split_gap_m 0).
   double piece_max_share = 0.3;
+  /// The piece rule's 3D test: the nearest centres of the two objects'
+  /// tracked surface voxels lie less than this apart. The mask gap alone
+  /// cannot tell a piece that touches from a small object standing in front
+  /// of the larger one (both give negative gaps). In the missions traced, the
+  /// pieces lay 0.000 and 0.045 m from their chair, the two small objects it
+  /// must keep apart 0.22 and 0.24 m (docs/BENCHMARKS.md): 0.1 m leaves a
+  /// factor of two either side. m; must be > 0.
+  double piece_max_distance_m = 0.1;
   /// A new object is made only from a detection that keeps at least this many
   /// mask pixels with valid depth outside the (grown) renders of known objects,
   /// px; fewer (a rim round a known object) would make a spurious object of a
@@ -135,6 +144,8 @@ struct ObjectMapConfig {
             "must be in (0.5, 1]");
     require(std::isfinite(piece_max_share) && piece_max_share >= 0 && piece_max_share < 1, ns + "piece_max_share",
             "must be in [0, 1) (1 would take any two touching objects for one)");
+    require(std::isfinite(piece_max_distance_m) && piece_max_distance_m > 0, ns + "piece_max_distance_m",
+            "must be > 0 m");
     require(std::isfinite(render_depth_tolerance_rel) && render_depth_tolerance_rel >= 0 && render_depth_tolerance_rel < 1,
             ns + "render_depth_tolerance_rel", "must be in [0, 1)");
     require(min_new_object_pixels >= 1, ns + "min_new_object_pixels", "must be >= 1 px");
