@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -87,7 +88,7 @@ std::map<std::uint32_t, std::uint32_t> ObjectMap::mergeSameObjects(const Pinhole
   // wherever the larger object reaches past the piece on both sides of the line between their centroids
   // (a small object 20 cm in front of a bench did in the tests). Neighbouring objects of a class touch too,
   // but are of a size (traced in docs/BENCHMARKS.md).
-  const auto piece = [&](std::uint32_t y, std::uint32_t x, const cv::Mat& mask) {
+  const auto piece = [&](std::uint32_t y, std::uint32_t x, const cv::Mat& mask, std::string& why) {
     if (config_.split_gap_m <= 0 || config_.piece_max_share <= 0) return false;
     const TsdfSummary &sy = summary(y, true), &sx = summary(x, true);
     const double ny = static_cast<double>(sy.voxel_count), nx = static_cast<double>(sx.voxel_count);
@@ -101,18 +102,27 @@ std::map<std::uint32_t, std::uint32_t> ObjectMap::mergeSameObjects(const Pinhole
                              .gap_m;
     if (!(gap_m < config_.split_gap_m)) return false;  // NaN: too few points to tell
     const TsdfMap &ty = objects_.at(y)->tsdf, &tx = objects_.at(x)->tsdf;
-    return std::isfinite(ny <= nx ? trackedSurfaceDistance(ty, tx, config_.piece_max_distance_m)
-                                  : trackedSurfaceDistance(tx, ty, config_.piece_max_distance_m));
+    const double d_m = ny <= nx ? trackedSurfaceDistance(ty, tx, config_.piece_max_distance_m)
+                                : trackedSurfaceDistance(tx, ty, config_.piece_max_distance_m);
+    if (!std::isfinite(d_m)) return false;
+    char text[160];
+    std::snprintf(text, sizeof(text), "a piece: %.0f of %.0f tracked surface voxels, %.3f m apart, mask gap %.3f m",
+                  std::min(ny, nx), std::max(ny, nx), d_m, gap_m);
+    why = text;
+    return true;
   };
   std::map<std::uint32_t, std::uint32_t> merged_into;
+  std::map<std::uint32_t, std::string> reasons;  // merged id -> why
   // y is the same object as the detected x: normally y goes into x. Where x is the piece (and not in keep_ids),
   // x goes into y, which takes over x's mask (and whatever was merged into x so far): the larger object's id
   // stays.
-  const auto merge = [&](std::uint32_t y, std::uint32_t x, bool x_into_y) {
+  const auto merge = [&](std::uint32_t y, std::uint32_t x, bool x_into_y, const std::string& why) {
     if (!x_into_y || keep_ids.count(x)) {
       merged_into[y] = x;
+      reasons[y] = why;
       return;
     }
+    reasons[x] = why + "; the detected one is the piece, the larger keeps its id";
     for (auto& m : merged_into)
       if (m.second == x) m.second = y;
     merged_into[x] = y;
@@ -140,10 +150,11 @@ std::map<std::uint32_t, std::uint32_t> ObjectMap::mergeSameObjects(const Pinhole
       if (inside < config_.merge_fraction * rp.second) continue;
       // A detector may also merge two neighbouring objects into one mask: only merge if y's surface also lies
       // mostly inside x's box in 3D, or one of the two is a piece of the other.
+      std::string why;
       if (inside_box(y, x, false)) {
-        merge(y, x, false);
-      } else if (piece(y, x, kv.second)) {
-        merge(y, x, summary(x, true).voxel_count < summary(y, true).voxel_count);  // a tie: the detected one's id
+        merge(y, x, false, "rendered inside its detection, inside its box");
+      } else if (piece(y, x, kv.second, why)) {
+        merge(y, x, summary(x, true).voxel_count < summary(y, true).voxel_count, why);  // a tie: the detected one's id
       } else {
         continue;
       }
@@ -160,7 +171,7 @@ std::map<std::uint32_t, std::uint32_t> ObjectMap::mergeSameObjects(const Pinhole
     for (const auto& kv : masks) {
       const MappedObject& ox = *objects_.at(kv.first);
       if (ox.class_id != oy.class_id || ox.resolution_m != oy.resolution_m || !inside_box(y, kv.first, true)) continue;
-      merge(y, kv.first, false);
+      merge(y, kv.first, false, "made from one detection, never rendered, inside its box");
       break;
     }
   }
@@ -173,6 +184,7 @@ std::map<std::uint32_t, std::uint32_t> ObjectMap::mergeSameObjects(const Pinhole
     objects_.erase(m.first);
     ids_.release(m.first, version_);
     result.merged.emplace_back(m.first, m.second);
+    result.merge_reasons.push_back(reasons[m.first]);
   }
   return merged_into;
 }

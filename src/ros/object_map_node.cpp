@@ -129,7 +129,9 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
                                          std::to_string(semexp::ObjectIdPool::kReuseAfterFrames) + " frames");
   for (const auto id : r.created)
     ROS_INFO("object_map: new object %u (%s)", id, map_->object(id)->class_name.c_str());
-  for (const auto& m : r.merged) ROS_INFO("object_map: object %u is part of object %u: merged", m.first, m.second);
+  for (size_t i = 0; i < r.merged.size(); ++i)
+    ROS_INFO("object_map: object %u is part of object %u (%s): merged", r.merged[i].first, r.merged[i].second,
+             i < r.merge_reasons.size() ? r.merge_reasons[i].c_str() : "");
   for (const auto& s : r.split)
     ROS_INFO("object_map: object %u split off object %u (two detections of it lay apart)", s.first, s.second);
   last_stamp_ = matched->header.stamp;

@@ -216,6 +216,7 @@ ObjectMapConfig withPieceShare(double share) {
 // Their surfaces touch, and the top holds a small share of the chair's voxels.
 struct PieceRun {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> merged;  // (merged, into) over all frames
+  std::vector<std::string> reasons;                             // FrameIntegration::merge_reasons, likewise
   std::vector<std::uint32_t> ids;                               // the objects left
   double rmse_m = NAN, top_m = -1.0;                            // the mesh of the first object left
 };
@@ -245,6 +246,7 @@ PieceRun chairFoundInTwoPieces(double piece_max_share, bool match_to_piece) {
       EXPECT_EQ(r.created, std::vector<std::uint32_t>{2u}) << "the top alone did not make an object of its own";
     }
     run.merged.insert(run.merged.end(), r.merged.begin(), r.merged.end());
+    run.reasons.insert(run.reasons.end(), r.merge_reasons.begin(), r.merge_reasons.end());
   }
   for (const auto& kv : map.objects()) run.ids.push_back(kv.first);
   if (run.ids.empty()) return run;
@@ -259,6 +261,8 @@ TEST(ObjectMapImperfect, PieceOutsideTheObjectsBoxThatTouchesItIsMergedIntoIt) {
   // The top (object 2) joined the chair's object (1), not the other way round.
   ASSERT_EQ(on.merged, (std::vector<std::pair<std::uint32_t, std::uint32_t>>{{2u, 1u}}));
   ASSERT_EQ(on.ids, std::vector<std::uint32_t>{1u});
+  ASSERT_EQ(on.reasons.size(), 1u);
+  EXPECT_EQ(on.reasons[0].rfind("a piece: ", 0), 0u) << on.reasons[0];
   EXPECT_LT(on.rmse_m, 0.02);
   EXPECT_GT(on.top_m, 0.9) << "the merged object holds the top of the back";
   // With the rule off (share 0) the same frames leave the top an object of its own: the box rule does not merge it.
@@ -272,6 +276,8 @@ TEST(ObjectMapImperfect, PieceOutsideTheObjectsBoxThatTouchesItIsMergedIntoIt) {
 TEST(ObjectMapImperfect, WholeObjectsDetectionMatchedToItsPieceKeepsTheWholeObjectsId) {
   const PieceRun r = chairFoundInTwoPieces(0.3, true);
   ASSERT_EQ(r.merged, (std::vector<std::pair<std::uint32_t, std::uint32_t>>{{2u, 1u}}));
+  ASSERT_EQ(r.reasons.size(), 1u);
+  EXPECT_NE(r.reasons[0].find("the larger keeps its id"), std::string::npos) << r.reasons[0];
   ASSERT_EQ(r.ids, std::vector<std::uint32_t>{1u});
   EXPECT_LT(r.rmse_m, 0.02);
   EXPECT_GT(r.top_m, 0.9);

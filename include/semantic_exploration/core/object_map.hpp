@@ -63,6 +63,8 @@ struct FrameIntegration {
   std::vector<std::uint32_t> undetected;  ///< visible objects updated without foreground probability
   /// (merged, into): objects found to be the same as a detected one (see ObjectMapConfig::merge_fraction), now gone
   std::vector<std::pair<std::uint32_t, std::uint32_t>> merged;
+  /// One per `merged` entry, in its order: which rule merged them, with its figures (for the log).
+  std::vector<std::string> merge_reasons;
   /// (new, from): objects split off a known one, whose detection lay split_gap_m apart from another detection of
   /// it in this frame (see ObjectMapConfig::split_gap_m); also listed in `created`
   std::vector<std::pair<std::uint32_t, std::uint32_t>> split;
