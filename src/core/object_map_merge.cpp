@@ -95,9 +95,9 @@ std::map<std::uint32_t, std::uint32_t> ObjectMap::mergeSameObjects(const Pinhole
     if (ny == 0 || nx == 0 || std::min(ny, nx) > config_.piece_max_share * std::max(ny, nx)) return false;
     // Boxes of the tracked surfaces farther apart than the 3D test allows (plus a voxel of rounding): no need to
     // look at the voxels.
-    const Eigen::Vector3d apart_m =
-        (sy.bbox_min_W - sx.bbox_max_W).cwiseMax(sx.bbox_min_W - sy.bbox_max_W).cwiseMax(0.0);
-    if (apart_m.norm() > config_.piece_max_distance_m + objects_.at(x)->resolution_m) return false;
+    const double boxes_apart_m = Eigen::AlignedBox3d(sy.bbox_min_W, sy.bbox_max_W)
+                                     .exteriorDistance(Eigen::AlignedBox3d(sx.bbox_min_W, sx.bbox_max_W));
+    if (boxes_apart_m > config_.piece_max_distance_m + objects_.at(x)->resolution_m) return false;
     const double gap_m = separation(mask & (rendered == static_cast<int>(y)), mask & (rendered == static_cast<int>(x)),
                                     camera, depth_m)
                              .gap_m;
