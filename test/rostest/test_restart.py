@@ -153,9 +153,9 @@ class Restart(unittest.TestCase):
                 # Updates the old process sent just before the kill can reach this node after it (a loaded
                 # machine delivered 180 after the kill, then 1): they continue the old numbering. The restarted
                 # node's first update is the first one that does not.
-                in_flight, last = 0, before[-1] if before else 0
-                while in_flight < len(after) and after[in_flight] == last + 1:
-                    in_flight, last = in_flight + 1, last + 1
+                in_flight = 0
+                while before and in_flight < len(after) and after[in_flight] == before[-1] + 1 + in_flight:
+                    in_flight += 1
                 self.assertLess(in_flight, len(after), "no map_update from the restarted node: %s" % after[:5])
                 self.assertEqual(after[in_flight], 1, "map_update sequences after the restart: %s (last before: %s)"
                                  % (after[:5], before[-1:] or "none"))
