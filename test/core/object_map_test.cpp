@@ -4,10 +4,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <unistd.h>
+#include <vector>
 
 #include "semantic_exploration/core/object_map.hpp"
 #include "semexp_test/cameras.hpp"
@@ -392,6 +396,39 @@ TEST(ObjectMap, TrackedSurfaceDistanceBetweenTwoSpheres) {
   TsdfParams coarse = a.params();
   coarse.resolution_m = 0.04;
   EXPECT_THROW(trackedSurfaceDistance(a, TsdfMap(coarse), 0.6), std::invalid_argument);
+}
+
+// The binned search compares exactly the pairs the definition names: its answer equals a scan of every pair
+// of tracked surface voxels (within max_m / resolution voxels per axis), at bounds that cut between the two
+// spheres, reach just past them and take in everything.
+TEST(ObjectMap, TrackedSurfaceDistanceIsTheNearestPairOfAllPairs) {
+  PinholeCamera cam;
+  const ObjectMap map = twoObjects(cam);
+  const TsdfMap &a = map.object(1)->tsdf, &b = map.object(2)->tsdf;  // b lies along +y of a; a straddles 0
+  const double res_m = a.params().resolution_m;
+  const auto surface = [](const TsdfMap& m) {
+    std::vector<Eigen::Vector3i> out;
+    m.forEachVoxel([&](const Eigen::Vector3i& i, const TsdfVoxel& v) {
+      if (m.isSurfaceVoxel(v, true)) out.push_back(i);
+    });
+    return out;
+  };
+  const std::vector<Eigen::Vector3i> sa = surface(a), sb = surface(b);
+  ASSERT_GT(sa.size(), 100u);
+  ASSERT_GT(sb.size(), 100u);
+  for (const double max_m : {0.3, 0.45, 0.5, 0.6, 2.0}) {
+    const int r = static_cast<int>(std::ceil(max_m / res_m));
+    int best_sq = std::numeric_limits<int>::max();
+    for (const auto& i : sa)
+      for (const auto& j : sb) {
+        const Eigen::Vector3i d = j - i;
+        if (d.cwiseAbs().maxCoeff() <= r) best_sq = std::min(best_sq, d.squaredNorm());
+      }
+    const double d_m = std::sqrt(static_cast<double>(best_sq)) * res_m;
+    const double expected = d_m < max_m ? d_m : std::numeric_limits<double>::infinity();
+    EXPECT_EQ(trackedSurfaceDistance(a, b, max_m), expected) << "a to b, max_m " << max_m;
+    EXPECT_EQ(trackedSurfaceDistance(b, a, max_m), expected) << "b to a, max_m " << max_m;
+  }
 }
 
 TEST(ObjectMap, SaveWritesMeshesAndIndex) {
