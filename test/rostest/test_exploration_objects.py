@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""rostest: a whole exploration of a small generated house (2 rooms, 7 chairs)
+"""rostest: a whole exploration of a small generated house (4-7 chairs)
 until the planner stops by itself, with a reason and no collision. With
 ~check_objects (semantic mode) the object map is saved into a temp dir and
 scored against the exported ground truth (issue 7's acceptance): every chair
