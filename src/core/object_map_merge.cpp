@@ -13,11 +13,9 @@
 #include <unordered_map>
 #include <vector>
 
-namespace semexp {
+#include "semantic_exploration/core/int_math.hpp"
 
-namespace {
-int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
-}  // namespace
+namespace semexp {
 
 double trackedSurfaceDistance(const TsdfMap& a, const TsdfMap& b, double max_m) {
   const double res_m = a.params().resolution_m;
@@ -25,8 +23,9 @@ double trackedSurfaceDistance(const TsdfMap& a, const TsdfMap& b, double max_m) 
     throw std::invalid_argument("trackedSurfaceDistance: the two maps must share one voxel grid");
   // Nearest pair of tracked surface voxels within r voxels per axis. b's surface voxels are binned in cubic
   // cells of r voxels, so every voxel within r of one of a's lies in the 27 cells around it: each of a's
-  // voxels compares itself with b's voxels there instead of looking up all (2r + 1)^3 offsets (at max_m
-  // 0.6 m and 2 cm that was 226,981 hash lookups per voxel). The same pairs are compared, so the same minimum.
+  // voxels compares itself with b's voxels there instead of looking up all (2r + 1)^3 offsets: 1,331 hash
+  // lookups per voxel at the piece rule's 0.1 m and a 2 cm chair map, 226,981 at its test's 0.6 m. The same
+  // pairs are compared, so the same minimum.
   const int r = static_cast<int>(std::ceil(max_m / res_m));
   const int cell = std::max(r, 1);
   const auto cellOf = [cell](const Eigen::Vector3i& v) {

@@ -13,6 +13,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include "semantic_exploration/core/int_math.hpp"
 #include "semantic_exploration/core/object_map.hpp"
 #include "semexp_test/cameras.hpp"
 #include "semexp_test/object_scenes.hpp"
@@ -416,7 +417,8 @@ TEST(ObjectMap, TrackedSurfaceDistanceIsTheNearestPairOfAllPairs) {
   const std::vector<Eigen::Vector3i> sa = surface(a), sb = surface(b);
   ASSERT_GT(sa.size(), 100u);
   ASSERT_GT(sb.size(), 100u);
-  for (const double max_m : {0.3, 0.45, 0.5, 0.6, 2.0}) {
+  // -1 and 0: no pair; 0.1: the piece rule's default (none that close here); 0.45-0.6: around the gap.
+  for (const double max_m : {-1.0, 0.0, 0.1, 0.3, 0.45, 0.5, 0.6, 2.0}) {
     const int r = static_cast<int>(std::ceil(max_m / res_m));
     int best_sq = std::numeric_limits<int>::max();
     for (const auto& i : sa)
@@ -429,6 +431,14 @@ TEST(ObjectMap, TrackedSurfaceDistanceIsTheNearestPairOfAllPairs) {
     EXPECT_EQ(trackedSurfaceDistance(a, b, max_m), expected) << "a to b, max_m " << max_m;
     EXPECT_EQ(trackedSurfaceDistance(b, a, max_m), expected) << "b to a, max_m " << max_m;
   }
+}
+
+TEST(ObjectMap, FloorDivRoundsTowardsMinusInfinity) {
+  for (int b : {1, 2, 5, 16})
+    for (int a = -40; a <= 40; ++a)
+      EXPECT_EQ(floorDiv(a, b), static_cast<int>(std::floor(static_cast<double>(a) / b))) << a << " / " << b;
+  EXPECT_EQ(floorDiv(std::numeric_limits<int>::min(), 16), std::numeric_limits<int>::min() / 16);
+  EXPECT_EQ(floorDiv(std::numeric_limits<int>::max(), 16), std::numeric_limits<int>::max() / 16);
 }
 
 TEST(ObjectMap, SaveWritesMeshesAndIndex) {

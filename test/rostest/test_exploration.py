@@ -42,7 +42,7 @@ class Exploration(unittest.TestCase):
         rospy.Subscriber("/planner/status", ExplorationStatus, status.append)
         rospy.Subscriber("/background_map/stats", MapStats, stats.append)
         rospy.Subscriber("/mav/collisions", UInt32, lambda m: collisions.__setitem__(0, m.data))
-        finished, iterations = wait_finished(self, status, collisions, 1700.0)
+        finished, iterations = wait_finished(self, status, collisions, 500.0)
         gt = os.path.join(rospy.get_param("/exploration_test/gt_dir"), "free_space.json")
         with open(gt) as f:
             free_m3 = json.load(f)["explorable_free_volume_m3"]

@@ -1,5 +1,7 @@
 #include "semantic_exploration/core/planning/map_replica.hpp"
 
+#include "semantic_exploration/core/int_math.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -125,9 +127,8 @@ bool MapReplica::sphereCheck(const Eigen::Vector3d& p, double r, bool allow_unkn
   const Eigen::Vector3i lo = ((p.array() - r - origin_W_.array()) / res).floor().cast<int>();
   const Eigen::Vector3i hi = ((p.array() + r - origin_W_.array()) / res).floor().cast<int>();
   const int bs = block_size_;
-  auto floor_div = [bs](int a) { return a >= 0 ? a / bs : -((-a + bs - 1) / bs); };
-  const Eigen::Vector3i blo(floor_div(lo.x()), floor_div(lo.y()), floor_div(lo.z()));
-  const Eigen::Vector3i bhi(floor_div(hi.x()), floor_div(hi.y()), floor_div(hi.z()));
+  const Eigen::Vector3i blo(floorDiv(lo.x(), bs), floorDiv(lo.y(), bs), floorDiv(lo.z(), bs));
+  const Eigen::Vector3i bhi(floorDiv(hi.x(), bs), floorDiv(hi.y(), bs), floorDiv(hi.z(), bs));
   const double h = 0.5 * res, r2 = r * r;
   for (int bz = blo.z(); bz <= bhi.z(); ++bz)
     for (int by = blo.y(); by <= bhi.y(); ++by)

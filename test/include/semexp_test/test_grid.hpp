@@ -48,7 +48,7 @@ class TestGrid {
       for (int i = 0; i < dims_[k]; ++i) {
         const double c = centerAxis(k, i);
         if (c >= lo[k] && c <= hi[k]) {
-          first[k] = std::min(first[k], i);
+          if (last[k] < 0) first[k] = i;
           last[k] = i;
         }
       }

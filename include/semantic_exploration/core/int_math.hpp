@@ -1,0 +1,14 @@
+#pragma once
+/// @file int_math.hpp
+/// Integer helpers shared by the voxel-grid code.
+
+namespace semexp {
+
+/// a / b rounded towards minus infinity (C++'s / rounds towards zero), for
+/// b > 0: the block or cell holding voxel index a when blocks are b voxels wide.
+inline int floorDiv(int a, int b) {
+  const int q = a / b;
+  return (a % b != 0 && a < 0) ? q - 1 : q;
+}
+
+}  // namespace semexp
