@@ -417,15 +417,22 @@ TEST(ObjectMap, TrackedSurfaceDistanceIsTheNearestPairOfAllPairs) {
   const std::vector<Eigen::Vector3i> sa = surface(a), sb = surface(b);
   ASSERT_GT(sa.size(), 100u);
   ASSERT_GT(sb.size(), 100u);
+  // One scan of all pairs: the nearest pair at each Chebyshev distance c (voxels); a bound of r voxels per
+  // axis admits the pairs of c <= r.
+  std::vector<int> nearest_sq_at(1, std::numeric_limits<int>::max());
+  for (const auto& i : sa)
+    for (const auto& j : sb) {
+      const Eigen::Vector3i d = j - i;
+      const auto c = static_cast<std::size_t>(d.cwiseAbs().maxCoeff());
+      if (c >= nearest_sq_at.size()) nearest_sq_at.resize(c + 1, std::numeric_limits<int>::max());
+      nearest_sq_at[c] = std::min(nearest_sq_at[c], d.squaredNorm());
+    }
   // -1 and 0: no pair; 0.1: the piece rule's default (none that close here); 0.45-0.6: around the gap.
   for (const double max_m : {-1.0, 0.0, 0.1, 0.3, 0.45, 0.5, 0.6, 2.0}) {
     const int r = static_cast<int>(std::ceil(max_m / res_m));
     int best_sq = std::numeric_limits<int>::max();
-    for (const auto& i : sa)
-      for (const auto& j : sb) {
-        const Eigen::Vector3i d = j - i;
-        if (d.cwiseAbs().maxCoeff() <= r) best_sq = std::min(best_sq, d.squaredNorm());
-      }
+    for (int c = 0; c <= r && c < static_cast<int>(nearest_sq_at.size()); ++c)
+      best_sq = std::min(best_sq, nearest_sq_at[static_cast<std::size_t>(c)]);
     const double d_m = std::sqrt(static_cast<double>(best_sq)) * res_m;
     const double expected = d_m < max_m ? d_m : std::numeric_limits<double>::infinity();
     EXPECT_EQ(trackedSurfaceDistance(a, b, max_m), expected) << "a to b, max_m " << max_m;
