@@ -445,6 +445,7 @@ TEST(ObjectMap, FloorDivRoundsTowardsMinusInfinity) {
     for (int a = -40; a <= 40; ++a)
       EXPECT_EQ(floorDiv(a, b), static_cast<int>(std::floor(static_cast<double>(a) / b))) << a << " / " << b;
   EXPECT_EQ(floorDiv(std::numeric_limits<int>::min(), 16), std::numeric_limits<int>::min() / 16);
+  EXPECT_EQ(floorDiv(std::numeric_limits<int>::min() + 1, 16), std::numeric_limits<int>::min() / 16);
   EXPECT_EQ(floorDiv(std::numeric_limits<int>::max(), 16), std::numeric_limits<int>::max() / 16);
 }
 
