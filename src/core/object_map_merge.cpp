@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "semantic_exploration/core/int_math.hpp"
+#include "semantic_exploration/core/neighbour_cells.hpp"
 
 namespace semexp {
 
@@ -39,18 +40,12 @@ double trackedSurfaceDistance(const TsdfMap& a, const TsdfMap& b, double max_m) 
   int best_sq = max_sq;  // in voxels squared
   a.forEachVoxel([&](const Eigen::Vector3i& index, const TsdfVoxel& vx) {
     if (best_sq == 0 || cells_b.empty() || !a.isSurfaceVoxel(vx, true)) return;
-    const Eigen::Vector3i c = cellOf(index);
-    for (int cz = -1; cz <= 1; ++cz)
-      for (int cy = -1; cy <= 1; ++cy)
-        for (int cx = -1; cx <= 1; ++cx) {
-          const auto it = cells_b.find(c + Eigen::Vector3i(cx, cy, cz));
-          if (it == cells_b.end()) continue;
-          for (const Eigen::Vector3i& j : it->second) {
-            const Eigen::Vector3i d = j - index;
-            if (std::abs(d.x()) > r || std::abs(d.y()) > r || std::abs(d.z()) > r) continue;
-            best_sq = std::min(best_sq, d.squaredNorm());
-          }
-        }
+    visitNeighbourCells(cells_b, cellOf(index), [&](const Eigen::Vector3i& j) {
+      const Eigen::Vector3i d = j - index;
+      if (std::abs(d.x()) <= r && std::abs(d.y()) <= r && std::abs(d.z()) <= r)
+        best_sq = std::min(best_sq, d.squaredNorm());
+      return false;  // the nearest pair: every candidate counts
+    });
   });
   const double d_m = best_sq == max_sq ? std::numeric_limits<double>::infinity()
                                        : std::sqrt(static_cast<double>(best_sq)) * res_m;

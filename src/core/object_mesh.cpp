@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "semantic_exploration/core/neighbour_cells.hpp"
 #include "semantic_exploration/core/tsdf.hpp"  // VoxelIndexHash
 
 namespace semexp {
@@ -62,16 +63,8 @@ std::size_t dropMeshFragments(Mesh& mesh, double gap_m) {
   };
   const auto near = [&](std::uint32_t i) {
     const Eigen::Vector3f& p = mesh.vertices_W[i];
-    const Eigen::Vector3i c = cell(p);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const auto it = grid.find(c + Eigen::Vector3i(dx, dy, dz));
-          if (it == grid.end()) continue;
-          for (const std::uint32_t j : it->second)
-            if ((mesh.vertices_W[j] - p).squaredNorm() <= gap2) return true;
-        }
-    return false;
+    return visitNeighbourCells(grid, cell(p),
+                               [&](std::uint32_t j) { return (mesh.vertices_W[j] - p).squaredNorm() <= gap2; });
   };
   keepPiece(0);
   for (bool changed = true; changed;) {  // a piece kept can bring another within reach
