@@ -113,6 +113,7 @@ MapBlocksData OccupancyMap::snapshot(bool uniform_as_values) const {
 void OccupancyMap::clearAll() {
   store_.reset();
   frontiers_.reset(store_.cellCount(), store_.fwords);
+  surface_counter_.reset();
   dirty_.assign(store_.cellCount(), 0);
   dirty_cells_.clear();
 }

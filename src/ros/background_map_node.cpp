@@ -207,9 +207,9 @@ void BackgroundMapNode::processFrame(const sensor_msgs::ImageConstPtr& msg, cons
     last_update_sequence_ = update.sequence;
     update_pub_.publish(update);
   }
-  // The termination's background share: one pass over the occupied blocks (70-120 ms on the default house's
-  // map at 600 s), paced by image stamps; the planner reads it once per iteration.
-  if (surface_share_period_.due(msg->header.stamp)) surface_ = map_->surfaceObservedWithin(exploration_.d_bg_m);
+  // The termination's background share, counted again only in the cells changed since the last count, paced
+  // by image stamps; the planner reads it once per iteration.
+  if (surface_share_period_.due(msg->header.stamp)) surface_ = map_->trackSurfaceObservedWithin(exploration_.d_bg_m);
   // Clouds before the stats: the stats name the newest frontier cloud (frontiers_stamp), which must be this
   // frame's when it fell due, or a planner that waits for it could plan on the previous frame's frontiers.
   frontiers_dirty_ = occupied_dirty_ = true;

@@ -93,6 +93,82 @@ TEST(Integrator, AWallInFrontOfTheCamera) {
   EXPECT_EQ(std::unique(sorted.begin(), sorted.end()), sorted.end());
 }
 
+// SurfaceChanges name the cells where a voxel changed between unknown, free and occupied, and those where an
+// occupied voxel's distance went down; log-odds that only grow within a state name neither. The wall of
+// AWallInFrontOfTheCamera, seen four times.
+TEST(Integrator, SurfaceChangesNameTheCellsWhoseStateOrDistanceChanged) {
+  BackgroundMapConfig cfg;
+  cfg.resolution_m = 0.1;
+  cfg.block_size = 4;
+  cfg.integration_threads = 1;
+  Bounds bounds;
+  bounds.min_m = {-0.8, -0.8, 0.0};
+  bounds.max_m = {0.8, 0.8, 1.6};
+  BlockStore store(cfg.resolution_m, cfg.block_size, bounds, cfg.integrate_colour);
+  Integrator integ(cfg);
+  // 127 deg wide: the cells of z 0.4-0.8 lie wholly inside the view, in front of the wall, and are freed whole.
+  const PinholeCamera cam = semexp_test::centredCamera(64, 48, 16.0);
+  const auto cellSet = [](std::vector<int> v) {
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+    return v;
+  };
+  const auto frame = [&](double cam_z, float depth_m, std::vector<int>& changed, semexp::occupancy::SurfaceChanges& sc) {
+    Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
+    T_WC.translation() = Eigen::Vector3d(0.05, 0.05, cam_z);
+    const std::vector<float> depth(static_cast<std::size_t>(cam.width) * cam.height, depth_m);
+    changed.clear();
+    sc.clear();
+    integ.integrate(store, depth.data(), nullptr, cam, T_WC, changed, &sc);
+  };
+  const auto occupiedCells = [&] {  // cells holding an occupied voxel
+    std::vector<int> out;
+    for (int c = 0; c < static_cast<int>(store.cellCount()); ++c) {
+      const Eigen::Vector3i v0 = store.cellCoords(c) * store.bs;
+      bool any = false;
+      for (int i = 0; i < store.bs3 && !any; ++i)
+        any = store.voxelValue(v0.x() + (i & 3), v0.y() + ((i >> 2) & 3), v0.z() + (i >> 4)) >= 0;
+      if (any) out.push_back(c);
+    }
+    return out;
+  };
+  const int wall_cell = store.cellIndex(2, 2, 2);  // world z 0.8-1.2, holding the wall at z = 1.05
+  std::vector<int> changed;
+  semexp::occupancy::SurfaceChanges sc;
+  // 1. Everything was unknown: every changed cell changed state; the wall's voxels got a distance.
+  frame(-0.3, 1.35f, changed, sc);
+  ASSERT_GT(changed.size(), 10u);
+  EXPECT_EQ(cellSet(sc.state_changed), cellSet(changed));
+  ASSERT_EQ(occupiedCells().size(), 16u);  // the cells of z 0.8-1.2 across the whole bounds
+  int uniform_free = 0;  // cells freed whole, as uniform leaves (the other path through the update)
+  for (int c = 0; c < static_cast<int>(store.cellCount()); ++c)
+    uniform_free += store.cell_block[c] < 0 && store.cell_value[c] != kUnknown;
+  ASSERT_GT(uniform_free, 0);
+  EXPECT_EQ(cellSet(sc.distance_changed), occupiedCells());
+  // 2. The same view: log-odds grow (free -0.4 -> -0.8, occupied 0.85 -> 1.7), states and distances stay.
+  frame(-0.3, 1.35f, changed, sc);
+  EXPECT_GT(changed.size(), 10u);
+  EXPECT_TRUE(sc.state_changed.empty());
+  EXPECT_TRUE(sc.distance_changed.empty());
+  // 3. The wall 0.2 m farther (z = 1.25): the wall's old cell lies wholly in front of it, is freed as a whole
+  // (its unknown voxels behind the old wall become free) and changes state; the old wall stays occupied
+  // (1.7 - 0.4 = 1.3).
+  frame(-0.3, 1.55f, changed, sc);
+  const std::vector<int> state3 = cellSet(sc.state_changed);
+  EXPECT_TRUE(std::binary_search(state3.begin(), state3.end(), wall_cell));
+  EXPECT_EQ(store.voxelValue(8, 8, 11), -400);  // z 1.15: was unknown behind the old wall, now free
+  EXPECT_EQ(store.voxelValue(8, 8, 10), 1300);  // z 1.05: the old wall, still occupied
+  // 4. 0.2 m closer to the same wall: within the known free space, so no state changes; the distances of
+  // both walls' voxels go down (the old one, still occupied at 1.3 - 0.4 = 0.9, is freed from closer).
+  frame(-0.1, 1.35f, changed, sc);
+  EXPECT_TRUE(sc.state_changed.empty());
+  EXPECT_EQ(store.voxelValue(8, 8, 10), 900);
+  const std::vector<int> dist4 = cellSet(sc.distance_changed);
+  EXPECT_TRUE(std::binary_search(dist4.begin(), dist4.end(), store.cellIndex(2, 2, 3)));  // z 1.2-1.6
+  EXPECT_TRUE(std::binary_search(dist4.begin(), dist4.end(), wall_cell));
+  EXPECT_EQ(dist4, occupiedCells());
+}
+
 TEST(Integrator, ThreadCountDoesNotChangeTheMap) {
   const semexp_test::BoxRoom room = semexp_test::standardRoom();
   const PinholeCamera cam = smallCamera();

@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 #include "semexp_test/box_room.hpp"
+#include "semexp_test/rendering.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 
 using namespace semexp;
@@ -213,4 +215,73 @@ TEST(SurfaceObservation, TheGapWalkCountsExactlyWhatAWalkThroughTheQueriesFinds)
   const OccupancyMap::SurfaceObservation s = map.surfaceObservedWithin(3.0);
   EXPECT_EQ(s.occupied_voxels, ref.all);
   EXPECT_EQ(s.within_voxels, ref.within);
+}
+
+// trackSurfaceObservedWithin counts again only the cells a frame can have changed; after every frame of a
+// flight around the standard room with the simulator's depth noise it must give exactly the full count, with
+// and without the free margin (whose gap walk reads cells up to 5 away along an axis), and count fewer cells
+// than the map has once the first frame is in.
+TEST(SurfaceObservation, TheTrackedCountEqualsAFullCountAfterEveryFrame) {
+  PinholeCamera cam;
+  const BoxRoom scene = semexp_test::standardRoom();
+  for (const double q : {0.0, 0.006}) {
+    SCOPED_TRACE(q);
+    BackgroundMapConfig cfg;
+    cfg.free_margin_quadratic_per_m = q;
+    OccupancyMap map(cfg, scene.bounds(0.3));
+    std::mt19937 rng(7);
+    const Eigen::Vector3d cell_counts = (map.extentMax() - map.extentMin()) / (map.blockSize() * map.resolution());
+    const std::size_t all_cells = static_cast<std::size_t>(std::lround(cell_counts.prod()));
+    std::size_t most_counted = 0;  // the most cells one tracked count after the first frame counted
+    for (int k = 0; k < 24; ++k) {
+      const double a = 0.35 * k;
+      const Eigen::Vector3d p(1.2 * std::cos(a), 0.9 * std::sin(a), 1.0 + 0.3 * std::sin(2.0 * a));
+      const Eigen::Isometry3d T = lookPose(p, a + 1.3 * std::sin(0.7 * k), 0.15 * std::cos(a));
+      std::vector<float> d = scene.render(cam, T);
+      cv::Mat depth(cam.height, cam.width, CV_32FC1, d.data());  // wraps d
+      semexp_test::addQuadraticDepthNoise(depth, rng);
+      map.integrate(d.data(), nullptr, cam, T);
+      const OccupancyMap::SurfaceObservation full = map.surfaceObservedWithin(2.0);
+      const OccupancyMap::SurfaceObservation tracked = map.trackSurfaceObservedWithin(2.0);
+      ASSERT_EQ(tracked.occupied_voxels, full.occupied_voxels) << "frame " << k;
+      ASSERT_EQ(tracked.within_voxels, full.within_voxels) << "frame " << k;
+      if (k == 0) {
+        EXPECT_EQ(map.lastSurfaceCellsCounted(), all_cells);  // the first count is a full one
+        ASSERT_GT(full.occupied_voxels, 1000u);
+      } else {
+        most_counted = std::max(most_counted, map.lastSurfaceCellsCounted());
+      }
+    }
+    EXPECT_GT(most_counted, 0u);
+    EXPECT_LT(most_counted, all_cells);
+    // Another distance counts everything again, and agrees too.
+    const OccupancyMap::SurfaceObservation full3 = map.surfaceObservedWithin(3.0);
+    const OccupancyMap::SurfaceObservation tracked3 = map.trackSurfaceObservedWithin(3.0);
+    EXPECT_EQ(map.lastSurfaceCellsCounted(), all_cells);
+    EXPECT_EQ(tracked3.occupied_voxels, full3.occupied_voxels);
+    EXPECT_EQ(tracked3.within_voxels, full3.within_voxels);
+  }
+}
+
+// A wall seen from 4 m until its voxels sit at the log-odds clamp, then from 2 m: the second view changes the
+// voxels' observed distances and no log-odds on the wall, and the tracked count must follow the distances.
+TEST(SurfaceObservation, TheTrackedCountFollowsDistancesAloneSeenFromCloser) {
+  BackgroundMapConfig cfg;
+  cfg.free_margin_quadratic_per_m = 0.0;  // no gap to carve from closer: only the distances change
+  PinholeCamera cam;
+  const BoxRoom scene = twoWalls();
+  OccupancyMap map(cfg, twoWallBounds());
+  const Eigen::Isometry3d T_far = lookPose({-2.0, 0.0, 0.0}, 0.0, 0.0);   // the +x wall from 4 m
+  const Eigen::Isometry3d T_near = lookPose({0.0, 0.0, 0.0}, 0.0, 0.0);   // and from 2 m
+  // log_odds_occupied 0.85 a frame reaches the 3.5 clamp in 5 frames; 8 to be sure.
+  for (int k = 0; k < 8; ++k) map.integrate(scene.render(cam, T_far).data(), nullptr, cam, T_far);
+  const OccupancyMap::SurfaceObservation before = map.trackSurfaceObservedWithin(3.0);
+  ASSERT_GT(before.occupied_voxels, 1000u);
+  EXPECT_EQ(before.within_voxels, 0u);
+  map.integrate(scene.render(cam, T_near).data(), nullptr, cam, T_near);
+  const OccupancyMap::SurfaceObservation full = map.surfaceObservedWithin(3.0);
+  const OccupancyMap::SurfaceObservation tracked = map.trackSurfaceObservedWithin(3.0);
+  ASSERT_GT(full.within_voxels, 1000u);
+  EXPECT_EQ(tracked.occupied_voxels, full.occupied_voxels);
+  EXPECT_EQ(tracked.within_voxels, full.within_voxels);
 }

@@ -38,6 +38,7 @@
 #include "semantic_exploration/core/occupancy/block_store.hpp"
 #include "semantic_exploration/core/occupancy/frontier_tracker.hpp"
 #include "semantic_exploration/core/occupancy/integrator.hpp"
+#include "semantic_exploration/core/occupancy/surface_counter.hpp"
 #include "semantic_exploration/core/spherical_grid.hpp"
 
 namespace cv {
@@ -151,6 +152,12 @@ class OccupancyMap {
   };
   /// Counts the surface observed from <= d_m; one pass over the occupied blocks.
   SurfaceObservation surfaceObservedWithin(double d_m) const;
+  /// The same figure, counting again only the cells that changed since the
+  /// previous call (and those whose count reads them): a frame's worth of
+  /// cells instead of the whole map. A call with another d_m counts all.
+  SurfaceObservation trackSurfaceObservedWithin(double d_m);
+  /// Cells the last trackSurfaceObservedWithin() counted (all on a full count).
+  std::size_t lastSurfaceCellsCounted() const { return surface_counter_.lastCounted(); }
 
   double freeVolume() const;      ///< m^3
   double occupiedVolume() const;  ///< m^3
@@ -211,10 +218,13 @@ class OccupancyMap {
   /// Recomputes summaries of `cells` and their ancestors (`summaries`: the
   /// cells' own, if already computed); a block of equal free voxels becomes a
   /// uniform leaf again. `track` also queues the cells for the next update
-  /// message and frontier check.
+  /// message and frontier check; `surface` marks them (and the cells whose
+  /// count reads them) for the surface count, for callers that do not say
+  /// more precisely what changed.
   void refreshSummaries(const std::vector<int>& cells, bool track = true,
-                        const std::vector<occupancy::Summary>* summaries = nullptr);
+                        const std::vector<occupancy::Summary>* summaries = nullptr, bool surface = true);
   void releaseBlock(int cell);  ///< store_.releaseBlock, telling the frontier tracker first
+  occupancy::SurfaceRule surfaceRule(double d_m) const;  ///< surfaceObservedWithin's rule for d_m
   void clearAll();
   void encodeCell(int cell, std::int8_t* out) const;
   // queries (occupancy_map_query.cpp)
@@ -227,12 +237,14 @@ class OccupancyMap {
   occupancy::BlockStore store_;
   occupancy::Integrator integrator_;
   occupancy::FrontierTracker frontiers_;
+  occupancy::SurfaceCounter surface_counter_;  ///< per-cell counts of trackSurfaceObservedWithin
   std::int16_t l_free_, l_min_, l_max_;
   std::vector<float> entropy_lut_;  ///< reducible entropy of log-odds l_min_ + i (computeGains)
   std::vector<std::uint8_t> dirty_;  ///< per cell: changed since the last takeUpdate()
   std::vector<int> dirty_cells_;     ///< the cells with dirty_ set
   std::uint64_t sequence_ = 0;
   std::vector<int> changed_scratch_;  ///< reused per-frame list of changed cells
+  occupancy::SurfaceChanges surface_scratch_;  ///< reused per frame: cells to count again for the surface
   std::vector<occupancy::Summary> summary_scratch_;  ///< their summaries
 };
 

@@ -29,6 +29,8 @@ inline void forEachChild(const Eigen::Vector3i& child_dims, int ix, int iy, int 
 
 void Integrator::TaskOut::clear() {
   changed.clear();
+  state_changed.clear();
+  distance_changed.clear();
   voxels_updated = blocks_allocated = 0;
   pending.clear();
   l.clear();
@@ -65,7 +67,7 @@ Integrator::~Integrator() = default;
 
 IntegrationStats Integrator::integrate(BlockStore& store, const float* depth_m, const std::uint8_t* rgb,
                                        const PinholeCamera& camera, const Eigen::Isometry3d& T_WC,
-                                       std::vector<int>& changed) {
+                                       std::vector<int>& changed, SurfaceChanges* surface) {
   camera.validate();
   Frame fr;
   fr.W = camera.width;
@@ -114,7 +116,7 @@ IntegrationStats Integrator::integrate(BlockStore& store, const float* depth_m, 
     else
       descend(store, fr, out, t.k, t.ix, t.iy, t.iz);
   });
-  for (std::size_t i = 0; i < tasks_.size(); ++i) merge(store, outs_[i], changed, stats);
+  for (std::size_t i = 0; i < tasks_.size(); ++i) merge(store, outs_[i], changed, surface, stats);
   // Endpoint cells the octree walk did not reach (numerical edge cases).
   TaskOut& rest = outs_[tasks_.size()];
   rest.clear();
@@ -124,7 +126,7 @@ IntegrationStats Integrator::integrate(BlockStore& store, const float* depth_m, 
     for (int w = 0; w < store.fwords; ++w) any = any || hb[w] != 0;
     if (any) updateCellVoxels(store, fr, rest, cell);
   }
-  merge(store, rest, changed, stats);
+  merge(store, rest, changed, surface, stats);
   stats.changed_cells = changed.size();
   return stats;
 }
@@ -349,7 +351,8 @@ void Integrator::freeRegion(BlockStore& store, const Frame& fr, TaskOut& out, in
 
 // Allocates the task's new blocks and surfaces in the store (in the order the
 // task met them) and appends its changed cells.
-void Integrator::merge(BlockStore& store, TaskOut& out, std::vector<int>& changed, IntegrationStats& stats) {
+void Integrator::merge(BlockStore& store, TaskOut& out, std::vector<int>& changed, SurfaceChanges* surface,
+                       IntegrationStats& stats) {
   const std::size_t bs3 = static_cast<std::size_t>(store.bs3);
   for (const Pending& p : out.pending) {
     int b = store.cell_block[p.cell];
@@ -364,6 +367,11 @@ void Integrator::merge(BlockStore& store, TaskOut& out, std::vector<int>& change
     }
   }
   changed.insert(changed.end(), out.changed.begin(), out.changed.end());
+  if (surface) {
+    surface->state_changed.insert(surface->state_changed.end(), out.state_changed.begin(), out.state_changed.end());
+    surface->distance_changed.insert(surface->distance_changed.end(), out.distance_changed.begin(),
+                                     out.distance_changed.end());
+  }
   stats.voxels_updated += out.voxels_updated;
   stats.blocks_allocated += out.blocks_allocated;
   // Scratch blocks are rare after the first frames: give their memory back
@@ -389,7 +397,7 @@ std::size_t Integrator::memoryBytes() const {
                   hit_cells_.capacity() * sizeof(int) + (cell_stamp_.capacity() + hit_stamp_.capacity()) * sizeof(std::uint32_t) +
                   tasks_.capacity() * sizeof(Task);
   for (const TaskOut& o : outs_)
-    m += o.changed.capacity() * sizeof(int) + o.pending.capacity() * sizeof(Pending) +
+    m += (o.changed.capacity() + o.state_changed.capacity() + o.distance_changed.capacity()) * sizeof(int) + o.pending.capacity() * sizeof(Pending) +
          o.l.capacity() * sizeof(std::int16_t) + o.dist.capacity() * sizeof(std::uint16_t) + o.rgbw.capacity();
   return m;
 }

@@ -77,6 +77,9 @@ inline void projectSlab(const Projector& pr, const Eigen::Vector3f& p0, const Ei
 
 }  // namespace
 
+// Unknown, free (< 0) and occupied (>= 0) are what the surface count reads (SurfaceCounter); nv is never unknown.
+bool Integrator::stateChanged(std::int16_t old, std::int16_t nv) { return old == kUnknown || (old < 0) != (nv < 0); }
+
 void Integrator::markChanged(TaskOut& out, int cell) {
   if (cell_stamp_[cell] == stamp_) return;
   cell_stamp_[cell] = stamp_;
@@ -95,16 +98,21 @@ void Integrator::freeCell(BlockStore& store, const Frame& fr, TaskOut& out, int 
     if (nv != v) {
       store.cell_value[cell] = nv;
       markChanged(out, cell);
+      if (stateChanged(v, nv)) out.state_changed.push_back(cell);
     }
     if (cfg_.integrate_min_distance) {
       const Eigen::Vector3d c = store.origin + (bc.cast<double>() * bs + Eigen::Vector3d::Constant(0.5 * bs)) * res;
-      store.cell_dist[cell] = std::min(store.cell_dist[cell], toMm(static_cast<float>((c - fr.cam_W).norm())));
+      const std::uint16_t dm = toMm(static_cast<float>((c - fr.cam_W).norm()));
+      if (dm < store.cell_dist[cell]) {
+        store.cell_dist[cell] = dm;
+        if (nv >= 0) out.distance_changed.push_back(cell);
+      }
     }
     return;
   }
   std::int16_t* L = store.logOdds(b);
   std::uint16_t* D = store.block_surf[b] >= 0 && cfg_.integrate_min_distance ? store.dist(store.block_surf[b]) : nullptr;
-  bool changed = false;
+  bool changed = false, state_changed = false, dist_lowered = false;
   const Eigen::Vector3d c0 = store.origin + (bc.cast<double>() * bs + Eigen::Vector3d::Constant(0.5)) * res - fr.cam_W;
   int i = 0;
   for (int z = 0; z < bs; ++z)
@@ -115,13 +123,19 @@ void Integrator::freeCell(BlockStore& store, const Frame& fr, TaskOut& out, int 
         if (nv != v) {
           L[i] = nv;
           changed = true;
+          state_changed |= stateChanged(v, nv);
         }
         if (D) {
-          const double d = (c0 + Eigen::Vector3d(x, y, z) * res).norm();
-          D[i] = std::min(D[i], toMm(static_cast<float>(d)));
+          const std::uint16_t dm = toMm(static_cast<float>((c0 + Eigen::Vector3d(x, y, z) * res).norm()));
+          if (dm < D[i]) {
+            D[i] = dm;
+            dist_lowered |= nv >= 0;
+          }
         }
       }
   if (changed) markChanged(out, cell);
+  if (state_changed) out.state_changed.push_back(cell);
+  if (dist_lowered) out.distance_changed.push_back(cell);
 }
 
 void Integrator::updateCellVoxels(BlockStore& store, const Frame& fr, TaskOut& out, int cell) {
@@ -178,7 +192,7 @@ void Integrator::updateCellVoxels(BlockStore& store, const Frame& fr, TaskOut& o
   const float* depth = pyr_.depth();
   const float* freelim = pyr_.freeLimit();
   const bool track_dist = cfg_.integrate_min_distance;
-  bool changed = false;
+  bool changed = false, state_changed = false, dist_lowered = false;
   std::size_t updated = 0;
   // The cell's rows of bs voxels (row r = y + bs z, voxel i = x + bs r) go
   // in slabs of kLanes rows: the projection runs on all rows of a slab at
@@ -223,10 +237,14 @@ void Integrator::updateCellVoxels(BlockStore& store, const Frame& fr, TaskOut& o
         if (nv != old) {
           L[i] = nv;
           changed = true;
+          state_changed |= stateChanged(old, nv);
         }
         if (track_dist && Dm) {
           const std::uint16_t dm = static_cast<std::uint16_t>(PD[t]);  // toMm(p.norm())
-          if (dm < Dm[i]) Dm[i] = dm;
+          if (dm < Dm[i]) {
+            Dm[i] = dm;
+            dist_lowered |= nv >= 0;  // only an occupied voxel's distance counts (SurfaceCounter)
+          }
         }
       }
     }
@@ -247,6 +265,8 @@ void Integrator::updateCellVoxels(BlockStore& store, const Frame& fr, TaskOut& o
     if (was_uniform) ++out.blocks_allocated;
     markChanged(out, cell);
   }
+  if (state_changed) out.state_changed.push_back(cell);
+  if (dist_lowered) out.distance_changed.push_back(cell);
   if (scratch_block >= 0 || scratch_surface >= 0) out.pending.push_back({cell, scratch_block, scratch_surface});
 }
 

@@ -56,6 +56,17 @@ inline std::uint8_t blendColour(int c, int w, int in) {
   return static_cast<std::uint8_t>((n * detail::kColourReciprocal[static_cast<std::size_t>(w)]) >> 32);
 }
 
+/// The cells of one frame whose surface count (SurfaceCounter) may have
+/// changed; a cell may be listed more than once.
+struct SurfaceChanges {
+  std::vector<int> state_changed;     ///< a voxel went from unknown, free or occupied to another of these
+  std::vector<int> distance_changed;  ///< an occupied voxel's observed distance was lowered
+  void clear() {
+    state_changed.clear();
+    distance_changed.clear();
+  }
+};
+
 class Integrator {
  public:
   /// Octree level whose nodes are the parallel tasks (level 0: cells).
@@ -72,8 +83,10 @@ class Integrator {
   /// Integrates one depth frame (see OccupancyMap::integrate) into `store`
   /// and appends each changed cell once to `changed`, in depth-first order.
   /// Summaries are not refreshed: the caller does that with `changed`.
+  /// `surface` (if given) gets what the surface count reads (SurfaceCounter).
   IntegrationStats integrate(BlockStore& store, const float* depth_m, const std::uint8_t* rgb,
-                             const PinholeCamera& camera, const Eigen::Isometry3d& T_WC, std::vector<int>& changed);
+                             const PinholeCamera& camera, const Eigen::Isometry3d& T_WC, std::vector<int>& changed,
+                             SurfaceChanges* surface = nullptr);
 
   /// Summaries of `cells` computed on the pool (BlockStore::cellSummary each).
   void summarise(BlockStore& store, const std::vector<int>& cells, std::vector<Summary>& out);
@@ -111,6 +124,7 @@ class Integrator {
   };
   struct TaskOut {
     std::vector<int> changed;
+    std::vector<int> state_changed, distance_changed;  ///< SurfaceChanges of the task
     std::size_t voxels_updated = 0, blocks_allocated = 0;
     std::vector<Pending> pending;
     std::vector<std::int16_t> l;      ///< scratch blocks, bs3 each
@@ -135,7 +149,9 @@ class Integrator {
   void freeCell(BlockStore& store, const Frame& fr, TaskOut& out, int cell);
   void updateCellVoxels(BlockStore& store, const Frame& fr, TaskOut& out, int cell);
   void markChanged(TaskOut& out, int cell);
-  static void merge(BlockStore& store, TaskOut& out, std::vector<int>& changed, IntegrationStats& stats);
+  static void merge(BlockStore& store, TaskOut& out, std::vector<int>& changed, SurfaceChanges* surface,
+                    IntegrationStats& stats);
+  static bool stateChanged(std::int16_t old, std::int16_t nv);
   std::uint64_t* hits(const BlockStore& store, int b) { return hit_.data() + static_cast<std::size_t>(b) * store.fwords; }
 
   BackgroundMapConfig cfg_;
