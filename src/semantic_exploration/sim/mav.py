@@ -302,6 +302,10 @@ class CollisionChecker:
         self._tris = tri_of[order]
         self._keys, self._start, self._count = np.unique(keys[order], return_index=True, return_counts=True)
         self._last = (b"", np.empty(0, np.int64))  # (cell range, its triangles): reused for many steps
+        self.clear_margin_m = 0.25  # contact(): how far past the radius a search looks, m
+        self._clear_at: Optional[np.ndarray] = None  # contact(): where the last search found the sphere clear
+        self._clear_slack = 0.0  # ... and how far from there it stays clear, m
+        self.searches = 0  # contact()'s searches
 
     def _candidates(self, p: np.ndarray, r: float) -> np.ndarray:
         c0 = np.floor((p - r - self.origin) / self.cell).astype(np.int64)
@@ -343,3 +347,22 @@ class CollisionChecker:
 
     def collides(self, p: Sequence[float]) -> bool:
         return self.nearest(p)[1] >= 0
+
+    def contact(self, p: Sequence[float]) -> Tuple[float, int]:
+        """nearest(p) with the sphere's own radius, for a point that moves in small steps (the
+        physics loop): the same answer, searched for only when the sphere may touch something.
+
+        A search looks ``clear_margin_m`` beyond the radius. Distance to the mesh changes by at
+        most as much as the point moves, so a point found at clearance c (>= that reach when
+        nothing was found) cannot touch anything until it has moved c - radius away."""
+        p = np.asarray(p, float)
+        if self._clear_at is not None and float(np.linalg.norm(p - self._clear_at)) < self._clear_slack:
+            return math.inf, -1
+        self.searches += 1
+        reach = self.radius + self.clear_margin_m
+        d, k = self.nearest(p, reach)
+        if k >= 0 and d <= self.radius:
+            self._clear_at = None
+            return self.nearest(p)  # the radius's own search: the same triangle where several are as near
+        self._clear_at, self._clear_slack = p.copy(), (d if k >= 0 else reach) - self.radius
+        return math.inf, -1

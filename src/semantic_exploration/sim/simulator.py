@@ -179,7 +179,7 @@ class Simulator:
         p0 = self.follower.p.copy()
         reached = self.follower.step(dt)
         self.path_length_m += float(np.linalg.norm(self.follower.p - p0))
-        d, tri = self.collision.nearest(self.follower.p)
+        d, tri = self.collision.contact(self.follower.p)
         info = None
         if tri >= 0 and not self.in_collision:
             self.collisions += 1
