@@ -67,21 +67,21 @@ IntegrationStats OccupancyMap::integrate(const float* depth_m, const std::uint8_
   const IntegrationStats stats =
       integrator_.integrate(store_, depth_m, rgb, camera, T_WC, changed_scratch_, &surface_scratch_);
   integrator_.summarise(store_, changed_scratch_, summary_scratch_);
-  refreshSummaries(changed_scratch_, true, &summary_scratch_, false);
+  refreshSummaries(changed_scratch_, true, &summary_scratch_, SurfaceMarks::kByCaller);
   // A frame's log-odds changes mostly stay within free or occupied: only the cells where a voxel changed state
   // (and their neighbours) or an occupied voxel's distance was lowered are counted again.
-  const occupancy::SurfaceRule surface_rule = surfaceRule(0.0);  // its reach, which does not depend on d
+  const occupancy::SurfaceRule surface_rule = surfaceMarkingRule();
   for (const int c : surface_scratch_.state_changed) surface_counter_.occupancyChanged(store_, c, surface_rule);
   for (const int c : surface_scratch_.distance_changed) surface_counter_.distanceChanged(c);
   return stats;
 }
 
 void OccupancyMap::refreshSummaries(const std::vector<int>& cells, bool track,
-                                    const std::vector<Summary>* summaries, bool surface) {
-  const occupancy::SurfaceRule surface_rule = surfaceRule(0.0);  // its reach, which does not depend on d
+                                    const std::vector<Summary>* summaries, SurfaceMarks surface_marks) {
+  const occupancy::SurfaceRule surface_rule = surfaceMarkingRule();
   for (std::size_t j = 0; j < cells.size(); ++j) {
     const int c = cells[j];
-    if (surface) surface_counter_.occupancyChanged(store_, c, surface_rule);
+    if (surface_marks == SurfaceMarks::kAll) surface_counter_.occupancyChanged(store_, c, surface_rule);
     const Summary sm = summaries ? (*summaries)[j] : store_.cellSummary(c);
     if (store_.cell_block[c] >= 0 && !sm.unknown_any && sm.min_l == sm.max_l && sm.max_l < 0) {
       // A block of equal free voxels is a uniform leaf again: give the memory back.
@@ -181,9 +181,10 @@ double OccupancyMap::occupiedVolume() const {
 }
 
 std::size_t OccupancyMap::memoryBytes() const {
+  const std::size_t ints = dirty_cells_.capacity() + changed_scratch_.capacity() +
+                           surface_scratch_.state_changed.capacity() + surface_scratch_.distance_changed.capacity();
   return sizeof(*this) - sizeof(store_) - sizeof(integrator_) + store_.memoryBytes() + integrator_.memoryBytes() +
-         frontiers_.memoryBytes() + surface_counter_.memoryBytes() + dirty_.capacity() +
-         (dirty_cells_.capacity() + changed_scratch_.capacity() + surface_scratch_.state_changed.capacity() + surface_scratch_.distance_changed.capacity()) * sizeof(int) +
+         frontiers_.memoryBytes() + surface_counter_.memoryBytes() + dirty_.capacity() + ints * sizeof(int) +
          summary_scratch_.capacity() * sizeof(Summary);
 }
 

@@ -17,23 +17,25 @@ occupancy::SurfaceRule OccupancyMap::surfaceRule(double d_m) const {
   return rule;
 }
 
-OccupancyMap::SurfaceObservation OccupancyMap::surfaceObservedWithin(double d_m) const {
-  const occupancy::SurfaceRule rule = surfaceRule(d_m);
-  SurfaceObservation out;
-  for (int cell = 0; cell < static_cast<int>(store_.cellCount()); ++cell) {
-    const occupancy::SurfaceCount c = occupancy::countSurface(store_, cell, rule);
-    out.occupied_voxels += c.occupied;
-    out.within_voxels += c.within;
-  }
-  return out;
+occupancy::SurfaceRule OccupancyMap::surfaceMarkingRule() const {
+  return surfaceRule(0.0);  // marking needs the rule's reach only, which does not depend on d
 }
 
-OccupancyMap::SurfaceObservation OccupancyMap::trackSurfaceObservedWithin(double d_m) {
-  const occupancy::SurfaceTotals t = surface_counter_.update(store_, surfaceRule(d_m));
-  SurfaceObservation out;
+namespace {
+OccupancyMap::SurfaceObservation observation(const occupancy::SurfaceTotals& t) {
+  OccupancyMap::SurfaceObservation out;
   out.occupied_voxels = t.occupied;
   out.within_voxels = t.within;
   return out;
+}
+}  // namespace
+
+OccupancyMap::SurfaceObservation OccupancyMap::surfaceObservedWithin(double d_m) const {
+  return observation(occupancy::countSurfaceAll(store_, surfaceRule(d_m)));
+}
+
+OccupancyMap::SurfaceObservation OccupancyMap::trackSurfaceObservedWithin(double d_m) {
+  return observation(surface_counter_.update(store_, surfaceRule(d_m)));
 }
 
 }  // namespace semexp

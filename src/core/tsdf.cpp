@@ -1,11 +1,17 @@
 #include "semantic_exploration/core/tsdf.hpp"
 
+#include <atomic>
 #include <climits>
 #include <stdexcept>
 
 namespace semexp {
 
 namespace {
+
+// TsdfMapT::revision(): one counter for all maps, so that no two maps (or states of one) share a value.
+std::atomic<std::uint64_t> g_next_revision{1};
+std::uint64_t nextRevision() { return g_next_revision.fetch_add(1, std::memory_order_relaxed); }
+
 
 static_assert((-5 >> 1) == -3, "blockOf needs an arithmetic right shift");
 
@@ -28,7 +34,8 @@ TsdfMapT<V>::TsdfMapT(const TsdfParams& params)
       block_shift_(0),
       inv_resolution_(static_cast<float>(1.0 / params.resolution_m)),
       truncation_m_(static_cast<float>(params.truncation_m)),
-      tracked_foreground_(params.trackedForeground()) {
+      tracked_foreground_(params.trackedForeground()),
+      revision_(nextRevision()) {
   if (tracked_foreground_ < 0.5f) {
     V stored;
     stored.setForeground(static_cast<float>(params.foreground_prior));
@@ -93,6 +100,7 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
   if (depth_m.type() != CV_32FC1 || mask.type() != CV_8UC1 || depth_m.size() != mask.size() ||
       depth_m.cols != camera.width || depth_m.rows != camera.height)
     throw std::invalid_argument("TsdfMap::integrate: depth (32FC1) and mask (8UC1) must match the camera size");
+  revision_ = nextRevision();
   const bool use_rgb = !rgb.empty();
   if (use_rgb && (rgb.type() != CV_8UC3 || rgb.size() != depth_m.size()))
     throw std::invalid_argument("TsdfMap::integrate: rgb must be 8UC3 of the depth image's size");
@@ -154,8 +162,10 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
         for (int x = 0; x < B; ++x, ++i) {
           const Eigen::Vector3f p_C = T_CWf * voxelCentre(base + Eigen::Vector3i(x, y, z));
           if (p_C.z() <= 0.f) continue;
-          const int u = static_cast<int>(std::lround(camera.fx * p_C.x() / p_C.z() + camera.cx));
-          const int v = static_cast<int>(std::lround(camera.fy * p_C.y() / p_C.z() + camera.cy));
+          const double u_px = camera.fx * p_C.x() / p_C.z() + camera.cx;
+          const double v_px = camera.fy * p_C.y() / p_C.z() + camera.cy;
+          if (!(std::abs(u_px) < 1e9 && std::abs(v_px) < 1e9)) continue;  // far off the image (or NaN)
+          const int u = tsdf_fixed::roundToInt(u_px), v = tsdf_fixed::roundToInt(v_px);  // std::lround, inline
           if (u < 0 || v < 0 || u >= depth_m.cols || v >= depth_m.rows) continue;
           const float d = depth_m.at<float>(v, u);
           const std::uint8_t in_mask = mask.at<std::uint8_t>(v, u);
@@ -320,6 +330,7 @@ template <class V>
 std::size_t TsdfMapT<V>::dropForegroundBeyond(const Eigen::Vector3f& normal_W, float offset_m) {
   const int B = params_.block_size;
   std::size_t changed = 0;
+  revision_ = nextRevision();
   for (auto& kv : blocks_) {
     const Eigen::Vector3i base = kv.first * B;
     for (int z = 0, i = 0; z < B; ++z)
@@ -339,6 +350,7 @@ template <class V>
 void TsdfMapT<V>::mergeFrom(const TsdfMapT& other) {
   if (other.params_.resolution_m != params_.resolution_m || other.params_.block_size != params_.block_size)
     throw std::invalid_argument("TsdfMap::mergeFrom: maps differ in resolution or block size");
+  revision_ = nextRevision();
   const float trunc = truncation_m_, other_trunc = other.truncation_m_;
   const float max_w = static_cast<float>(params_.max_weight);
   for (const auto& kv : other.blocks_) {

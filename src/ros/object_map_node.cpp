@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <iterator>
 
 #include "semantic_exploration/ObjectArray.h"
 #include "semantic_exploration/ros/conversions.hpp"
@@ -146,6 +147,15 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
   reportFrame(matched->header, true, timer);
 }
 
+const semexp::TsdfSummary& ObjectMapNode::summaryOf(const semexp::MappedObject& o) {
+  CachedSummary& c = summaries_[o.id];
+  if (c.revision != o.tsdf.revision()) {
+    c.summary = map_->summarize(o, exploration_.d_obj_m);
+    c.revision = o.tsdf.revision();
+  }
+  return c.summary;
+}
+
 void ObjectMapNode::publishObjects(const ros::Time& stamp) {
   last_publish_ = ros::WallTime::now();
   last_published_stamp_ = std::max(last_published_stamp_, stamp);
@@ -177,9 +187,11 @@ void ObjectMapNode::publishObjects(const ros::Time& stamp) {
     }
     marker_ids_.clear();
   }
+  for (auto it = summaries_.begin(); it != summaries_.end();)  // objects merged away since
+    it = map_->object(it->first) ? std::next(it) : summaries_.erase(it);
   for (const auto& kv : map_->objects()) {
     const semexp::MappedObject& o = *kv.second;
-    const semexp::TsdfSummary s = map_->summarize(o, exploration_.d_obj_m);
+    const semexp::TsdfSummary& s = summaryOf(o);
     const semantic_exploration::ObjectInfo info = toObjectInfo(o, s);
     arr.objects.push_back(info);
     if (!draw) continue;

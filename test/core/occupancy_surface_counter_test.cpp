@@ -83,29 +83,31 @@ TEST(SurfaceCounter, AFreeVoxelTwoCellsAwayAcrossTheGapExposesTheSurface) {
 
 TEST(SurfaceCounter, OnlyMarkedCellsAreCountedAgain) {
   BlockStore s = threeCells();
-  occupiedFaceVoxel(s, 6000);
-  s.cell_value[1] = -2000;  // free in front of the voxel: surface, observed from 6 m
+  occupiedFaceVoxel(s, 8000);
+  s.cell_value[1] = -2000;  // free in front of the voxel: surface, observed from 8 m
   refreshSummaries(s);
   const SurfaceRule rule = marginRule();
   SurfaceCounter counter;
-  ASSERT_EQ(counter.update(s, rule).within, 1u);
-  // Seen again from 8 m: no longer within 7 m. Unmarked, the cache keeps the old count; marked, it follows.
-  s.dist(s.block_surf[s.cell_block[2]])[s.voxelIndex(0, 3, 3)] = 8000;
-  EXPECT_EQ(counter.update(s, rule).within, 1u);
+  SurfaceTotals t = counter.update(s, rule);
+  ASSERT_EQ(t.occupied, 1u);
+  ASSERT_EQ(t.within, 0u);  // 8 m > 7 m
+  // Seen again from 6 m: within 7 m now. Unmarked, the cache keeps the old count; marked, it follows.
+  s.dist(s.block_surf[s.cell_block[2]])[s.voxelIndex(0, 3, 3)] = 6000;
+  EXPECT_EQ(counter.update(s, rule).within, 0u);
   EXPECT_EQ(counter.lastCounted(), 0u);
   counter.distanceChanged(2);
-  const SurfaceTotals t = counter.update(s, rule);
+  t = counter.update(s, rule);
   EXPECT_EQ(counter.lastCounted(), 1u);
   EXPECT_EQ(t.occupied, 1u);
-  EXPECT_EQ(t.within, 0u);
+  EXPECT_EQ(t.within, 1u);
   // Another rule counts everything again.
-  SurfaceRule far = rule;
-  far.d_mm = 9000.0;
-  EXPECT_EQ(counter.update(s, far).within, 1u);
+  SurfaceRule near = rule;
+  near.d_mm = 5000.0;
+  EXPECT_EQ(counter.update(s, near).within, 0u);
   EXPECT_EQ(counter.lastCounted(), 3u);
   // So does reset().
   counter.reset();
-  counter.update(s, far);
+  counter.update(s, near);
   EXPECT_EQ(counter.lastCounted(), 3u);
 }
 

@@ -115,6 +115,21 @@ TEST(TsdfFixedPoint, InlineRoundingMatchesStdRound) {
   std::uniform_real_distribution<float> uni(-70000.f, 70000.f);
   for (int i = 0; i < 200000; ++i) check(uni(rng));
   EXPECT_GT(checked, 1000000u);
+  // The double overload rounds pixel coordinates in the integration as std::lround did: around every integer
+  // and half-integer of +-5000 px, and the 0.49999999999999994 that x + 0.5 gets wrong.
+  const auto check_d = [](double x) { ASSERT_EQ(tsdf_fixed::roundToInt(x), std::lround(x)) << x; };
+  check_d(0.49999999999999994);
+  check_d(-0.49999999999999994);
+  for (int k = -10000; k <= 10000; ++k) {
+    double lo = 0.5 * k, hi = 0.5 * k;
+    check_d(lo);
+    for (int j = 0; j < 3; ++j) {
+      lo = std::nextafter(lo, -1e9);
+      hi = std::nextafter(hi, 1e9);
+      check_d(lo);
+      check_d(hi);
+    }
+  }
 }
 
 // A wall 1 m in front of the camera, integrated three times from the same pose into both layouts: every

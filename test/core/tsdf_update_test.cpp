@@ -58,6 +58,32 @@ TEST(TsdfUpdate, UndetectedUpdatesGeometryButNotForeground) {
   EXPECT_FALSE(map.extractMesh().empty());
 }
 
+// revision() keys per-object caches (the object map node's summaries): it must change with every call that
+// can change a voxel, stay with the ones that read, and differ between maps.
+TEST(TsdfUpdate, RevisionChangesWithEveryChangeAndDiffersBetweenMaps) {
+  const WallAhead view;
+  TsdfMap a(params()), b(params());
+  EXPECT_NE(a.revision(), b.revision());
+  std::uint64_t r = a.revision();
+  view.into(a, 255, true);
+  EXPECT_NE(a.revision(), r);
+  r = a.revision();
+  a.summarize(2.0);
+  a.extractMesh();
+  a.hasSurface();
+  EXPECT_EQ(a.revision(), r);  // reads leave it
+  view.into(b, 255, true);
+  EXPECT_NE(b.revision(), a.revision());
+  a.mergeFrom(b);
+  EXPECT_NE(a.revision(), r);
+  r = a.revision();
+  a.dropForegroundBeyond(Eigen::Vector3f::UnitX(), 0.5f);
+  EXPECT_NE(a.revision(), r);
+  r = a.revision();
+  TsdfMap moved(std::move(a));
+  EXPECT_EQ(moved.revision(), r);  // the same state, moved
+}
+
 TEST(TsdfUpdate, ColourMinDistanceAndSummary) {
   PinholeCamera cam;
   TsdfMap map(params());

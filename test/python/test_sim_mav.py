@@ -156,20 +156,28 @@ def test_collision_grid_matches_brute_force_along_a_walk():
                 assert got_k == -1
     assert 20 < hits < 500
 
+
 def test_contact_is_nearest_along_a_walk_with_fewer_searches():
     """contact() skips the search while the sphere provably stays clear; along a walk that grazes
-    walls and a jump across the house it must give exactly nearest()'s answer at every step."""
+    walls and a jump across the house it must give exactly nearest()'s answer at every step, with
+    searches that found something within the reach and searches that found nothing."""
     s = generate(2, (8, 6, 3))
     cc = CollisionChecker(s.triangles(), 0.3, cell_m=0.4)
     ref = CollisionChecker(s.triangles(), 0.3, cell_m=0.4)
     points = [np.array([x, 3.0 + 2.9 * math.sin(x), 1.0 + 1.1 * math.cos(0.7 * x)])
               for x in np.arange(0.2, 7.8, 0.01)]
-    points.insert(len(points) // 2, np.array([7.5, 0.5, 2.5]))  # a jump (a new scene, a reset)
-    hits = 0
+    points.insert(len(points) // 2, np.array([7.5, 0.5, 2.5]))  # a teleport across the house
+    hits, near, nothing = 0, 0, 0
     for p in points:
+        searches = cc.searches
         got = cc.contact(p)
         assert got == ref.nearest(p), p
         hits += got[1] >= 0
+        if got[1] < 0 and cc.searches > searches:  # a search that found the sphere clear
+            reach = cc.radius + cc.clear_margin_m
+            near += cc._clearance < reach
+            nothing += cc._clearance == reach
+    assert near > 10 and nothing > 0
     clear = len(points) - hits
     assert hits > 10 and clear > 100
     # Every step in contact searches; of the clear ones (1 cm steps), only a few.

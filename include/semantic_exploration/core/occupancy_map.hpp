@@ -150,7 +150,7 @@ class OccupancyMap {
       return occupied_voxels == 0 ? 1.0 : static_cast<double>(within_voxels) / static_cast<double>(occupied_voxels);
     }
   };
-  /// Counts the surface observed from <= d_m; one pass over the occupied blocks.
+  /// Counts the surface observed from <= d_m; one pass over every cell.
   SurfaceObservation surfaceObservedWithin(double d_m) const;
   /// The same figure, counting again only the cells that changed since the
   /// previous call (and those whose count reads them): a frame's worth of
@@ -218,13 +218,16 @@ class OccupancyMap {
   /// Recomputes summaries of `cells` and their ancestors (`summaries`: the
   /// cells' own, if already computed); a block of equal free voxels becomes a
   /// uniform leaf again. `track` also queues the cells for the next update
-  /// message and frontier check; `surface` marks them (and the cells whose
-  /// count reads them) for the surface count, for callers that do not say
-  /// more precisely what changed.
+  /// message and frontier check. SurfaceMarks::kAll marks the cells (and
+  /// those whose count reads them) for the surface count; kByCaller leaves
+  /// that to a caller that knows more precisely what changed (integrate()).
+  enum class SurfaceMarks { kAll, kByCaller };
   void refreshSummaries(const std::vector<int>& cells, bool track = true,
-                        const std::vector<occupancy::Summary>* summaries = nullptr, bool surface = true);
+                        const std::vector<occupancy::Summary>* summaries = nullptr,
+                        SurfaceMarks surface_marks = SurfaceMarks::kAll);
   void releaseBlock(int cell);  ///< store_.releaseBlock, telling the frontier tracker first
   occupancy::SurfaceRule surfaceRule(double d_m) const;  ///< surfaceObservedWithin's rule for d_m
+  occupancy::SurfaceRule surfaceMarkingRule() const;     ///< the rule whose reach marks changed cells
   void clearAll();
   void encodeCell(int cell, std::int8_t* out) const;
   // queries (occupancy_map_query.cpp)

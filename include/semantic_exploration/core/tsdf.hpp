@@ -35,6 +35,12 @@ inline int roundToInt(float x) {
   const float frac = x - static_cast<float>(i);
   return i + (frac >= 0.5f) - (frac <= -0.5f);
 }
+/// std::lround for |x| < 2^31 in double (the integration's pixel coordinates), inline; exact as above.
+inline int roundToInt(double x) {
+  const int i = static_cast<int>(x);
+  const double frac = x - static_cast<double>(i);
+  return i + (frac >= 0.5) - (frac <= -0.5);
+}
 /// roundToInt for 0 <= x < 2^31 (one comparison fewer).
 inline int roundNonNegativeToInt(float x) {
   const int i = static_cast<int>(x);
@@ -318,6 +324,12 @@ class TsdfMapT {
            vx.foreground() > (tracked ? tracked_foreground_ : 0.5f);
   }
 
+  /// Changes with every call that may change a voxel (integrate,
+  /// dropForegroundBeyond, mergeFrom) and differs between any two maps of the
+  /// process, so a cache keyed by it (a summary per object) is never taken
+  /// for a map's state that it was not computed from.
+  std::uint64_t revision() const { return revision_; }
+
   /// Axis-aligned box of the allocated blocks in world, m; false if empty.
   bool allocatedBox(Eigen::AlignedBox3f& box_W) const;
   std::size_t blockCount() const { return blocks_.size(); }
@@ -371,6 +383,7 @@ class TsdfMapT {
   /// ray casts and meshing look blocks up without hashing.
   std::vector<Block*> dense_;
   Eigen::Vector3i dense_min_{0, 0, 0}, dense_dims_{0, 0, 0};
+  std::uint64_t revision_;  ///< revision(): the next value of a process-wide counter at each change
 };
 
 using TsdfMap = TsdfMapT<TsdfVoxel>;

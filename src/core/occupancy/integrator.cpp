@@ -397,7 +397,8 @@ std::size_t Integrator::memoryBytes() const {
                   hit_cells_.capacity() * sizeof(int) + (cell_stamp_.capacity() + hit_stamp_.capacity()) * sizeof(std::uint32_t) +
                   tasks_.capacity() * sizeof(Task);
   for (const TaskOut& o : outs_)
-    m += (o.changed.capacity() + o.state_changed.capacity() + o.distance_changed.capacity()) * sizeof(int) + o.pending.capacity() * sizeof(Pending) +
+    m += (o.changed.capacity() + o.state_changed.capacity() + o.distance_changed.capacity()) * sizeof(int) +
+         o.pending.capacity() * sizeof(Pending) +
          o.l.capacity() * sizeof(std::int16_t) + o.dist.capacity() * sizeof(std::uint16_t) + o.rgbw.capacity();
   return m;
 }

@@ -266,7 +266,9 @@ void Integrator::updateCellVoxels(BlockStore& store, const Frame& fr, TaskOut& o
     markChanged(out, cell);
   }
   if (state_changed) out.state_changed.push_back(cell);
-  if (dist_lowered) out.distance_changed.push_back(cell);
+  // A uniform occupied cell refined into a block keeps its log-odds but not its distance (the block's surface
+  // slot starts unobserved, cell_value still holds the uniform value): its count seen from close by changes.
+  if (dist_lowered || (was_uniform && store.cell_value[cell] >= 0)) out.distance_changed.push_back(cell);
   if (scratch_block >= 0 || scratch_surface >= 0) out.pending.push_back({cell, scratch_block, scratch_surface});
 }
 

@@ -102,6 +102,16 @@ SurfaceCount countSurface(const BlockStore& store, int cell, const SurfaceRule& 
   return out;
 }
 
+SurfaceTotals countSurfaceAll(const BlockStore& store, const SurfaceRule& rule) {
+  SurfaceTotals t;
+  for (int cell = 0; cell < static_cast<int>(store.cellCount()); ++cell) {
+    const SurfaceCount c = countSurface(store, cell, rule);
+    t.occupied += c.occupied;
+    t.within += c.within;
+  }
+  return t;
+}
+
 void SurfaceCounter::reset() {
   all_stale_ = true;
   for (const int c : stale_cells_) stale_[c] = 0;

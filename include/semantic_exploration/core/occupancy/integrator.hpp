@@ -83,7 +83,9 @@ class Integrator {
   /// Integrates one depth frame (see OccupancyMap::integrate) into `store`
   /// and appends each changed cell once to `changed`, in depth-first order.
   /// Summaries are not refreshed: the caller does that with `changed`.
-  /// `surface` (if given) gets what the surface count reads (SurfaceCounter).
+  /// `surface` (if given) gets the cells where a voxel changed between
+  /// unknown, free and occupied, and those where an occupied voxel's observed
+  /// distance went down (what the surface count, SurfaceCounter, reads).
   IntegrationStats integrate(BlockStore& store, const float* depth_m, const std::uint8_t* rgb,
                              const PinholeCamera& camera, const Eigen::Isometry3d& T_WC, std::vector<int>& changed,
                              SurfaceChanges* surface = nullptr);

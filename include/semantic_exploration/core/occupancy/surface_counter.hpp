@@ -42,6 +42,9 @@ struct SurfaceRule {
 /// The longest walk across a free-margin gap, voxels: 32 x 4 cm covers sqrt(3) q d^2 for q = 0.006 up to 11 m.
 constexpr int kMaxGapSteps = 32;
 
+/// Sums countSurface over every cell (the full count).
+SurfaceTotals countSurfaceAll(const BlockStore& store, const SurfaceRule& rule);
+
 /// Counts the surface voxels of `cell`: occupied voxels with a free
 /// 6-neighbour or, with a margin, free space along an axis beyond unknown
 /// voxels only, as far as the voxel's own gap reaches.
@@ -55,9 +58,11 @@ class SurfaceCounter {
  public:
   /// Everything is counted again at the next update().
   void reset();
-  /// The log-odds of `cell` changed.
+  /// A voxel of `cell` changed between unknown, free and occupied (or the
+  /// cell changed in a way the caller does not say more precisely): marks it
+  /// and the cells within reachCells() of it along each axis.
   void occupancyChanged(const BlockStore& store, int cell, const SurfaceRule& rule);
-  /// Only the observed distances of `cell` changed.
+  /// Only the observed distances of `cell`'s occupied voxels changed: marks it alone.
   void distanceChanged(int cell);
   /// Counts the marked cells again (all of them after reset() or with a
   /// rule other than the last one's) and returns the sums over all cells.
