@@ -50,17 +50,26 @@ std::string bytes(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
 }
 
-}  // namespace
-
-TEST(Integrator, AWallInFrontOfTheCamera) {
+// 10 cm voxels in cells of 4 (0.4 m), one thread; bounds of 1.6 m on a side from z = 0.
+BackgroundMapConfig wallConfig() {
   BackgroundMapConfig cfg;
   cfg.resolution_m = 0.1;
   cfg.block_size = 4;
   cfg.integration_threads = 1;
+  return cfg;
+}
+Bounds wallBounds() {
   Bounds bounds;
   bounds.min_m = {-0.8, -0.8, 0.0};
   bounds.max_m = {0.8, 0.8, 1.6};
-  BlockStore store(cfg.resolution_m, cfg.block_size, bounds, cfg.integrate_colour);
+  return bounds;
+}
+
+}  // namespace
+
+TEST(Integrator, AWallInFrontOfTheCamera) {
+  const BackgroundMapConfig cfg = wallConfig();
+  BlockStore store(cfg.resolution_m, cfg.block_size, wallBounds(), cfg.integrate_colour);
   Integrator integ(cfg);
   const PinholeCamera cam = smallCamera();
   // Camera at (0.05, 0.05, -0.3) looking along world +z (optical = world axes),
@@ -97,14 +106,8 @@ TEST(Integrator, AWallInFrontOfTheCamera) {
 // occupied voxel's distance went down; log-odds that only grow within a state name neither. The wall of
 // AWallInFrontOfTheCamera, seen four times.
 TEST(Integrator, SurfaceChangesNameTheCellsWhoseStateOrDistanceChanged) {
-  BackgroundMapConfig cfg;
-  cfg.resolution_m = 0.1;
-  cfg.block_size = 4;
-  cfg.integration_threads = 1;
-  Bounds bounds;
-  bounds.min_m = {-0.8, -0.8, 0.0};
-  bounds.max_m = {0.8, 0.8, 1.6};
-  BlockStore store(cfg.resolution_m, cfg.block_size, bounds, cfg.integrate_colour);
+  const BackgroundMapConfig cfg = wallConfig();
+  BlockStore store(cfg.resolution_m, cfg.block_size, wallBounds(), cfg.integrate_colour);
   Integrator integ(cfg);
   // 127 deg wide: the cells of z 0.4-0.8 lie wholly inside the view, in front of the wall, and are freed whole.
   const PinholeCamera cam = semexp_test::centredCamera(64, 48, 16.0);

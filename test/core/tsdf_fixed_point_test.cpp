@@ -89,6 +89,22 @@ TEST(TsdfFixedPoint, MeshDiffersFromFloatLayoutByLessThanQuarterVoxel) {
   EXPECT_LT(fixed.voxelBytes(), 0.65 * flt.voxelBytes());
 }
 
+// Calls check(x) for every integer and half-integer x in [-max, max] and the three values of T on either side.
+template <class T, class F>
+void aroundHalfIntegers(T max, F&& check) {
+  const int n = static_cast<int>(2 * max);
+  for (int k = -n; k <= n; ++k) {
+    T lo = static_cast<T>(0.5) * static_cast<T>(k), hi = lo;
+    check(lo);
+    for (int j = 0; j < 3; ++j) {
+      lo = std::nextafter(lo, static_cast<T>(-1e9));
+      hi = std::nextafter(hi, static_cast<T>(1e9));
+      check(lo);
+      check(hi);
+    }
+  }
+}
+
 // The voxel setters round inline instead of calling std::round: same result for every input they get.
 TEST(TsdfFixedPoint, InlineRoundingMatchesStdRound) {
   std::size_t checked = 0;
@@ -101,16 +117,7 @@ TEST(TsdfFixedPoint, InlineRoundingMatchesStdRound) {
   };
   // Around every integer and half-integer of the stored ranges (the cases a shortcut like (int)(x + 0.5f) gets
   // wrong, e.g. 0.49999997f), three floats on either side.
-  for (int k = -2 * 70000; k <= 2 * 70000; ++k) {
-    float lo = 0.5f * k, hi = 0.5f * k;
-    check(lo);
-    for (int j = 0; j < 3; ++j) {
-      lo = std::nextafter(lo, -1e9f);
-      hi = std::nextafter(hi, 1e9f);
-      check(lo);
-      check(hi);
-    }
-  }
+  aroundHalfIntegers(70000.f, check);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> uni(-70000.f, 70000.f);
   for (int i = 0; i < 200000; ++i) check(uni(rng));
@@ -120,16 +127,7 @@ TEST(TsdfFixedPoint, InlineRoundingMatchesStdRound) {
   const auto check_d = [](double x) { ASSERT_EQ(tsdf_fixed::roundToInt(x), std::lround(x)) << x; };
   check_d(0.49999999999999994);
   check_d(-0.49999999999999994);
-  for (int k = -10000; k <= 10000; ++k) {
-    double lo = 0.5 * k, hi = 0.5 * k;
-    check_d(lo);
-    for (int j = 0; j < 3; ++j) {
-      lo = std::nextafter(lo, -1e9);
-      hi = std::nextafter(hi, 1e9);
-      check_d(lo);
-      check_d(hi);
-    }
-  }
+  aroundHalfIntegers(5000.0, check_d);
 }
 
 // A wall 1 m in front of the camera, integrated three times from the same pose into both layouts: every
