@@ -12,8 +12,9 @@ namespace {
 std::atomic<std::uint64_t> g_next_revision{1};
 std::uint64_t nextRevision() { return g_next_revision.fetch_add(1, std::memory_order_relaxed); }
 
-
 static_assert((-5 >> 1) == -3, "blockOf needs an arithmetic right shift");
+
+constexpr double kFarOffImagePx = 1e9;  ///< pixel coordinates beyond this are skipped before rounding
 
 inline bool validDepth(float d, const PinholeCamera& camera) {
   return std::isfinite(d) && d > 0.f && d >= camera.d_min_m && d <= camera.d_max_m;
@@ -28,14 +29,30 @@ inline std::uint64_t edgeKey(const Eigen::Vector3i& v, int axis) {
 }  // namespace
 
 template <class V>
+TsdfMapT<V>::Revision::Revision() : value(nextRevision()) {}
+template <class V>
+TsdfMapT<V>::Revision::Revision(Revision&& other) noexcept : value(other.value) {
+  other.value = nextRevision();
+}
+template <class V>
+typename TsdfMapT<V>::Revision& TsdfMapT<V>::Revision::operator=(Revision&& other) noexcept {
+  value = other.value;
+  other.value = nextRevision();
+  return *this;
+}
+template <class V>
+void TsdfMapT<V>::Revision::bump() {
+  value = nextRevision();
+}
+
+template <class V>
 TsdfMapT<V>::TsdfMapT(const TsdfParams& params)
     : params_(params),
       voxels_per_block_(params.block_size * params.block_size * params.block_size),
       block_shift_(0),
       inv_resolution_(static_cast<float>(1.0 / params.resolution_m)),
       truncation_m_(static_cast<float>(params.truncation_m)),
-      tracked_foreground_(params.trackedForeground()),
-      revision_(nextRevision()) {
+      tracked_foreground_(params.trackedForeground()) {
   if (tracked_foreground_ < 0.5f) {
     V stored;
     stored.setForeground(static_cast<float>(params.foreground_prior));
@@ -100,7 +117,7 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
   if (depth_m.type() != CV_32FC1 || mask.type() != CV_8UC1 || depth_m.size() != mask.size() ||
       depth_m.cols != camera.width || depth_m.rows != camera.height)
     throw std::invalid_argument("TsdfMap::integrate: depth (32FC1) and mask (8UC1) must match the camera size");
-  revision_ = nextRevision();
+  revision_.bump();
   const bool use_rgb = !rgb.empty();
   if (use_rgb && (rgb.type() != CV_8UC3 || rgb.size() != depth_m.size()))
     throw std::invalid_argument("TsdfMap::integrate: rgb must be 8UC3 of the depth image's size");
@@ -164,7 +181,8 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
           if (p_C.z() <= 0.f) continue;
           const double u_px = camera.fx * p_C.x() / p_C.z() + camera.cx;
           const double v_px = camera.fy * p_C.y() / p_C.z() + camera.cy;
-          if (!(std::abs(u_px) < 1e9 && std::abs(v_px) < 1e9)) continue;  // far off the image (or NaN)
+          // roundToInt needs |x| < 2^31 (the int conversion); anything past 1e9 px (or NaN) is off the image anyway.
+          if (!(std::abs(u_px) < kFarOffImagePx && std::abs(v_px) < kFarOffImagePx)) continue;
           const int u = tsdf_fixed::roundToInt(u_px), v = tsdf_fixed::roundToInt(v_px);  // std::lround, inline
           if (u < 0 || v < 0 || u >= depth_m.cols || v >= depth_m.rows) continue;
           const float d = depth_m.at<float>(v, u);
@@ -330,7 +348,7 @@ template <class V>
 std::size_t TsdfMapT<V>::dropForegroundBeyond(const Eigen::Vector3f& normal_W, float offset_m) {
   const int B = params_.block_size;
   std::size_t changed = 0;
-  revision_ = nextRevision();
+  revision_.bump();
   for (auto& kv : blocks_) {
     const Eigen::Vector3i base = kv.first * B;
     for (int z = 0, i = 0; z < B; ++z)
@@ -350,7 +368,7 @@ template <class V>
 void TsdfMapT<V>::mergeFrom(const TsdfMapT& other) {
   if (other.params_.resolution_m != params_.resolution_m || other.params_.block_size != params_.block_size)
     throw std::invalid_argument("TsdfMap::mergeFrom: maps differ in resolution or block size");
-  revision_ = nextRevision();
+  revision_.bump();
   const float trunc = truncation_m_, other_trunc = other.truncation_m_;
   const float max_w = static_cast<float>(params_.max_weight);
   for (const auto& kv : other.blocks_) {

@@ -5,7 +5,6 @@
 
 #include <cmath>
 #include <cstring>
-#include <iterator>
 
 #include "semantic_exploration/ObjectArray.h"
 #include "semantic_exploration/ros/conversions.hpp"
@@ -61,6 +60,7 @@ ObjectMapNode::ObjectMapNode(ros::NodeHandle& nh, ros::NodeHandle& pnh)
   classes_ = loadClasses(p);
   exploration_ = loadExploration(p);
   map_ = std::make_unique<semexp::ObjectMap>(config_, classes_);
+  summaries_ = std::make_unique<semexp::ObjectSummaryCache>(exploration_.d_obj_m);
   // The maps must hold what a camera inside the bounds sees (it is refused outside them).
   if (const std::string why = map_->checkBounds(bounds_, camera_.d_max_m); !why.empty())
     throw semexp::ConfigError("bounds/max_m", why);
@@ -147,15 +147,6 @@ void ObjectMapNode::frameCallback(const semantic_exploration::MatchedDetectionsC
   reportFrame(matched->header, true, timer);
 }
 
-const semexp::TsdfSummary& ObjectMapNode::summaryOf(const semexp::MappedObject& o) {
-  CachedSummary& c = summaries_[o.id];
-  if (c.revision != o.tsdf.revision()) {
-    c.summary = map_->summarize(o, exploration_.d_obj_m);
-    c.revision = o.tsdf.revision();
-  }
-  return c.summary;
-}
-
 void ObjectMapNode::publishObjects(const ros::Time& stamp) {
   last_publish_ = ros::WallTime::now();
   last_published_stamp_ = std::max(last_published_stamp_, stamp);
@@ -187,11 +178,10 @@ void ObjectMapNode::publishObjects(const ros::Time& stamp) {
     }
     marker_ids_.clear();
   }
-  for (auto it = summaries_.begin(); it != summaries_.end();)  // objects merged away since
-    it = map_->object(it->first) ? std::next(it) : summaries_.erase(it);
+  summaries_->prune(*map_);  // objects merged away since
   for (const auto& kv : map_->objects()) {
     const semexp::MappedObject& o = *kv.second;
-    const semexp::TsdfSummary& s = summaryOf(o);
+    const semexp::TsdfSummary& s = summaries_->get(*map_, o);
     const semantic_exploration::ObjectInfo info = toObjectInfo(o, s);
     arr.objects.push_back(info);
     if (!draw) continue;

@@ -116,7 +116,8 @@ TEST(Integrator, SurfaceChangesNameTheCellsWhoseStateOrDistanceChanged) {
     v.erase(std::unique(v.begin(), v.end()), v.end());
     return v;
   };
-  const auto frame = [&](double cam_z, float depth_m, std::vector<int>& changed, semexp::occupancy::SurfaceChanges& sc) {
+  using semexp::occupancy::SurfaceChanges;
+  const auto frame = [&](double cam_z, float depth_m, std::vector<int>& changed, SurfaceChanges& sc) {
     Eigen::Isometry3d T_WC = Eigen::Isometry3d::Identity();
     T_WC.translation() = Eigen::Vector3d(0.05, 0.05, cam_z);
     const std::vector<float> depth(static_cast<std::size_t>(cam.width) * cam.height, depth_m);

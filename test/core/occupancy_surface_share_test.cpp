@@ -314,7 +314,10 @@ TEST(SurfaceObservation, TheTrackedCountFollowsARestoredMapsUniformOccupiedCells
     }
   OccupancyMap map(cfg, scene.bounds(0.3));
   ASSERT_TRUE(map.applyBlocks(restored));
-  ASSERT_EQ(map.trackSurfaceObservedWithin(2.0).occupied_voxels, map.surfaceObservedWithin(2.0).occupied_voxels);
+  const std::size_t blocks_restored = map.blockCount();
+  const OccupancyMap::SurfaceObservation first = map.trackSurfaceObservedWithin(2.0);
+  ASSERT_EQ(first.occupied_voxels, map.surfaceObservedWithin(2.0).occupied_voxels);
+  ASSERT_EQ(first.within_voxels, map.surfaceObservedWithin(2.0).within_voxels);
   std::mt19937 rng(11);
   for (int k = 0; k < 24; ++k) {
     const double a = 0.5 * k;
@@ -322,4 +325,14 @@ TEST(SurfaceObservation, TheTrackedCountFollowsARestoredMapsUniformOccupiedCells
     const Eigen::Isometry3d T = lookPose(p, a + M_PI + 0.6 * std::sin(0.9 * k), 0.2 * std::sin(a));
     ASSERT_NO_FATAL_FAILURE(integrateAndCompareCounts(map, scene, cam, T, rng)) << "frame " << k;
   }
+  // The flight saw through the slab: some of its cells were refined into blocks, some freed whole.
+  const MapBlocksData after = map.snapshot(true);
+  int slab_uniform_occupied = 0;
+  for (std::size_t u = 0; u < after.uniform_values.size(); ++u) {
+    const std::int32_t* c = &after.uniform_coords[3 * u];
+    const bool in_slab = c[2] == c0.z() && c[0] >= c0.x() && c[0] < c0.x() + 4 && c[1] >= c0.y() && c[1] < c0.y() + 4;
+    slab_uniform_occupied += in_slab && after.uniform_values[u] >= 0;
+  }
+  EXPECT_LT(slab_uniform_occupied, 16);
+  EXPECT_GT(map.blockCount(), blocks_restored);
 }

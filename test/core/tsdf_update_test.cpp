@@ -68,10 +68,6 @@ TEST(TsdfUpdate, RevisionChangesWithEveryChangeAndDiffersBetweenMaps) {
   view.into(a, 255, true);
   EXPECT_NE(a.revision(), r);
   r = a.revision();
-  a.summarize(2.0);
-  a.extractMesh();
-  a.hasSurface();
-  EXPECT_EQ(a.revision(), r);  // reads leave it
   view.into(b, 255, true);
   EXPECT_NE(b.revision(), a.revision());
   a.mergeFrom(b);
@@ -82,6 +78,11 @@ TEST(TsdfUpdate, RevisionChangesWithEveryChangeAndDiffersBetweenMaps) {
   r = a.revision();
   TsdfMap moved(std::move(a));
   EXPECT_EQ(moved.revision(), r);  // the same state, moved
+  EXPECT_NE(a.revision(), r);      // the moved-from map holds another (empty) state
+  const std::uint64_t r_moved = moved.revision();
+  b = std::move(moved);
+  EXPECT_EQ(b.revision(), r_moved);
+  EXPECT_NE(moved.revision(), r_moved);
 }
 
 TEST(TsdfUpdate, ColourMinDistanceAndSummary) {

@@ -174,9 +174,9 @@ def test_contact_is_nearest_along_a_walk_with_fewer_searches():
         assert got == ref.nearest(p), p
         hits += got[1] >= 0
         if got[1] < 0 and cc.searches > searches:  # a search that found the sphere clear
-            reach = cc.radius + cc.clear_margin_m
-            near += cc._clearance < reach
-            nothing += cc._clearance == reach
+            reach_m = cc.radius + cc.clear_margin_m
+            near += cc._clearance_m < reach_m
+            nothing += cc._clearance_m == reach_m
     assert near > 10 and nothing > 0
     clear = len(points) - hits
     assert hits > 10 and clear > 100

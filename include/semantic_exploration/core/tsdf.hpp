@@ -35,7 +35,9 @@ inline int roundToInt(float x) {
   const float frac = x - static_cast<float>(i);
   return i + (frac >= 0.5f) - (frac <= -0.5f);
 }
-/// std::lround for |x| < 2^31 in double (the integration's pixel coordinates), inline; exact as above.
+/// std::lround for |x| < 2^31 in double, inline; exact as above. Not a voxel
+/// field: the integration's pixel coordinates (both layouts), which called
+/// libm's lround twice per voxel.
 inline int roundToInt(double x) {
   const int i = static_cast<int>(x);
   const double frac = x - static_cast<double>(i);
@@ -326,9 +328,9 @@ class TsdfMapT {
 
   /// Changes with every call that may change a voxel (integrate,
   /// dropForegroundBeyond, mergeFrom) and differs between any two maps of the
-  /// process, so a cache keyed by it (a summary per object) is never taken
-  /// for a map's state that it was not computed from.
-  std::uint64_t revision() const { return revision_; }
+  /// process (a moved-from map gets a new one), so a cache keyed by it
+  /// (ObjectSummaryCache) is never taken for a state it was not computed from.
+  std::uint64_t revision() const { return revision_.value; }
 
   /// Axis-aligned box of the allocated blocks in world, m; false if empty.
   bool allocatedBox(Eigen::AlignedBox3f& box_W) const;
@@ -383,7 +385,15 @@ class TsdfMapT {
   /// ray casts and meshing look blocks up without hashing.
   std::vector<Block*> dense_;
   Eigen::Vector3i dense_min_{0, 0, 0}, dense_dims_{0, 0, 0};
-  std::uint64_t revision_;  ///< revision(): the next value of a process-wide counter at each change
+  /// revision(): the next value of a process-wide counter at each change; moving gives the source a new one.
+  struct Revision {
+    std::uint64_t value;
+    Revision();
+    Revision(Revision&& other) noexcept;
+    Revision& operator=(Revision&& other) noexcept;
+    void bump();
+  };
+  Revision revision_;
 };
 
 using TsdfMap = TsdfMapT<TsdfVoxel>;

@@ -23,13 +23,13 @@
 
 #include <memory>
 #include <set>
-#include <unordered_map>
 
 #include "semantic_exploration/ComputeGains.h"
 #include "semantic_exploration/MatchedDetections.h"
 #include "semantic_exploration/RenderInstances.h"
 #include "semantic_exploration/SaveMap.h"
 #include "semantic_exploration/core/object_map.hpp"
+#include "semantic_exploration/core/object_summary_cache.hpp"
 #include "semantic_exploration/ros/camera_node.hpp"
 
 namespace semexp_ros {
@@ -66,14 +66,7 @@ class ObjectMapNode : public CameraNode {
     std::uint64_t version = 0;
     cv::Mat ids;
   } cached_render_;
-  /// Each object's summary and the TSDF revision it was computed at: ~objects goes out with every frame in
-  /// lockstep runs, and only the objects integrated since change.
-  struct CachedSummary {
-    std::uint64_t revision = 0;
-    semexp::TsdfSummary summary;
-  };
-  std::unordered_map<std::uint32_t, CachedSummary> summaries_;
-  const semexp::TsdfSummary& summaryOf(const semexp::MappedObject& o);
+  std::unique_ptr<semexp::ObjectSummaryCache> summaries_;  ///< ~objects' summaries (d_obj), kept per TSDF revision
   ros::WallTime last_publish_;
   std::set<std::uint32_t> marker_ids_;  ///< objects whose markers rviz holds (deleted when the object goes)
   message_filters::Subscriber<semantic_exploration::MatchedDetections> matched_sub_;

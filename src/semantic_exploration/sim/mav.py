@@ -304,7 +304,7 @@ class CollisionChecker:
         self._last = (b"", np.empty(0, np.int64))  # (cell range, its triangles): reused for many steps
         self.clear_margin_m = 0.25  # contact(): how far past the radius a search looks, m
         self._clear_at: Optional[np.ndarray] = None  # contact(): where the last search found the sphere clear
-        self._clearance = 0.0  # ... and the distance to the mesh there (at least this), m
+        self._clearance_m = 0.0  # ... and the distance to the mesh there (at least this)
         self.searches = 0  # contact()'s searches
 
     def _candidates(self, p: np.ndarray, r: float) -> np.ndarray:
@@ -357,13 +357,13 @@ class CollisionChecker:
         nothing was found) cannot touch anything until it has moved c - radius away."""
         p = np.asarray(p, float)
         if self._clear_at is not None and \
-                float(np.linalg.norm(p - self._clear_at)) < self._clearance - self.radius - 1e-9:
+                float(np.linalg.norm(p - self._clear_at)) < self._clearance_m - self.radius - 1e-9:
             return math.inf, -1  # (1 nm below the bound: rounding in the distances cannot tip it)
         self.searches += 1
-        reach = self.radius + self.clear_margin_m
-        d, k = self.nearest(p, reach)
+        reach_m = self.radius + self.clear_margin_m
+        d, k = self.nearest(p, reach_m)
         if k >= 0 and d <= self.radius:
             self._clear_at = None
             return self.nearest(p)  # the radius's own search: the same triangle where several are as near
-        self._clear_at, self._clearance = p.copy(), (d if k >= 0 else reach)
+        self._clear_at, self._clearance_m = p.copy(), (d if k >= 0 else reach_m)
         return math.inf, -1
