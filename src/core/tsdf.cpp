@@ -1,16 +1,11 @@
 #include "semantic_exploration/core/tsdf.hpp"
 
-#include <atomic>
 #include <climits>
 #include <stdexcept>
 
 namespace semexp {
 
 namespace {
-
-// TsdfMapT::revision(): one counter for all maps, so that no two maps (or states of one) share a value.
-std::atomic<std::uint64_t> g_next_revision{1};
-std::uint64_t nextRevision() { return g_next_revision.fetch_add(1, std::memory_order_relaxed); }
 
 static_assert((-5 >> 1) == -3, "blockOf needs an arithmetic right shift");
 
@@ -27,23 +22,6 @@ inline std::uint64_t edgeKey(const Eigen::Vector3i& v, int axis) {
 }
 
 }  // namespace
-
-template <class V>
-TsdfMapT<V>::Revision::Revision() : value(nextRevision()) {}
-template <class V>
-TsdfMapT<V>::Revision::Revision(Revision&& other) noexcept : value(other.value) {
-  other.value = nextRevision();
-}
-template <class V>
-typename TsdfMapT<V>::Revision& TsdfMapT<V>::Revision::operator=(Revision&& other) noexcept {
-  value = other.value;
-  other.value = nextRevision();
-  return *this;
-}
-template <class V>
-void TsdfMapT<V>::Revision::bump() {
-  value = nextRevision();
-}
 
 template <class V>
 TsdfMapT<V>::TsdfMapT(const TsdfParams& params)

@@ -19,6 +19,7 @@
 
 #include "semantic_exploration/core/camera.hpp"
 #include "semantic_exploration/core/marching_cubes.hpp"
+#include "semantic_exploration/core/tsdf_revision.hpp"
 
 namespace semexp {
 
@@ -330,7 +331,7 @@ class TsdfMapT {
   /// dropForegroundBeyond, mergeFrom) and differs between any two maps of the
   /// process (a moved-from map gets a new one), so a cache keyed by it
   /// (ObjectSummaryCache) is never taken for a state it was not computed from.
-  std::uint64_t revision() const { return revision_.value; }
+  std::uint64_t revision() const { return revision_.value(); }
 
   /// Axis-aligned box of the allocated blocks in world, m; false if empty.
   bool allocatedBox(Eigen::AlignedBox3f& box_W) const;
@@ -385,15 +386,7 @@ class TsdfMapT {
   /// ray casts and meshing look blocks up without hashing.
   std::vector<Block*> dense_;
   Eigen::Vector3i dense_min_{0, 0, 0}, dense_dims_{0, 0, 0};
-  /// revision(): the next value of a process-wide counter at each change; moving gives the source a new one.
-  struct Revision {
-    std::uint64_t value;
-    Revision();
-    Revision(Revision&& other) noexcept;
-    Revision& operator=(Revision&& other) noexcept;
-    void bump();
-  };
-  Revision revision_;
+  TsdfRevision revision_;  ///< revision()
 };
 
 using TsdfMap = TsdfMapT<TsdfVoxel>;

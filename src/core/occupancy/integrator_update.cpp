@@ -75,10 +75,10 @@ inline void projectSlab(const Projector& pr, const Eigen::Vector3f& p0, const Ei
   }
 }
 
-}  // namespace
-
 // Unknown, free (< 0) and occupied (>= 0) are what the surface count reads (SurfaceCounter); nv is never unknown.
-bool Integrator::stateChanged(std::int16_t old, std::int16_t nv) { return old == kUnknown || (old < 0) != (nv < 0); }
+bool stateChanged(std::int16_t old, std::int16_t nv) { return old == kUnknown || (old < 0) != (nv < 0); }
+
+}  // namespace
 
 void Integrator::markChanged(TaskOut& out, int cell) {
   if (cell_stamp_[cell] == stamp_) return;

@@ -153,7 +153,6 @@ class Integrator {
   void markChanged(TaskOut& out, int cell);
   static void merge(BlockStore& store, TaskOut& out, std::vector<int>& changed, SurfaceChanges* surface,
                     IntegrationStats& stats);
-  static bool stateChanged(std::int16_t old, std::int16_t nv);
   std::uint64_t* hits(const BlockStore& store, int b) { return hit_.data() + static_cast<std::size_t>(b) * store.fwords; }
 
   BackgroundMapConfig cfg_;
