@@ -276,6 +276,8 @@ bool PlannerNode::iterate(std::string& message, const ros::Time& stamp, const ro
     return bounds_.contains(p) && replica_.sphereFree(p, r);
   };
   prov.not_occupied = [this](const Eigen::Vector3d& p, double r) { return replica_.sphereNotOccupied(p, r); };
+  prov.line_not_occupied = [this](const Eigen::Vector3d& from, const Eigen::Vector3d& u, double length_m,
+                                  double step_m) { return replica_.lineNotOccupied(from, u, length_m, step_m); };
   prov.gains = [this](const std::vector<Eigen::Vector3d>& ps) {
     return services_->gains(ps, objects_, replica_.resolution_m());
   };

@@ -17,7 +17,8 @@
 // background gains then come from that map, and the collision queries from a
 // MapReplica of it, the planner node's own copy answering its sphere queries
 // (is_free = in the bounds and MapReplica::sphereFree, not_occupied =
-// MapReplica::sphereNotOccupied, exactly the node's providers), as in the
+// MapReplica::sphereNotOccupied, line_not_occupied = MapReplica::lineNotOccupied,
+// exactly the node's providers), as in the
 // planner node minus the service round trips (the object raycast, a third
 // service, is not part of this figure). The iteration includes frontier
 // retirement (judging the frontiers, recording the winner's views), which
@@ -114,6 +115,8 @@ int main(int argc, char** argv) {
     return bounds.contains(p) && replica.sphereFree(p, r);
   };
   prov.not_occupied = [&replica](const Eigen::Vector3d& p, double r) { return replica.sphereNotOccupied(p, r); };
+  prov.line_not_occupied = [&replica](const Eigen::Vector3d& from, const Eigen::Vector3d& u, double length_m,
+                                      double step_m) { return replica.lineNotOccupied(from, u, length_m, step_m); };
   prov.gains = [&](const std::vector<Eigen::Vector3d>& ps) {
     const auto images = map.computeGains(ps, sgrid, gain_settings);
     std::vector<semexp::GainSet> out(ps.size());

@@ -134,5 +134,57 @@ TEST(ReplicaOfOccupancyMap, AgreesWithTheMap) {
   EXPECT_EQ(unsafe, 0);
 }
 
+// lineNotOccupied is a faster way of asking sphereNotOccupied(p, 0) at each
+// point of a line: the same answer on every line, on a replica of a map with
+// dense, uniform and missing blocks (a rendered room), for lines through
+// free space, walls, the table and unknown space, at steps of one voxel and
+// of less.
+TEST(ReplicaOfOccupancyMap, LinesOfSightAgreeWithPointQueries) {
+  const Bounds b = semexp_test::tableRoomBounds();
+  const semexp_test::TestGrid room = semexp_test::tableRoom();
+  const PinholeCamera cam = semexp_test::halfSizeCamera();
+  OccupancyMap map(BackgroundMapConfig(), b);
+  for (int k = 0; k < 6; ++k) {
+    const Eigen::Isometry3d T = semexp_test::levelCameraPose({1.2 + 0.3 * k, 2.0, 1.2}, 0.9 * k);
+    map.integrate(semexp_test::renderDepth(room, cam, T), cv::Mat(), cam, T);
+  }
+  MapReplica replica;
+  ASSERT_EQ(replica.apply(map.snapshot()), MapReplica::Result::kApplied);
+  const double res = replica.resolution_m();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> ux(-0.5, 5.5), uy(-0.5, 4.5), uz(-0.3, 2.7), ulen(0.0, 4.0);
+  int blocked = 0, clear = 0;
+  const int n = 4000;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d from(ux(rng), uy(rng), uz(rng));
+    const Eigen::Vector3d u = (Eigen::Vector3d(ux(rng), uy(rng), uz(rng)) - from).normalized();
+    const double len = ulen(rng), step = i % 2 ? res : 0.37 * res;
+    bool points = true;
+    for (double t = 0.0; t <= len && points; t += step) points = replica.sphereNotOccupied(from + t * u, 0.0);
+    ASSERT_EQ(replica.lineNotOccupied(from, u, len, step), points)
+        << "line " << i << " from " << from.transpose() << " along " << u.transpose() << ", " << len << " m";
+    (points ? clear : blocked) += 1;
+  }
+  // Both answers are common, so the comparison means something.
+  EXPECT_GT(blocked, n / 10);
+  EXPECT_GT(clear, n / 10);
+  // Lines on the voxel grid's faces: vertical lines down to the floor from
+  // points whose x and y are multiples of 0.2 m (each one a face of the
+  // 0.04 m grid), so that points land on borders and on the floor's face.
+  int face_blocked = 0;
+  for (double x = 0.2; x < 4.9; x += 0.2)
+    for (double y = 0.2; y < 3.9; y += 0.2) {
+      const Eigen::Vector3d top(std::round(x / 0.2) * 0.2, std::round(y / 0.2) * 0.2, 2.0);
+      bool points = true;
+      for (double t = 0.0; t <= 2.0 && points; t += res) points = replica.sphereNotOccupied(top - t * Eigen::Vector3d::UnitZ(), 0.0);
+      ASSERT_EQ(replica.lineNotOccupied(top, -Eigen::Vector3d::UnitZ(), 2.0, res), points) << top.transpose();
+      face_blocked += !points;
+    }
+  EXPECT_GT(face_blocked, 20);  // the floor (and the table) where the frames saw them
+  const Eigen::Vector3d on_face(0.0, 2.0, 1.2);
+  EXPECT_THROW(replica.lineNotOccupied(on_face, Eigen::Vector3d::UnitX(), 1.0, 0.0), std::invalid_argument);
+  EXPECT_TRUE(MapReplica().lineNotOccupied(on_face, Eigen::Vector3d::UnitX(), 1.0, res));  // empty: all unknown
+}
+
 }  // namespace
 }  // namespace semexp

@@ -154,10 +154,11 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   // Without an occupancy query every line of sight counts as clear.
   const CollisionQuery not_occupied =
       prov.not_occupied ? prov.not_occupied : CollisionQuery([](const Eigen::Vector3d&, double) { return true; });
+  const LineQuery line_not_occupied = prov.not_occupied ? prov.line_not_occupied : LineQuery();
 
   // Frontiers no reachable view can observe do not hold the exploration open.
   auto t0 = Clock::now();
-  FrontierRetirement::Split split = retirement_.update(in.frontiers_W, not_occupied);
+  FrontierRetirement::Split split = retirement_.update(in.frontiers_W, not_occupied, line_not_occupied);
   r.retirement_s = secondsSince(t0);
   r.active_frontiers = split.active_W.size();
   r.retired_frontiers_W = std::move(split.retired_W);
@@ -384,7 +385,7 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   std::vector<Eigen::Vector3d> targets;
   if (win.sample.source == CandidateSource::kFrontier) targets.push_back(win.sample.position_W);
   t0 = Clock::now();
-  retirement_.recordViews(poses, not_occupied, targets);
+  retirement_.recordViews(poses, not_occupied, targets, line_not_occupied);
   r.retirement_s += secondsSince(t0);
   if (win.sample.source == CandidateSource::kObject)
     for (const ObjectSummary& o : in.objects)

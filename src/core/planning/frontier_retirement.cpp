@@ -44,17 +44,19 @@ std::uint64_t FrontierRetirement::key(const Eigen::Vector3d& p) const {
 }
 
 bool FrontierRetirement::lineOfSight(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double short_m,
-                                     const CollisionQuery& not_occupied) const {
+                                     const CollisionQuery& not_occupied, const LineQuery& line) const {
   const Eigen::Vector3d d = to - from;
   const double len = d.norm() - short_m;
   if (len <= 0) return true;
   const Eigen::Vector3d u = d / d.norm();
+  if (line) return line(from, u, len, resolution_m_);
   for (double t = 0.0; t <= len; t += resolution_m_)
     if (!not_occupied(from + t * u, 0.0)) return false;
   return true;
 }
 
-bool FrontierRetirement::sees(const ViewPose& pose, const Eigen::Vector3d& p, const CollisionQuery& not_occupied) const {
+bool FrontierRetirement::sees(const ViewPose& pose, const Eigen::Vector3d& p, const CollisionQuery& not_occupied,
+                              const LineQuery& line) const {
   const Eigen::Vector3d d = p - pose.position_W;
   const double dist = d.norm();
   if (dist > config_.view_range_m || dist < 1e-6) return false;
@@ -64,7 +66,7 @@ bool FrontierRetirement::sees(const ViewPose& pose, const Eigen::Vector3d& p, co
   // A view reaches the cluster when nothing occupied lies between the camera
   // and the cluster's cube: the surface a frontier borders is allowed to
   // hide the frontier voxel itself (that is what the evidence is about).
-  return lineOfSight(pose.position_W, p, 0.5 * config_.cluster_size_m, not_occupied);
+  return lineOfSight(pose.position_W, p, 0.5 * config_.cluster_size_m, not_occupied, line);
 }
 
 std::vector<Eigen::Vector3d> FrontierRetirement::viewPointPositions(const Eigen::Vector3d& c) const {
@@ -92,30 +94,30 @@ std::vector<Eigen::Vector3d> FrontierRetirement::viewPointPositions(const Eigen:
 }
 
 bool FrontierRetirement::possibleViewPoint(const Eigen::Vector3d& p, const Eigen::Vector3d& c,
-                                           const CollisionQuery& not_occupied) const {
+                                           const CollisionQuery& not_occupied, const LineQuery& line) const {
   // Two voxels short: a grazing line meets the voxels of the surface the frontier borders next to it.
   return bounds_.contains(p) && not_occupied(p, clearance_radius_m_) &&
-         lineOfSight(p, c, 2.0 * resolution_m_, not_occupied);
+         lineOfSight(p, c, 2.0 * resolution_m_, not_occupied, line);
 }
 
-int FrontierRetirement::viewPoints(const Eigen::Vector3d& c, const CollisionQuery& not_occupied,
-                                   int stop_at) const {
+int FrontierRetirement::viewPoints(const Eigen::Vector3d& c, const CollisionQuery& not_occupied, int stop_at,
+                                   const LineQuery& line) const {
   int n = 0;
   for (const Eigen::Vector3d& p : viewPointPositions(c))
-    if (possibleViewPoint(p, c, not_occupied) && ++n == stop_at) return n;
+    if (possibleViewPoint(p, c, not_occupied, line) && ++n == stop_at) return n;
   return n;
 }
 
-std::vector<bool> FrontierRetirement::possibleViewPoints(const Eigen::Vector3d& c,
-                                                         const CollisionQuery& not_occupied) const {
+std::vector<bool> FrontierRetirement::possibleViewPoints(const Eigen::Vector3d& c, const CollisionQuery& not_occupied,
+                                                         const LineQuery& line) const {
   const std::vector<Eigen::Vector3d> ps = viewPointPositions(c);
   std::vector<bool> out(ps.size());
-  for (std::size_t i = 0; i < ps.size(); ++i) out[i] = possibleViewPoint(ps[i], c, not_occupied);
+  for (std::size_t i = 0; i < ps.size(); ++i) out[i] = possibleViewPoint(ps[i], c, not_occupied, line);
   return out;
 }
 
 FrontierRetirement::Recount FrontierRetirement::recount(const Eigen::Vector3d& c, const std::vector<bool>& before,
-                                                        const CollisionQuery& not_occupied) const {
+                                                        const CollisionQuery& not_occupied, const LineQuery& line) const {
   // Now = kept + gained, where kept counts the view points possible before
   // that still are, gained those impossible before that are now. More than
   // before (k) <=> gained > k - kept <=> lost = k - kept < gained. The
@@ -128,7 +130,7 @@ FrontierRetirement::Recount FrontierRetirement::recount(const Eigen::Vector3d& c
     if (before[i])
       ++k;
     else
-      gained += possibleViewPoint(ps[i], c, not_occupied);
+      gained += possibleViewPoint(ps[i], c, not_occupied, line);
   }
   Recount out;
   if (gained > k) {
@@ -138,7 +140,7 @@ FrontierRetirement::Recount FrontierRetirement::recount(const Eigen::Vector3d& c
   int kept = 0, lost = 0;
   for (std::size_t i = 0; i < ps.size(); ++i) {
     if (!before[i]) continue;
-    if (possibleViewPoint(ps[i], c, not_occupied)) {
+    if (possibleViewPoint(ps[i], c, not_occupied, line)) {
       ++kept;
       out.any = true;
       if (gained > k - kept) {  // already more than before
@@ -156,7 +158,7 @@ FrontierRetirement::Recount FrontierRetirement::recount(const Eigen::Vector3d& c
 }
 
 FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Vector3d>& frontiers_W,
-                                                     const CollisionQuery& not_occupied) {
+                                                     const CollisionQuery& not_occupied, const LineQuery& line) {
   ++iteration_;
   Split out;
   if (!config_.enabled) {
@@ -165,7 +167,18 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
   }
   // Members of each cluster now.
   std::unordered_map<std::uint64_t, std::vector<std::size_t>> members;
-  for (std::size_t i = 0; i < frontiers_W.size(); ++i) members[key(frontiers_W[i])].push_back(i);
+  // The map lists its frontier voxels block by block, so neighbours in the
+  // list mostly share a cube: look the cube up only when it changes.
+  std::uint64_t last_key = 0;
+  std::vector<std::size_t>* last = nullptr;
+  for (std::size_t i = 0; i < frontiers_W.size(); ++i) {
+    const std::uint64_t k = key(frontiers_W[i]);
+    if (last == nullptr || k != last_key) {
+      last = &members[k];  // references into an unordered_map stay valid as it grows
+      last_key = k;
+    }
+    last->push_back(i);
+  }
   for (auto it = clusters_.begin(); it != clusters_.end();) {
     // A cluster without frontiers keeps its state only while retired by evidence.
     if (!members.count(it->first) && !it->second.by_evidence) {
@@ -194,7 +207,7 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
     if (!c.by_evidence && c.failed_views >= config_.max_failed_views) {
       c.by_evidence = true;
       ever_retired_by_evidence_.insert(kv.first);
-      c.possible_at_retirement = possibleViewPoints(c.centre_W, not_occupied);
+      c.possible_at_retirement = possibleViewPoints(c.centre_W, not_occupied, line);
       c.viewpoints_at_retirement =
           static_cast<int>(std::count(c.possible_at_retirement.begin(), c.possible_at_retirement.end(), true));
       c.centre_at_retirement_W = c.centre_W;
@@ -208,7 +221,7 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
     if (c.judged_at >= 0 && iteration_ - c.judged_at < config_.recheck_iterations) continue;
     c.judged_at = iteration_;
     if (!c.by_evidence) {
-      c.by_geometry = viewPoints(c.centre_W, not_occupied, 1) == 0;
+      c.by_geometry = viewPoints(c.centre_W, not_occupied, 1, line) == 0;
       continue;
     }
     // Retired by evidence: are more view points possible than at retirement?
@@ -216,9 +229,9 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
     // those possible at retirement settle it without judging them all.
     Recount now;
     if (c.centre_W == c.centre_at_retirement_W) {
-      now = recount(c.centre_W, c.possible_at_retirement, not_occupied);
+      now = recount(c.centre_W, c.possible_at_retirement, not_occupied, line);
     } else {
-      const int n = viewPoints(c.centre_W, not_occupied);
+      const int n = viewPoints(c.centre_W, not_occupied, 0, line);
       now.any = n > 0;
       now.more = n > c.viewpoints_at_retirement;
     }
@@ -230,6 +243,7 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
       c.possible_at_retirement.clear();
     }
   }
+  out.active_W.reserve(frontiers_W.size());
   for (const auto& m : members) {
     const Cluster& c = clusters_[m.first];
     ++out.clusters;
@@ -254,7 +268,7 @@ void FrontierRetirement::discardViews() {
 }
 
 void FrontierRetirement::recordViews(const std::vector<ViewPose>& poses, const CollisionQuery& not_occupied,
-                                     const std::vector<Eigen::Vector3d>& targets_W) {
+                                     const std::vector<Eigen::Vector3d>& targets_W, const LineQuery& line) {
   if (!config_.enabled) return;
   for (const auto& t : targets_W) {
     const auto it = clusters_.find(key(t));
@@ -264,7 +278,7 @@ void FrontierRetirement::recordViews(const std::vector<ViewPose>& poses, const C
     Cluster& c = kv.second;
     if (c.voxels == 0 || c.by_geometry || c.by_evidence || c.voxels_at_view >= 0) continue;
     for (const auto& pose : poses)
-      if (sees(pose, c.centre_W, not_occupied)) {
+      if (sees(pose, c.centre_W, not_occupied, line)) {
         c.voxels_at_view = c.voxels;
         break;
       }

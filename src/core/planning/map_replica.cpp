@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace semexp {
 
@@ -155,6 +156,40 @@ bool MapReplica::sphereCheck(const Eigen::Vector3d& p, double r, bool allow_unkn
               if (d.squaredNorm() <= r2) return false;
             }
       }
+  return true;
+}
+
+bool MapReplica::lineNotOccupied(const Eigen::Vector3d& from, const Eigen::Vector3d& u, double length_m,
+                                 double step_m) const {
+  if (!(step_m > 0.0)) throw std::invalid_argument("MapReplica::lineNotOccupied: step_m must be > 0");
+  if (blocks_.empty()) return true;
+  const double res = resolution_m_, h = 0.5 * res;
+  const int bs = block_size_;
+  bool cached = false;
+  Eigen::Vector3i cached_b(0, 0, 0);
+  const Block* blk = nullptr;  // of cached_b; nullptr: not in the map (unknown)
+  for (double t = 0.0; t <= length_m; t += step_m) {
+    const Eigen::Vector3d p = from + t * u;
+    if (!p.allFinite()) continue;  // as sphereCheck: nothing to say about it
+    // The voxel and block sphereCheck(p, 0) reads (p - 0 is p exactly).
+    const Eigen::Vector3i v = ((p.array() - origin_W_.array()) / res).floor().cast<int>();
+    const Eigen::Vector3i b(floorDiv(v.x(), bs), floorDiv(v.y(), bs), floorDiv(v.z(), bs));
+    if (!cached || b != cached_b) {
+      const auto it = blocks_.find(key(b));
+      blk = it == blocks_.end() ? nullptr : &it->second;
+      cached_b = b;
+      cached = true;
+    }
+    if (blk == nullptr || blk->occupied == 0) continue;
+    const Eigen::Vector3i base = b * bs;
+    const Eigen::Vector3i l = v - base;
+    const std::int8_t x = blk->at((static_cast<std::size_t>(l.z()) * bs + l.y()) * bs + l.x());
+    if (x == kUnknownValue || x < free_below_) continue;
+    // sphereCheck's distance test at radius 0, for a point on the voxel's border after rounding.
+    const Eigen::Vector3d c = origin_W_ + (v.cast<double>().array() + 0.5).matrix() * res;
+    const Eigen::Vector3d d = ((p - c).cwiseAbs().array() - h).cwiseMax(0.0);
+    if (d.squaredNorm() <= 0.0) return false;
+  }
   return true;
 }
 

@@ -50,6 +50,9 @@ struct ExplorationInputs {
 struct ExplorationProviders {
   CollisionQuery is_free;       ///< required
   CollisionQuery not_occupied;  ///< optional: enables escapes from an invalid start
+  /// Optional: the lines of sight of frontier retirement asked at once
+  /// (same answers as not_occupied point by point, fewer map look-ups).
+  LineQuery line_not_occupied;
   GainProvider gains;           ///< required
   HistoryProvider history;      ///< optional: no history = all directions valid
 };

@@ -106,7 +106,10 @@ class FrontierRetirement {
   /// Judges this iteration's frontiers. The views recorded since the last
   /// call (recordViews) count as evidence now. not_occupied: sphere queries
   /// with unknown space allowed (radius 0 = the voxel at the point).
-  Split update(const std::vector<Eigen::Vector3d>& frontiers_W, const CollisionQuery& not_occupied);
+  /// line_not_occupied (optional): the lines of sight asked at once, with the
+  /// same answers as not_occupied point by point.
+  Split update(const std::vector<Eigen::Vector3d>& frontiers_W, const CollisionQuery& not_occupied,
+               const LineQuery& line_not_occupied = {});
 
   /// The poses the camera will look from while the published path is flown,
   /// and the frontier voxels the path was chosen to observe (a frontier
@@ -114,17 +117,19 @@ class FrontierRetirement {
   /// a pose sees count as viewed; whether they shrank is judged at the next
   /// update().
   void recordViews(const std::vector<ViewPose>& poses, const CollisionQuery& not_occupied,
-                   const std::vector<Eigen::Vector3d>& targets_W = {});
+                   const std::vector<Eigen::Vector3d>& targets_W = {}, const LineQuery& line_not_occupied = {});
 
   /// The views recorded last were not flown (the path was dropped or rejected): not judged.
   void discardViews();
 
   /// Possible view points of a cluster at `centre_W` (0 = not observable).
   /// `stop_at` > 0 stops counting there.
-  int viewPoints(const Eigen::Vector3d& centre_W, const CollisionQuery& not_occupied, int stop_at = 0) const;
+  int viewPoints(const Eigen::Vector3d& centre_W, const CollisionQuery& not_occupied, int stop_at = 0,
+                 const LineQuery& line_not_occupied = {}) const;
 
   /// Whether `pose` sees `p_W` inside both fields of view, within view_range_m, with a clear line of sight.
-  bool sees(const ViewPose& pose, const Eigen::Vector3d& p_W, const CollisionQuery& not_occupied) const;
+  bool sees(const ViewPose& pose, const Eigen::Vector3d& p_W, const CollisionQuery& not_occupied,
+            const LineQuery& line_not_occupied = {}) const;
 
   const FrontierRetirementConfig& config() const { return config_; }
   /// Distinct clusters (cubes) retired by evidence so far, each counted once:
@@ -159,20 +164,24 @@ class FrontierRetirement {
   /// The view points tried around a cluster at c_W, in a fixed order (heights, distances, azimuths), m.
   std::vector<Eigen::Vector3d> viewPointPositions(const Eigen::Vector3d& c_W) const;
   /// p_W is a possible camera centre that sees c_W.
-  bool possibleViewPoint(const Eigen::Vector3d& p_W, const Eigen::Vector3d& c_W,
-                         const CollisionQuery& not_occupied) const;
+  bool possibleViewPoint(const Eigen::Vector3d& p_W, const Eigen::Vector3d& c_W, const CollisionQuery& not_occupied,
+                         const LineQuery& line) const;
   /// Per view point of viewPointPositions(c_W): possible.
-  std::vector<bool> possibleViewPoints(const Eigen::Vector3d& c_W, const CollisionQuery& not_occupied) const;
+  std::vector<bool> possibleViewPoints(const Eigen::Vector3d& c_W, const CollisionQuery& not_occupied,
+                                       const LineQuery& line) const;
   /// The same answer as comparing viewPoints(c_W) with the count of `before`
   /// (the possible view points around the same c_W earlier), judging only
   /// as many view points as the comparison needs.
-  Recount recount(const Eigen::Vector3d& c_W, const std::vector<bool>& before, const CollisionQuery& not_occupied) const;
+  Recount recount(const Eigen::Vector3d& c_W, const std::vector<bool>& before, const CollisionQuery& not_occupied,
+                  const LineQuery& line) const;
   /// Whether the cluster of `cube`, retired by evidence, may come back now
   /// (max_evidence_returns); counts the return when it may.
   bool takeEvidenceReturn(std::uint64_t cube);
-  /// No occupied voxel on the segment from `from_W` up to short_m (m) before `to_W`.
+  /// No occupied voxel on the segment from `from_W` up to short_m (m) before
+  /// `to_W`, at points one map resolution apart: asked of `line` at once when
+  /// there is one, else of not_occupied point by point.
   bool lineOfSight(const Eigen::Vector3d& from_W, const Eigen::Vector3d& to_W, double short_m,
-                   const CollisionQuery& not_occupied) const;
+                   const CollisionQuery& not_occupied, const LineQuery& line) const;
 
   FrontierRetirementConfig config_;
   PinholeCamera camera_;

@@ -18,6 +18,15 @@ namespace semexp {
 /// bounds, are not free. Must be safe to call from several threads at once.
 using CollisionQuery = std::function<bool(const Eigen::Vector3d& p_W, double radius_m)>;
 
+/// True iff no point from_W + t u_W, for t = 0, step_m, 2 step_m, ... while
+/// t <= length_m (t summed step by step), lies in an occupied voxel (unknown
+/// allowed): the same answer as a not-occupied CollisionQuery at radius 0,
+/// point by point, from a map that can skip a block with nothing occupied.
+/// u_W is a unit vector; length_m and step_m in m, step_m > 0. Must be safe
+/// to call from several threads at once.
+using LineQuery =
+    std::function<bool(const Eigen::Vector3d& from_W, const Eigen::Vector3d& u_W, double length_m, double step_m)>;
+
 /// Gain images at a batch of positions (one GainSet per position, images in
 /// the SphericalGrid layout of the planner's raycast width x height). Empty
 /// images mean "no such gain". Called from one thread.

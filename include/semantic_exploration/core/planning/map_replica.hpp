@@ -57,6 +57,13 @@ class MapReplica {
   bool sphereNotOccupied(const Eigen::Vector3d& p_W, double radius_m) const {
     return sphereCheck(p_W, radius_m, true);
   }
+  /// No occupied voxel at the points from_W + t u_W, t = 0, step_m, ... <= length_m
+  /// (t summed step by step): exactly sphereNotOccupied(point, 0) at each,
+  /// with one block look-up per block the points cross instead of one per
+  /// point, and none of a block's voxels read when it holds nothing occupied
+  /// (a LineQuery). m; step_m > 0.
+  bool lineNotOccupied(const Eigen::Vector3d& from_W, const Eigen::Vector3d& u_W, double length_m,
+                       double step_m) const;
 
  private:
   struct Block {
