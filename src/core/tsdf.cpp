@@ -370,7 +370,7 @@ void TsdfMapT<V>::mergeFrom(const TsdfMapT& other) {
 }
 
 template <class V>
-Mesh TsdfMapT<V>::extractMesh() const {
+Mesh TsdfMapT<V>::extractMesh(float min_weight) const {
   const auto& table = MarchingCubesTable::get();
   const int B = params_.block_size;
   const float res = static_cast<float>(params_.resolution_m);
@@ -400,7 +400,7 @@ Mesh TsdfMapT<V>::extractMesh() const {
               break;
             }
             const V& vx = (*blk)[(cx % B) + B * ((cy % B) + B * (cz % B))];
-            if (vx.weight() <= 0.f) {
+            if (vx.weight() <= 0.f || vx.weight() < min_weight) {
               ok = false;
               break;
             }

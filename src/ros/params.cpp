@@ -143,6 +143,7 @@ semexp::ObjectMapConfig loadObjectMap(const ParamReader& p) {
   p.get(n + "foreground_prior", c.foreground_prior);
   p.get(n + "foreground_prior_weight", c.foreground_prior_weight);
   p.get(n + "mesh_fragment_gap_m", c.mesh_fragment_gap_m);
+  p.get(n + "mesh_min_weight", c.mesh_min_weight);
   c.validate(n);
   return c;
 }

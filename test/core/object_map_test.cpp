@@ -32,8 +32,8 @@ constexpr int kChair = 1;  // "chair" in the default class table
 ObjectMapConfig config() { return objectMapConfigWithPrior(); }
 
 // Builds a map holding A (id 1) and B (id 2), each seen all round.
-ObjectMap twoObjects(const PinholeCamera& cam) {
-  ObjectMap map(config(), ClassTable());
+ObjectMap twoObjects(const PinholeCamera& cam, const ObjectMapConfig& c = config()) {
+  ObjectMap map(c, ClassTable());
   for (int k = 0; k < 2; ++k) {
     const Sphere& s = k == 0 ? kA : kB;
     bool first = true;
@@ -451,7 +451,11 @@ TEST(ObjectMap, FloorDivRoundsTowardsMinusInfinity) {
 
 TEST(ObjectMap, SaveWritesMeshesAndIndex) {
   PinholeCamera cam;
-  const ObjectMap map = twoObjects(cam);
+  // Ten views of each sphere see each surface voxel three or four times: under the default
+  // mesh_min_weight (4 observations) little of it is meshed, with 0 all of it.
+  ObjectMapConfig every_voxel = config();
+  every_voxel.mesh_min_weight = 0.0;
+  const ObjectMap map = twoObjects(cam, every_voxel);
   const auto dir = std::filesystem::temp_directory_path() / ("semexp_objmap_" + std::to_string(::getpid()));
   std::string error;
   const auto files = map.save((dir / "run").string(), 1.0, &error);
@@ -460,6 +464,14 @@ TEST(ObjectMap, SaveWritesMeshesAndIndex) {
   Mesh m;
   ASSERT_TRUE(readPly(files[0], m));
   EXPECT_GT(m.triangles.size(), 100u);
+  // The saved mesh is the one the map gives (and publishes), under the configured minimum weight.
+  const ObjectMap sparse = twoObjects(cam);
+  const auto sparse_files = sparse.save((dir / "sparse").string(), 1.0, &error);
+  ASSERT_EQ(sparse_files.size(), 3u);
+  Mesh s;
+  ASSERT_TRUE(readPly(sparse_files[0], s));
+  EXPECT_EQ(s.triangles.size(), sparse.mesh(*sparse.object(1)).triangles.size());
+  EXPECT_LT(s.triangles.size(), m.triangles.size() / 2);
   std::ifstream f(files[2]);
   const std::string json((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
   EXPECT_NE(json.find("\"class_name\": \"chair\""), std::string::npos);

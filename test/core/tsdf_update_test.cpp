@@ -60,6 +60,25 @@ TEST(TsdfUpdate, UndetectedUpdatesGeometryButNotForeground) {
 
 // revision() keys per-object caches (the object map node's summaries): it must change with every call that
 // can change a voxel, stay with the ones that read, and differ between maps.
+// object_map/mesh_min_weight on a wall seen 3 times from one pose, exact depth: each view adds weight 1 to
+// every voxel from the truncation in front of the wall to one voxel behind it (deeper voxels get less, falling
+// to 0 at behind_surface_m). The cubes the surface crosses reach slightly more than one voxel behind where
+// rays run oblique, so their voxels hold 3 or a little less: a minimum of 2.5 keeps the whole mesh, 3.5 leaves
+// nothing, and a fourth view brings it all back.
+TEST(TsdfUpdate, MeshLeavesOutCubesBelowTheMinimumWeight) {
+  const WallAhead view;
+  TsdfMap map(params());
+  for (int k = 0; k < 3; ++k) view.into(map, 255, true);
+  const std::size_t all = map.extractMesh().triangles.size();
+  ASSERT_GT(all, 20u);
+  EXPECT_EQ(map.extractMesh(2.5f).triangles.size(), all);
+  EXPECT_TRUE(map.extractMesh(3.5f).empty());
+  view.into(map, 255, true);
+  EXPECT_EQ(map.extractMesh().triangles.size(), all);
+  EXPECT_EQ(map.extractMesh(3.5f).triangles.size(), all);
+  EXPECT_TRUE(map.extractMesh(4.5f).empty());
+}
+
 TEST(TsdfUpdate, RevisionChangesWithEveryChangeAndDiffersBetweenMaps) {
   const WallAhead view;
   TsdfMap a(params()), b(params());

@@ -164,8 +164,9 @@ class ObjectMap {
   /// planner, not a box at the origin.
   TsdfSummary summarize(const MappedObject& object, double d_obj_m) const;
 
-  /// The object's mesh as saved and published: TsdfMap::extractMesh without
-  /// the pieces farther than mesh_fragment_gap_m from its main surface.
+  /// The object's mesh as saved and published: TsdfMap::extractMesh over the
+  /// voxels of at least mesh_min_weight, without the pieces farther than
+  /// mesh_fragment_gap_m from its main surface.
   Mesh mesh(const MappedObject& object) const;
 
   /// Writes object_<id>_<class>.ply per object and objects.json (the

@@ -119,6 +119,12 @@ struct ObjectMapConfig {
   /// dropMeshFragments); farther pieces are strays that bled masks or noise
   /// left (a few vertices a metre or more from the chair). The TSDF keeps them. m; 0 = off.
   double mesh_fragment_gap_m = 0.3;
+  /// Meshes (saved and published) leave out the marching cube of any voxel
+  /// with less weight than this (TsdfMapT::extractMesh): a zero crossing
+  /// that few observations support is where depth noise left a surface in
+  /// the air beside the object. The TSDF, the render for matching and the
+  /// observed share keep every voxel. Observations; 0 = every observed voxel.
+  double mesh_min_weight = 4.0;
 
   DepthEdgeParams depthEdgeParams() const {
     return {mask_depth_edge_m, mask_depth_edge_rel, mask_depth_edge_window_px};
@@ -153,6 +159,8 @@ struct ObjectMapConfig {
     require(std::isfinite(mask_depth_edge_rel) && mask_depth_edge_rel >= 0, ns + "mask_depth_edge_rel", "must be >= 0");
     require(std::isfinite(split_gap_m) && split_gap_m >= 0, ns + "split_gap_m", "must be >= 0 m");
     require(std::isfinite(mesh_fragment_gap_m) && mesh_fragment_gap_m >= 0, ns + "mesh_fragment_gap_m", "must be >= 0 m");
+    require(std::isfinite(mesh_min_weight) && mesh_min_weight >= 0 && mesh_min_weight <= max_weight,
+            ns + "mesh_min_weight", "must be in [0, max_weight] observations");
     require(foreground_border_px >= 0 && foreground_border_px <= 64, ns + "foreground_border_px",
             "must be in [0, 64] px");
     require(std::isfinite(foreground_prior) && foreground_prior >= 0 && foreground_prior <= 1,

@@ -309,8 +309,10 @@ class TsdfMapT {
   /// belongs to another object. Returns the voxels changed.
   std::size_t dropForegroundBeyond(const Eigen::Vector3f& normal_W, float offset_m);
 
-  /// Marching-cubes mesh of the zero crossing where foreground probability > 0.5, with colour.
-  Mesh extractMesh() const;
+  /// Marching-cubes mesh of the zero crossing where foreground probability
+  /// > 0.5, with colour, over the cubes whose 8 voxels each hold a weight of
+  /// at least min_weight (and more than 0), in observations.
+  Mesh extractMesh(float min_weight = 0.f) const;
 
   /// Summary of the surface voxels (|sdf| < one voxel) whose foreground
   /// probability exceeds 0.5 (the mesh's surface; with tracked, exceeds
