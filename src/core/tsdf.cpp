@@ -1,6 +1,7 @@
 #include "semantic_exploration/core/tsdf.hpp"
 
 #include <climits>
+#include <type_traits>
 #include <stdexcept>
 
 namespace semexp {
@@ -102,6 +103,7 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
 
   const float res = static_cast<float>(params_.resolution_m);
   const float trunc = truncation_m_;
+  const float to_q = 32767.f / trunc;  // metres to the fixed-point voxel's SDF steps
   const float behind_fixed = static_cast<float>(std::min(params_.behind_surface_m, params_.truncation_m));
   const float q = static_cast<float>(params_.behind_surface_quadratic_per_m);
   const float max_depth = static_cast<float>(params_.maxIntegratedDepth_m());
@@ -183,15 +185,21 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
             if (w_obs <= 0.f) continue;
             const float w_new = w + w_obs;
             const float s = std::min(sdf, trunc);
-            const float sdf_new = (vx.sdf(trunc) * w + s * w_obs) / w_new;
-            vx.setSdf(sdf_new, trunc);
-            if (sdf_new < 0.f) block.has_negative = true;
+            if constexpr (std::is_same_v<V, TsdfVoxel>) {
+              if (vx.fuseSdf(s, w, w_obs, w_new, to_q)) block.has_negative = true;
+            } else {
+              const float sdf_new = (vx.sdf(trunc) * w + s * w_obs) / w_new;
+              vx.setSdf(sdf_new, trunc);
+              if (sdf_new < 0.f) block.has_negative = true;
+            }
             vx.setWeight(std::min(w_new, max_w));
             if (std::abs(sdf) < trunc) {
               if (use_rgb) {
                 const cv::Vec3b c = rgb.at<cv::Vec3b>(v, u);
+                // A weighted mean of bytes, so in [0, 255]: rounded inline, as std::lround (a libm call per channel).
                 for (int k = 0; k < 3; ++k)
-                  vx.rgb[k] = static_cast<std::uint8_t>(std::lround((vx.rgb[k] * w + c[k] * w_obs) / w_new));
+                  vx.rgb[k] = static_cast<std::uint8_t>(
+                      tsdf_fixed::roundNonNegativeToInt((vx.rgb[k] * w + c[k] * w_obs) / w_new));
               }
               vx.lowerMinDistance(dist);
             }

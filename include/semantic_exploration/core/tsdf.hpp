@@ -79,6 +79,16 @@ struct TsdfVoxel {
     const float q = std::max(-32767.f, std::min(32767.f, sdf_m / truncation_m * 32767.f));
     sdf_q = static_cast<std::int16_t>(tsdf_fixed::roundToInt(q));
   }
+  /// Fuses an observation s_m (m) of weight w_obs into the stored SDF of
+  /// weight w (w_new = w + w_obs > 0): the weighted mean, clamped and
+  /// stored. Works on the quantised value (to_q = 32767 / truncation_m), so
+  /// that the update needs no conversion to metres and back; returns whether
+  /// the mean is negative.
+  bool fuseSdf(float s_m, float w, float w_obs, float w_new, float to_q) {
+    const float q = (static_cast<float>(sdf_q) * w + s_m * to_q * w_obs) / w_new;
+    sdf_q = static_cast<std::int16_t>(tsdf_fixed::roundToInt(std::max(-32767.f, std::min(32767.f, q))));
+    return q < 0.f;
+  }
   float weight() const { return weight_q * (1.f / 16.f); }
   void setWeight(float w) {
     const float q = std::max(0.f, std::min(65535.f, w * 16.f));
