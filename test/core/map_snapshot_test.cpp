@@ -15,13 +15,8 @@ namespace {
 
 /// The table room seen from three level poses: free space (mostly uniform blocks), walls, a table, unknown beyond.
 OccupancyMap tableRoomSeenFromThreePoses(const BackgroundMapConfig& cfg) {
-  const semexp_test::TestGrid room = semexp_test::tableRoom();
-  const PinholeCamera cam = semexp_test::halfSizeCamera();
   OccupancyMap map(cfg, semexp_test::tableRoomBounds());
-  for (int k = 0; k < 3; ++k) {
-    const Eigen::Isometry3d T = semexp_test::levelCameraPose({1.2 + 0.6 * k, 2.0, 1.2}, 2.1 * k);
-    map.integrate(semexp_test::renderDepth(room, cam, T), cv::Mat(), cam, T);
-  }
+  semexp_test::integrateTableRoomViews(map, 3, 0.6, 2.1);
   return map;
 }
 

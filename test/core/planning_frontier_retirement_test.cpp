@@ -394,13 +394,8 @@ TEST(FrontierRetirement, ARecheckThatLosesTheFirstOldViewPointStillCountsTheNewO
 // geometry recheck every iteration make each iteration judge every cluster.
 TEST(FrontierRetirement, LinesOfSightFromTheReplicaJudgeAsPointQueriesDo) {
   const Bounds b = semexp_test::tableRoomBounds();
-  const semexp_test::TestGrid room = semexp_test::tableRoom();
-  const PinholeCamera cam = semexp_test::halfSizeCamera();
   OccupancyMap map(BackgroundMapConfig(), b);
-  for (int k = 0; k < 4; ++k) {
-    const Eigen::Isometry3d T = semexp_test::levelCameraPose({1.2 + 0.4 * k, 2.0, 1.2}, 1.3 * k);
-    map.integrate(semexp_test::renderDepth(room, cam, T), cv::Mat(), cam, T);
-  }
+  semexp_test::integrateTableRoomViews(map, 4, 0.4, 1.3);
   map.updateFrontiers();
   std::vector<Eigen::Vector3d> frontiers;
   map.forEachFrontier([&frontiers](const Eigen::Vector3d& c, double) { frontiers.push_back(c); });

@@ -140,14 +140,8 @@ TEST(ReplicaOfOccupancyMap, AgreesWithTheMap) {
 // free space, walls, the table and unknown space, at steps of one voxel and
 // of less.
 TEST(ReplicaOfOccupancyMap, LinesOfSightAgreeWithPointQueries) {
-  const Bounds b = semexp_test::tableRoomBounds();
-  const semexp_test::TestGrid room = semexp_test::tableRoom();
-  const PinholeCamera cam = semexp_test::halfSizeCamera();
-  OccupancyMap map(BackgroundMapConfig(), b);
-  for (int k = 0; k < 6; ++k) {
-    const Eigen::Isometry3d T = semexp_test::levelCameraPose({1.2 + 0.3 * k, 2.0, 1.2}, 0.9 * k);
-    map.integrate(semexp_test::renderDepth(room, cam, T), cv::Mat(), cam, T);
-  }
+  OccupancyMap map(BackgroundMapConfig(), semexp_test::tableRoomBounds());
+  semexp_test::integrateTableRoomViews(map, 6, 0.3, 0.9);
   MapReplica replica;
   ASSERT_EQ(replica.apply(map.snapshot()), MapReplica::Result::kApplied);
   const double res = replica.resolution_m();

@@ -231,4 +231,18 @@ inline TestGrid tableRoom() {
   return room;
 }
 
+/// Integrates `frames` exact depth views of tableRoom() into `map` (an OccupancyMap, or anything with its
+/// integrate(depth, colour, camera, T_WC)): the half-size camera, level, at (1.2 + step_m k, 2.0, 1.2) m with
+/// yaw yaw_step_rad k for k = 0 .. frames - 1. The map holds free space (mostly uniform blocks), walls, the
+/// table and unknown space beyond.
+template <class Map>
+void integrateTableRoomViews(Map& map, int frames, double step_m, double yaw_step_rad) {
+  const TestGrid room = tableRoom();
+  const semexp::PinholeCamera cam = halfSizeCamera();
+  for (int k = 0; k < frames; ++k) {
+    const Eigen::Isometry3d T = levelCameraPose({1.2 + step_m * k, 2.0, 1.2}, yaw_step_rad * k);
+    map.integrate(renderDepth(room, cam, T), cv::Mat(), cam, T);
+  }
+}
+
 }  // namespace semexp_test
