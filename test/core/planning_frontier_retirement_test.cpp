@@ -114,18 +114,31 @@ TEST(FrontierRetirement, RetiredByEvidenceAfterKViewsAndBackWhenFreeSpaceGrows) 
   EXPECT_EQ(fr.evidenceRetirements(), 2u);
 }
 
-// One cluster level with the camera (observable by geometry), K = 3, judged
-// by geometry every iteration, and max_evidence_returns as given.
-struct ReturningCluster {
-  static FrontierRetirementConfig config(int max_returns) {
+// One cluster of 25 voxels level with a camera (observable by geometry), 1.75 m up on kAxis, judged by a
+// FrontierRetirement with `cfg`, and 2 m of free space around it.
+struct LevelCluster {
+  static FrontierRetirementConfig failedViews(int k) {
     FrontierRetirementConfig cfg;
-    cfg.max_failed_views = 3;
+    cfg.max_failed_views = k;
+    return cfg;
+  }
+  explicit LevelCluster(const FrontierRetirementConfig& cfg)
+      : fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04), voxels(patch(centre)) {}
+  FrontierRetirement fr;
+  const Eigen::Vector3d centre{kAxis.x(), kAxis.y(), 1.75};
+  std::vector<Eigen::Vector3d> voxels;
+  const CollisionQuery free_space = cylinder(2.0);
+};
+
+// The level cluster with K = 3, judged by geometry every iteration, and max_evidence_returns as given.
+struct ReturningCluster : LevelCluster {
+  static FrontierRetirementConfig config(int max_returns) {
+    FrontierRetirementConfig cfg = failedViews(3);
     cfg.recheck_iterations = 1;
     cfg.max_evidence_returns = max_returns;
     return cfg;
   }
-  explicit ReturningCluster(int max_returns)
-      : fr(config(max_returns), camera(), box(5.0, 3.0), kClearance, 0.04), voxels(patch(centre)) {}
+  explicit ReturningCluster(int max_returns) : LevelCluster(config(max_returns)) {}
   /// K views aimed at it with `space` free, then the update that judges the last.
   FrontierRetirement::Split retire(const CollisionQuery& space) {
     for (int view = 1; view <= 3; ++view) {
@@ -134,9 +147,6 @@ struct ReturningCluster {
     }
     return fr.update(voxels, space);
   }
-  FrontierRetirement fr;
-  const Eigen::Vector3d centre{kAxis.x(), kAxis.y(), 1.75};
-  std::vector<Eigen::Vector3d> voxels;
 };
 
 // max_evidence_returns 1: a cluster comes back from retirement by evidence
@@ -191,12 +201,11 @@ TEST(FrontierRetirementConfig, EvidenceReturnsBelowMinusOneAreRefusedByName) {
 }
 
 TEST(FrontierRetirement, AViewThatShrinksTheClusterIsNoFailure) {
-  FrontierRetirementConfig cfg;
-  cfg.max_failed_views = 2;
-  FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
-  const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.75);
-  auto voxels = patch(centre);
-  const CollisionQuery free_space = cylinder(2.0);
+  LevelCluster c(LevelCluster::failedViews(2));
+  auto& fr = c.fr;
+  auto& voxels = c.voxels;
+  const Eigen::Vector3d& centre = c.centre;
+  const CollisionQuery& free_space = c.free_space;
   fr.update(voxels, free_space);
   fr.recordViews({}, free_space, {centre});
   fr.update(voxels, free_space);  // failed view 1
@@ -214,13 +223,12 @@ TEST(FrontierRetirement, AViewThatShrinksTheClusterIsNoFailure) {
 // Judged against the view before, each 25 -> 20 dip would restart the run and
 // it would never be retired.
 TEST(FrontierRetirement, ACountThatNoiseMovesUpAndDownIsNotProgress) {
-  FrontierRetirementConfig cfg;
-  cfg.max_failed_views = 3;
-  FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
-  const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.75);
-  const auto full = patch(centre);
+  LevelCluster c(LevelCluster::failedViews(3));
+  auto& fr = c.fr;
+  const Eigen::Vector3d& centre = c.centre;
+  const CollisionQuery& free_space = c.free_space;
+  const auto& full = c.voxels;
   const std::vector<Eigen::Vector3d> dipped(full.begin(), full.begin() + 20);
-  const CollisionQuery free_space = cylinder(2.0);
   const std::vector<const std::vector<Eigen::Vector3d>*> counts = {&full, &dipped, &full, &dipped};
   std::size_t active = 0;
   for (std::size_t k = 0; k < counts.size(); ++k) {
@@ -234,18 +242,13 @@ TEST(FrontierRetirement, ACountThatNoiseMovesUpAndDownIsNotProgress) {
 }
 
 TEST(FrontierRetirement, ViewsThatWereNotFlownAreNotJudged) {
-  FrontierRetirementConfig cfg;
-  cfg.max_failed_views = 1;
-  FrontierRetirement fr(cfg, camera(), box(5.0, 3.0), kClearance, 0.04);
-  const Eigen::Vector3d centre(kAxis.x(), kAxis.y(), 1.75);
-  const auto voxels = patch(centre);
-  const CollisionQuery free_space = cylinder(2.0);
-  fr.update(voxels, free_space);
-  fr.recordViews({}, free_space, {centre});
-  fr.discardViews();  // the path was rejected
-  EXPECT_EQ(fr.update(voxels, free_space).retired_by_evidence, 0u);
-  fr.recordViews({}, free_space, {centre});
-  EXPECT_EQ(fr.update(voxels, free_space).retired_by_evidence, 1u);  // K = 1 flown view that did not shrink it
+  LevelCluster c(LevelCluster::failedViews(1));
+  c.fr.update(c.voxels, c.free_space);
+  c.fr.recordViews({}, c.free_space, {c.centre});
+  c.fr.discardViews();  // the path was rejected
+  EXPECT_EQ(c.fr.update(c.voxels, c.free_space).retired_by_evidence, 0u);
+  c.fr.recordViews({}, c.free_space, {c.centre});
+  EXPECT_EQ(c.fr.update(c.voxels, c.free_space).retired_by_evidence, 1u);  // K = 1 flown view that did not shrink it
 }
 
 TEST(FrontierRetirement, APoseCountsAsAViewOnlyInsideTheFieldOfViewAndRange) {
