@@ -166,6 +166,12 @@ TEST(Config, OtherBadValues) {
   EXPECT_NO_THROW(om.validate());
   om.foreground_prior_weight = 2.5;  // 0.5: one detection leaves it at 0.5, so no new object has a surface
   EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/foreground_prior_weight");
+  om = ObjectMapConfig();
+  om.mesh_min_weight = -1.0;
+  EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/mesh_min_weight");
+  om.mesh_min_weight = 4.0;
+  om.max_weight = 3.0;  // no voxel could ever reach the minimum: every mesh would stay empty
+  EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/mesh_min_weight");
   Bounds b;
   b.max_m.z() = b.min_m.z();
   EXPECT_EQ(rejected([&] { b.validate(); }), "bounds/max_m");

@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <random>
 #include <set>
 #include <unistd.h>
@@ -45,6 +46,41 @@ TEST(TsdfFixedPoint, QuantisationRoundTrips) {
   EXPECT_TRUE(std::isinf(TsdfVoxel().minDistance()));
   v.setMinDistance(1.2345f);
   EXPECT_NEAR(v.minDistance(), 1.2345f, 0.0005f);
+}
+
+// fuseSdf averages in the stored units: the same value as setSdf of the mean in metres to within one step
+// (the two round differently in the last bit), the same sign flag, the same clamping, and NaN stored as the
+// upper bound as setSdf stores it.
+TEST(TsdfFixedPoint, FusingInStoredUnitsMatchesTheMeanInMetres) {
+  const float trunc = 0.08f, to_q = 32767.f / trunc;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> sdf(-trunc, trunc), weight(0.f, 100.f), obs(1.f / 16.f, 1.f);
+  int flagged = 0;
+  for (int i = 0; i < 200000; ++i) {
+    TsdfVoxel a, b;
+    a.setSdf(sdf(rng), trunc);
+    b = a;
+    const float w = (i % 10 == 0) ? 0.f : weight(rng), w_obs = obs(rng), w_new = w + w_obs;
+    const float s = (i % 1000 == 1) ? trunc : sdf(rng);  // the clamped end now and then
+    const float mean_m = (a.sdf(trunc) * w + s * w_obs) / w_new;
+    b.setSdf(mean_m, trunc);
+    const bool negative = a.fuseSdf(s, w, w_obs, w_new, to_q);
+    ASSERT_LE(std::abs(a.sdf_q - b.sdf_q), 1) << "mean " << mean_m;
+    // The flag is the mean's sign; the two means can differ in sign only within rounding of 0.
+    if (std::abs(mean_m) > 1e-6f) {
+      ASSERT_EQ(negative, mean_m < 0.f) << "mean " << mean_m;
+    }
+    flagged += negative;
+  }
+  EXPECT_GT(flagged, 50000);
+  TsdfVoxel v;
+  v.setSdf(trunc, trunc);
+  v.fuseSdf(trunc, 10.f, 1.f, 11.f, to_q);
+  EXPECT_EQ(v.sdf_q, 32767);  // at the bound, not past it
+  v.fuseSdf(std::numeric_limits<float>::quiet_NaN(), 10.f, 1.f, 11.f, to_q);
+  TsdfVoxel u;
+  u.setSdf(std::numeric_limits<float>::quiet_NaN(), trunc);
+  EXPECT_EQ(v.sdf_q, u.sdf_q);
 }
 
 TEST(TsdfFixedPoint, MeshDiffersFromFloatLayoutByLessThanQuarterVoxel) {

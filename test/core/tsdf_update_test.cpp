@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include "semantic_exploration/core/object_map_config.hpp"
 #include "semantic_exploration/core/tsdf.hpp"
 #include "semexp_test/cameras.hpp"
 #include "semexp_test/object_scenes.hpp"
@@ -58,13 +59,12 @@ TEST(TsdfUpdate, UndetectedUpdatesGeometryButNotForeground) {
   EXPECT_FALSE(map.extractMesh().empty());
 }
 
-// revision() keys per-object caches (the object map node's summaries): it must change with every call that
-// can change a voxel, stay with the ones that read, and differ between maps.
 // object_map/mesh_min_weight on a wall seen 3 times from one pose, exact depth: each view adds weight 1 to
 // every voxel from the truncation in front of the wall to one voxel behind it (deeper voxels get less, falling
 // to 0 at behind_surface_m). The cubes the surface crosses reach slightly more than one voxel behind where
-// rays run oblique, so their voxels hold 3 or a little less: a minimum of 2.5 keeps the whole mesh, 3.5 leaves
-// nothing, and a fourth view brings it all back.
+// rays run oblique, so their voxels gain between 5/6 and 1 per view: after 3 views a minimum of 2.5 keeps the
+// whole mesh and 3.5 leaves nothing; a fourth view brings it back at 3.5, and the default, 4, meshes all of
+// it from the fifth view (5 x 5/6 > 4).
 TEST(TsdfUpdate, MeshLeavesOutCubesBelowTheMinimumWeight) {
   const WallAhead view;
   TsdfMap map(params());
@@ -77,8 +77,12 @@ TEST(TsdfUpdate, MeshLeavesOutCubesBelowTheMinimumWeight) {
   EXPECT_EQ(map.extractMesh().triangles.size(), all);
   EXPECT_EQ(map.extractMesh(3.5f).triangles.size(), all);
   EXPECT_TRUE(map.extractMesh(4.5f).empty());
+  view.into(map, 255, true);
+  EXPECT_EQ(map.extractMesh(static_cast<float>(ObjectMapConfig().mesh_min_weight)).triangles.size(), all);
 }
 
+// revision() keys per-object caches (the object map node's summaries): it must change with every call that
+// can change a voxel, stay with the ones that read, and differ between maps.
 TEST(TsdfUpdate, RevisionChangesWithEveryChangeAndDiffersBetweenMaps) {
   const WallAhead view;
   TsdfMap a(params()), b(params());

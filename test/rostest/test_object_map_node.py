@@ -303,7 +303,11 @@ class ObjectMapTest(unittest.TestCase):
             self.assertEqual(label.type, Marker.TEXT_VIEW_FACING)
             self.assertEqual(label.text, "chair #%d" % o.id)
             self.assertGreater(label.pose.position.z, o.bbox_max.z)
-            self.assertIn(("object_meshes", o.id), markers)
+            mesh = markers.get(("object_meshes", o.id))
+            self.assertIsNotNone(mesh, "no mesh marker for object %d (an empty mesh is deleted)" % o.id)
+            self.assertEqual(mesh.type, Marker.TRIANGLE_LIST)
+            self.assertGreater(len(mesh.points), 3 * 100, "object %d's mesh has %d triangles" %
+                               (o.id, len(mesh.points) // 3))
         self.assertFalse([k for k in markers if k[1] not in chairs], "markers of objects that do not exist")
 
         d = tempfile.mkdtemp(prefix="semexp_object_map_test_")
@@ -317,6 +321,11 @@ class ObjectMapTest(unittest.TestCase):
         self.assertTrue(all(o["undetected_count"] >= 0 and o["weight_sum"] > 0 for o in doc["objects"]))
         for p in res.files:
             self.assertTrue(os.path.getsize(p) > 0)
+            if p.endswith(".ply"):  # a mesh with vertices, not a header alone
+                with open(p, "rb") as f:
+                    header = f.read(512).split(b"end_header")[0].decode("ascii", "replace")
+                vertices = [int(line.split()[2]) for line in header.splitlines() if line.startswith("element vertex")]
+                self.assertTrue(vertices and vertices[0] > 100, "%s: %s vertices" % (p, vertices))
 
 
 if __name__ == "__main__":

@@ -119,11 +119,14 @@ struct ObjectMapConfig {
   /// dropMeshFragments); farther pieces are strays that bled masks or noise
   /// left (a few vertices a metre or more from the chair). The TSDF keeps them. m; 0 = off.
   double mesh_fragment_gap_m = 0.3;
-  /// Meshes (saved and published) leave out the marching cube of any voxel
-  /// with less weight than this (TsdfMapT::extractMesh): a zero crossing
-  /// that few observations support is where depth noise left a surface in
-  /// the air beside the object. The TSDF, the render for matching and the
-  /// observed share keep every voxel. Observations; 0 = every observed voxel.
+  /// Meshes (saved and published) leave out each marching cube one of whose
+  /// 8 voxels holds less weight than this (TsdfMapT::extractMesh): a zero
+  /// crossing that few observations support is where depth noise left a
+  /// surface in the air beside the object. A voxel gains up to 1 per view
+  /// (less just behind the surface where rays run oblique, and less beyond
+  /// full_weight_depth_m), so the default meshes a surface seen about five
+  /// times. The TSDF, the render for matching and the observed share keep
+  /// every voxel. Full-weight observations, <= max_weight; 0 = every observed voxel.
   double mesh_min_weight = 4.0;
 
   DepthEdgeParams depthEdgeParams() const {

@@ -167,18 +167,7 @@ FrontierRetirement::Split FrontierRetirement::update(const std::vector<Eigen::Ve
   }
   // Members of each cluster now.
   std::unordered_map<std::uint64_t, std::vector<std::size_t>> members;
-  // The map lists its frontier voxels block by block, so neighbours in the
-  // list mostly share a cube: look the cube up only when it changes.
-  std::uint64_t last_key = 0;
-  std::vector<std::size_t>* last = nullptr;
-  for (std::size_t i = 0; i < frontiers_W.size(); ++i) {
-    const std::uint64_t k = key(frontiers_W[i]);
-    if (last == nullptr || k != last_key) {
-      last = &members[k];  // references into an unordered_map stay valid as it grows
-      last_key = k;
-    }
-    last->push_back(i);
-  }
+  for (std::size_t i = 0; i < frontiers_W.size(); ++i) members[key(frontiers_W[i])].push_back(i);
   for (auto it = clusters_.begin(); it != clusters_.end();) {
     // A cluster without frontiers keeps its state only while retired by evidence.
     if (!members.count(it->first) && !it->second.by_evidence) {
