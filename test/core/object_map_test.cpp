@@ -451,8 +451,8 @@ TEST(ObjectMap, FloorDivRoundsTowardsMinusInfinity) {
 
 TEST(ObjectMap, SaveWritesMeshesAndIndex) {
   PinholeCamera cam;
-  // Ten views of each sphere see each surface voxel three or four times: under the default
-  // mesh_min_weight (4 observations) little of it is meshed, with 0 all of it.
+  // Ten views of each sphere see each surface voxel three or four times: with mesh_min_weight 4 little
+  // of it is meshed, with 0 all of it.
   ObjectMapConfig every_voxel = config();
   every_voxel.mesh_min_weight = 0.0;
   const ObjectMap map = twoObjects(cam, every_voxel);
@@ -465,7 +465,9 @@ TEST(ObjectMap, SaveWritesMeshesAndIndex) {
   ASSERT_TRUE(readPly(files[0], m));
   EXPECT_GT(m.triangles.size(), 100u);
   // The saved mesh is the one the map gives (and publishes), under the configured minimum weight.
-  const ObjectMap sparse = twoObjects(cam);
+  ObjectMapConfig four = config();
+  four.mesh_min_weight = 4.0;
+  const ObjectMap sparse = twoObjects(cam, four);
   const auto sparse_files = sparse.save((dir / "sparse").string(), 1.0, &error);
   ASSERT_EQ(sparse_files.size(), 3u);
   Mesh s;

@@ -63,8 +63,8 @@ TEST(TsdfUpdate, UndetectedUpdatesGeometryButNotForeground) {
 // every voxel from the truncation in front of the wall to one voxel behind it (deeper voxels get less, falling
 // to 0 at behind_surface_m). The cubes the surface crosses reach slightly more than one voxel behind where
 // rays run oblique, so their voxels gain between 5/6 and 1 per view: after 3 views a minimum of 2.5 keeps the
-// whole mesh and 3.5 leaves nothing; a fourth view brings it back at 3.5, and the default, 4, meshes all of
-// it from the fifth view (5 x 5/6 > 4).
+// whole mesh (so does the default, 2) and 3.5 leaves nothing; a fourth view brings it back at 3.5, and 4
+// meshes all of it from the fifth view (5 x 5/6 > 4).
 TEST(TsdfUpdate, MeshLeavesOutCubesBelowTheMinimumWeight) {
   const WallAhead view;
   TsdfMap map(params());
@@ -72,13 +72,14 @@ TEST(TsdfUpdate, MeshLeavesOutCubesBelowTheMinimumWeight) {
   const std::size_t all = map.extractMesh().triangles.size();
   ASSERT_GT(all, 20u);
   EXPECT_EQ(map.extractMesh(2.5f).triangles.size(), all);
+  EXPECT_EQ(map.extractMesh(static_cast<float>(ObjectMapConfig().mesh_min_weight)).triangles.size(), all);
   EXPECT_TRUE(map.extractMesh(3.5f).empty());
   view.into(map, 255, true);
   EXPECT_EQ(map.extractMesh().triangles.size(), all);
   EXPECT_EQ(map.extractMesh(3.5f).triangles.size(), all);
   EXPECT_TRUE(map.extractMesh(4.5f).empty());
   view.into(map, 255, true);
-  EXPECT_EQ(map.extractMesh(static_cast<float>(ObjectMapConfig().mesh_min_weight)).triangles.size(), all);
+  EXPECT_EQ(map.extractMesh(4.f).triangles.size(), all);
 }
 
 // revision() keys per-object caches (the object map node's summaries): it must change with every call that
