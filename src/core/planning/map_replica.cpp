@@ -122,6 +122,12 @@ MapReplica::State MapReplica::state(const Eigen::Vector3d& p) const {
   return map_blocks::stateOf(x, free_below_);
 }
 
+bool MapReplica::voxelWithin(const Eigen::Vector3d& p, const Eigen::Vector3i& v, double r2) const {
+  const Eigen::Vector3d c = origin_W_ + (v.cast<double>().array() + 0.5).matrix() * resolution_m_;
+  const Eigen::Vector3d d = ((p - c).cwiseAbs().array() - 0.5 * resolution_m_).cwiseMax(0.0);
+  return d.squaredNorm() <= r2;
+}
+
 bool MapReplica::sphereCheck(const Eigen::Vector3d& p, double r, bool allow_unknown) const {
   if (blocks_.empty() || !p.allFinite()) return allow_unknown;
   const double res = resolution_m_;
@@ -130,7 +136,7 @@ bool MapReplica::sphereCheck(const Eigen::Vector3d& p, double r, bool allow_unkn
   const int bs = block_size_;
   const Eigen::Vector3i blo(floorDiv(lo.x(), bs), floorDiv(lo.y(), bs), floorDiv(lo.z(), bs));
   const Eigen::Vector3i bhi(floorDiv(hi.x(), bs), floorDiv(hi.y(), bs), floorDiv(hi.z(), bs));
-  const double h = 0.5 * res, r2 = r * r;
+  const double r2 = r * r;
   for (int bz = blo.z(); bz <= bhi.z(); ++bz)
     for (int by = blo.y(); by <= bhi.y(); ++by)
       for (int bx = blo.x(); bx <= bhi.x(); ++bx) {
@@ -149,11 +155,7 @@ bool MapReplica::sphereCheck(const Eigen::Vector3d& p, double r, bool allow_unkn
             for (int x = from.x(); x <= to.x(); ++x) {
               const std::int8_t v = blk.at((static_cast<std::size_t>(z) * bs + y) * bs + x);
               const bool bad = v == kUnknownValue ? !allow_unknown : v >= free_below_;
-              if (!bad) continue;
-              const Eigen::Vector3d c =
-                  origin_W_ + ((base + Eigen::Vector3i(x, y, z)).cast<double>().array() + 0.5).matrix() * res;
-              const Eigen::Vector3d d = ((p - c).cwiseAbs().array() - h).cwiseMax(0.0);
-              if (d.squaredNorm() <= r2) return false;
+              if (bad && voxelWithin(p, base + Eigen::Vector3i(x, y, z), r2)) return false;
             }
       }
   return true;
@@ -163,7 +165,7 @@ bool MapReplica::lineNotOccupied(const Eigen::Vector3d& from, const Eigen::Vecto
                                  double step_m) const {
   if (!(step_m > 0.0)) throw std::invalid_argument("MapReplica::lineNotOccupied: step_m must be > 0");
   if (blocks_.empty()) return true;
-  const double res = resolution_m_, h = 0.5 * res;
+  const double res = resolution_m_;
   const int bs = block_size_;
   bool cached = false;
   Eigen::Vector3i cached_b(0, 0, 0);
@@ -184,11 +186,8 @@ bool MapReplica::lineNotOccupied(const Eigen::Vector3d& from, const Eigen::Vecto
     const Eigen::Vector3i base = b * bs;
     const Eigen::Vector3i l = v - base;
     const std::int8_t x = blk->at((static_cast<std::size_t>(l.z()) * bs + l.y()) * bs + l.x());
-    if (x == kUnknownValue || x < free_below_) continue;
     // sphereCheck's distance test at radius 0, for a point on the voxel's border after rounding.
-    const Eigen::Vector3d c = origin_W_ + (v.cast<double>().array() + 0.5).matrix() * res;
-    const Eigen::Vector3d d = ((p - c).cwiseAbs().array() - h).cwiseMax(0.0);
-    if (d.squaredNorm() <= 0.0) return false;
+    if (x != kUnknownValue && x >= free_below_ && voxelWithin(p, v, 0.0)) return false;
   }
   return true;
 }

@@ -76,6 +76,8 @@ class MapReplica {
   static std::uint64_t key(const Eigen::Vector3i& b);
   static Eigen::Vector3i blockOf(std::uint64_t key);  ///< the inverse of key()
   bool sphereCheck(const Eigen::Vector3d& p, double r, bool allow_unknown) const;
+  /// The voxel of global index v comes within sqrt(r2) of p (m^2; 0: p lies in it, borders included).
+  bool voxelWithin(const Eigen::Vector3d& p, const Eigen::Vector3i& v, double r2) const;
 
   int free_below_;
   std::uint64_t sequence_ = 0;
