@@ -1,7 +1,6 @@
 #include "semantic_exploration/core/tsdf.hpp"
 
 #include <climits>
-#include <type_traits>
 #include <stdexcept>
 
 namespace semexp {
@@ -185,13 +184,7 @@ std::size_t TsdfMapT<V>::integrate(const PinholeCamera& camera, const Eigen::Iso
             if (w_obs <= 0.f) continue;
             const float w_new = w + w_obs;
             const float s = std::min(sdf, trunc);
-            if constexpr (std::is_same_v<V, TsdfVoxel>) {
-              if (vx.fuseSdf(s, w, w_obs, w_new, to_q)) block.has_negative = true;
-            } else {
-              const float sdf_new = (vx.sdf(trunc) * w + s * w_obs) / w_new;
-              vx.setSdf(sdf_new, trunc);
-              if (sdf_new < 0.f) block.has_negative = true;
-            }
+            if (vx.fuseSdf(s, w, w_obs, w_new, trunc, to_q)) block.has_negative = true;
             vx.setWeight(std::min(w_new, max_w));
             if (std::abs(sdf) < trunc) {
               if (use_rgb) {

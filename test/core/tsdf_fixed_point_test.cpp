@@ -64,7 +64,7 @@ TEST(TsdfFixedPoint, FusingInStoredUnitsMatchesTheMeanInMetres) {
     const float s = (i % 1000 == 1) ? trunc : sdf(rng);  // the clamped end now and then
     const float mean_m = (a.sdf(trunc) * w + s * w_obs) / w_new;
     b.setSdf(mean_m, trunc);
-    const bool negative = a.fuseSdf(s, w, w_obs, w_new, to_q);
+    const bool negative = a.fuseSdf(s, w, w_obs, w_new, trunc, to_q);
     ASSERT_LE(std::abs(a.sdf_q - b.sdf_q), 1) << "mean " << mean_m;
     // The flag is the mean's sign; the two means can differ in sign only within rounding of 0.
     if (std::abs(mean_m) > 1e-6f) {
@@ -75,9 +75,9 @@ TEST(TsdfFixedPoint, FusingInStoredUnitsMatchesTheMeanInMetres) {
   EXPECT_GT(flagged, 50000);
   TsdfVoxel v;
   v.setSdf(trunc, trunc);
-  v.fuseSdf(trunc, 10.f, 1.f, 11.f, to_q);
+  v.fuseSdf(trunc, 10.f, 1.f, 11.f, trunc, to_q);
   EXPECT_EQ(v.sdf_q, 32767);  // at the bound, not past it
-  v.fuseSdf(std::numeric_limits<float>::quiet_NaN(), 10.f, 1.f, 11.f, to_q);
+  v.fuseSdf(std::numeric_limits<float>::quiet_NaN(), 10.f, 1.f, 11.f, trunc, to_q);
   TsdfVoxel u;
   u.setSdf(std::numeric_limits<float>::quiet_NaN(), trunc);
   EXPECT_EQ(v.sdf_q, u.sdf_q);

@@ -84,7 +84,7 @@ struct TsdfVoxel {
   /// stored. Works on the quantised value (to_q = 32767 / truncation_m), so
   /// that the update needs no conversion to metres and back; returns whether
   /// the mean is negative.
-  bool fuseSdf(float s_m, float w, float w_obs, float w_new, float to_q) {
+  bool fuseSdf(float s_m, float w, float w_obs, float w_new, float /*truncation_m*/, float to_q) {
     const float q = (static_cast<float>(sdf_q) * w + s_m * to_q * w_obs) / w_new;
     sdf_q = static_cast<std::int16_t>(tsdf_fixed::roundToInt(std::max(-32767.f, std::min(32767.f, q))));
     return q < 0.f;
@@ -126,6 +126,12 @@ struct TsdfVoxelFloat {
 
   float sdf(float) const { return sdf_m; }
   void setSdf(float sdf, float truncation_m) { sdf_m = std::max(-truncation_m, std::min(truncation_m, sdf)); }
+  /// TsdfVoxel::fuseSdf in metres.
+  bool fuseSdf(float s_m, float w, float w_obs, float w_new, float truncation_m, float /*to_q*/) {
+    const float sdf = (sdf_m * w + s_m * w_obs) / w_new;
+    setSdf(sdf, truncation_m);
+    return sdf < 0.f;
+  }
   float weight() const { return weight_f; }
   void setWeight(float w) { weight_f = w; }
   float foreground() const { return foreground_p; }
