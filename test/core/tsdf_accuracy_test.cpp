@@ -165,7 +165,7 @@ TEST(TsdfAccuracy, ABandOfThreeSigmaOfTheSensorsNoiseKeepsTheMeshOnTheSurface) {
 // noise (sigma = max(0.5 cm, 0.002 d^2)) and with it doubled (3.6 cm at 3 m, about the parts' thickness).
 // Noisy rays leave zero crossings in the air beside the thin parts that only a few observations support
 // (measured: 3.8% and 11.6% of the mesh's vertices over 2 cm from the chair, 0.99 and 1.83 cm RMSE).
-// object_map/mesh_min_weight's default, 2, is the least weight that leaves under 1% there with the
+// An object_map/mesh_min_weight of 2 is the least weight that leaves under 1% there with the
 // simulator's noise (0.9%, 0.49 cm, 6% fewer vertices); with the noise doubled it leaves 3.1%, and 4 is
 // needed (0.5%, 0.53 cm, 16% fewer vertices).
 TEST(TsdfAccuracy, AMinimumWeightKeepsNoisyZeroCrossingsOutOfTheMesh) {
@@ -207,7 +207,7 @@ TEST(TsdfAccuracy, AMinimumWeightKeepsNoisyZeroCrossingsOutOfTheMesh) {
     EXPECT_LT(matched.off_share, 0.01) << "noise x" << noise_factor;   // ... and the minimum weight drops it
     EXPECT_LT(matched.rmse_m, 0.6 * m[0].rmse_m) << "noise x" << noise_factor;
     EXPECT_GT(matched.vertices, 0.75 * m[0].vertices) << "noise x" << noise_factor;  // the chair stays
-    // What the default's 2 leaves with the noise doubled: more than 1% strays.
+    // What 2 leaves with the noise doubled: more than 1% strays.
     if (noise_factor == 2.0) {
       EXPECT_GT(m[1].off_share, 0.01);
     }

@@ -3,7 +3,6 @@
 
 #include <gtest/gtest.h>
 
-#include "semantic_exploration/core/object_map_config.hpp"
 #include "semantic_exploration/core/tsdf.hpp"
 #include "semexp_test/cameras.hpp"
 #include "semexp_test/object_scenes.hpp"
@@ -63,7 +62,7 @@ TEST(TsdfUpdate, UndetectedUpdatesGeometryButNotForeground) {
 // every voxel from the truncation in front of the wall to one voxel behind it (deeper voxels get less, falling
 // to 0 at behind_surface_m). The cubes the surface crosses reach slightly more than one voxel behind where
 // rays run oblique, so their voxels gain between 5/6 and 1 per view: after 3 views a minimum of 2.5 keeps the
-// whole mesh (so does the default, 2) and 3.5 leaves nothing; a fourth view brings it back at 3.5, and 4
+// whole mesh (so does 2) and 3.5 leaves nothing; a fourth view brings it back at 3.5, and 4
 // meshes all of it from the fifth view (5 x 5/6 > 4).
 TEST(TsdfUpdate, MeshLeavesOutCubesBelowTheMinimumWeight) {
   const WallAhead view;
@@ -72,7 +71,7 @@ TEST(TsdfUpdate, MeshLeavesOutCubesBelowTheMinimumWeight) {
   const std::size_t all = map.extractMesh().triangles.size();
   ASSERT_GT(all, 20u);
   EXPECT_EQ(map.extractMesh(2.5f).triangles.size(), all);
-  EXPECT_EQ(map.extractMesh(static_cast<float>(ObjectMapConfig().mesh_min_weight)).triangles.size(), all);
+  EXPECT_EQ(map.extractMesh(2.f).triangles.size(), all);
   EXPECT_TRUE(map.extractMesh(3.5f).empty());
   view.into(map, 255, true);
   EXPECT_EQ(map.extractMesh().triangles.size(), all);
