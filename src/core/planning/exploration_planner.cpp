@@ -1,4 +1,5 @@
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
+#include "semantic_exploration/core/planning/room_search.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -270,62 +271,107 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   };
   const std::size_t batch = lazy ? static_cast<std::size_t>(paths.threads()) : std::max<std::size_t>(1, n);
   std::vector<ViewGains> end_gains(n);  // for paths that end away from their view position
-  int best = -1;
-  for (std::size_t k = 0; k < order.size();) {
-    if (lazy && best >= 0 && !beats(order[k], r.candidates[order[k]].utility_bound, static_cast<std::size_t>(best)))
-      break;
-    const std::vector<std::size_t> ids(order.begin() + static_cast<std::ptrdiff_t>(k),
-                                       order.begin() + static_cast<std::ptrdiff_t>(std::min(order.size(), k + batch)));
-    k += ids.size();
-    t0 = Clock::now();
-    std::vector<ResolvedGoal> batch_goals;
-    std::vector<std::uint32_t> seeds;
-    for (std::size_t i : ids) {
-      batch_goals.push_back(goals[i]);
-      seeds.push_back(pathSeed(planner_.seed, iteration, i));
+  constexpr int kProviderFailed = -2;  // planPaths: a gain provider failed (reported in r)
+  const auto planPaths = [&](const PlanningStart& start) -> int {
+    for (EvaluatedCandidate& c : r.candidates) {  // a second pass starts afresh
+      if (!c.planned) continue;
+      c.plan = PlannedPath();
+      c.planned = c.reachable = false;
+      c.path_time_s = c.utility = 0.0;
     }
-    std::vector<PlannedPath> planned = paths.planAll(from, batch_goals, seeds);
-    r.path_planning_s += secondsSince(t0);
-    std::vector<std::size_t> moved;
-    std::vector<Eigen::Vector3d> ends;
-    for (std::size_t j = 0; j < ids.size(); ++j) {
-      EvaluatedCandidate& c = r.candidates[ids[j]];
-      c.plan = std::move(planned[j]);
-      c.planned = true;
-      c.reachable = c.plan.ok();
-      ++r.candidates_planned;
-      r.candidates_reachable += c.reachable ? 1 : 0;
-      if (c.reachable && c.plan.path_W.back() != views[ids[j]]) {
-        // Approximate: the view is taken where the path ends.
-        moved.push_back(ids[j]);
-        ends.push_back(c.plan.path_W.back());
+    for (std::size_t i = 0; i < n; ++i)
+      if (r.candidates[i].position_W != views[i]) {
+        r.candidates[i].position_W = views[i];
+        setGains(r.candidates[i], view_gains[i]);
       }
-    }
-    if (!moved.empty()) {
+    r.candidates_planned = r.candidates_reachable = 0;
+    int best = -1;
+    for (std::size_t k = 0; k < order.size();) {
+      if (lazy && best >= 0 && !beats(order[k], r.candidates[order[k]].utility_bound, static_cast<std::size_t>(best)))
+        break;
+      const std::vector<std::size_t> ids(order.begin() + static_cast<std::ptrdiff_t>(k),
+                                         order.begin() + static_cast<std::ptrdiff_t>(std::min(order.size(), k + batch)));
+      k += ids.size();
       t0 = Clock::now();
-      std::vector<ViewGains> g;
-      const bool ok = evaluateViews(ends, prov, planner_, window_columns_, g, r);
-      r.gains_s += secondsSince(t0);
-      if (!ok) return finish();
-      for (std::size_t j = 0; j < moved.size(); ++j) {
-        end_gains[moved[j]] = std::move(g[j]);
-        r.candidates[moved[j]].position_W = ends[j];
-        setGains(r.candidates[moved[j]], end_gains[moved[j]]);
+      std::vector<ResolvedGoal> batch_goals;
+      std::vector<std::uint32_t> seeds;
+      for (std::size_t i : ids) {
+        batch_goals.push_back(goals[i]);
+        seeds.push_back(pathSeed(planner_.seed, iteration, i));
+      }
+      std::vector<PlannedPath> planned = paths.planAll(start, batch_goals, seeds);
+      r.path_planning_s += secondsSince(t0);
+      std::vector<std::size_t> moved;
+      std::vector<Eigen::Vector3d> ends;
+      for (std::size_t j = 0; j < ids.size(); ++j) {
+        EvaluatedCandidate& c = r.candidates[ids[j]];
+        c.plan = std::move(planned[j]);
+        c.planned = true;
+        c.reachable = c.plan.ok();
+        ++r.candidates_planned;
+        r.candidates_reachable += c.reachable ? 1 : 0;
+        if (c.reachable && c.plan.path_W.back() != views[ids[j]]) {
+          // Approximate: the view is taken where the path ends.
+          moved.push_back(ids[j]);
+          ends.push_back(c.plan.path_W.back());
+        }
+      }
+      if (!moved.empty()) {
+        t0 = Clock::now();
+        std::vector<ViewGains> g;
+        const bool ok = evaluateViews(ends, prov, planner_, window_columns_, g, r);
+        r.gains_s += secondsSince(t0);
+        if (!ok) return kProviderFailed;
+        for (std::size_t j = 0; j < moved.size(); ++j) {
+          end_gains[moved[j]] = std::move(g[j]);
+          r.candidates[moved[j]].position_W = ends[j];
+          setGains(r.candidates[moved[j]], end_gains[moved[j]]);
+        }
+      }
+      for (std::size_t i : ids) {
+        EvaluatedCandidate& c = r.candidates[i];
+        if (!c.reachable) continue;
+        c.path_time_s = pathTime_s(c.plan.path_W, in.yaw_rad, c.yaw_rad, planner_.v_max_mps, planner_.omega_max_radps);
+        // Capped at the bound: equal to the uncapped value whenever the path
+        // reaches its view (up to rounding); an approximate path is never
+        // worth more than reaching its view could have been.
+        c.utility = std::min(utility(c.gain, c.path_time_s, planner_.min_path_time_s), c.utility_bound);
+        if (c.utility > 0 && (best < 0 || beats(i, c.utility, static_cast<std::size_t>(best))))
+          best = static_cast<int>(i);
       }
     }
-    for (std::size_t i : ids) {
-      EvaluatedCandidate& c = r.candidates[i];
-      if (!c.reachable) continue;
-      c.path_time_s = pathTime_s(c.plan.path_W, in.yaw_rad, c.yaw_rad, planner_.v_max_mps, planner_.omega_max_radps);
-      // Capped at the bound: equal to the uncapped value whenever the path
-      // reaches its view (up to rounding); an approximate path is never
-      // worth more than reaching its view could have been.
-      c.utility = std::min(utility(c.gain, c.path_time_s, planner_.min_path_time_s), c.utility_bound);
-      if (c.utility > 0 && (best < 0 || beats(i, c.utility, static_cast<std::size_t>(best))))
-        best = static_cast<int>(i);
+    return best;
+  };
+  r.winner = planPaths(from);
+  // A cramped start whose best path (if any) does not reach its goal: perhaps
+  // a pocket whose way out RRT* does not sample (room_search.hpp). Plan again
+  // from the nearest point with room. Decided on the winner, which lazy and
+  // exhaustive planning share, not on the candidates each mode planned.
+  RoomSearchSettings room;
+  room.room_radius_m = 2.0 * planner_.clearance_radius_m();
+  room.step_m = 2.0 * map_resolution_m_;
+  const auto reached = [](const EvaluatedCandidate& c) {
+    return c.plan.status == PlannedPath::Status::kExact || c.plan.status == PlannedPath::Status::kStraight;
+  };
+  if (r.winner != kProviderFailed && r.candidates_planned > 0 && !from.escaped &&
+      (r.winner < 0 || !reached(r.candidates[static_cast<std::size_t>(r.winner)])) &&
+      !prov.is_free(from.from_W, room.room_radius_m)) {
+    t0 = Clock::now();
+    const std::vector<Eigen::Vector3d> route = findRoom(paths, prov.is_free, from.from_W, room);
+    r.path_planning_s += secondsSince(t0);
+    if (!route.empty()) {
+      r.message += fmt("no winning path reached its goal from (%.2f, %.2f, %.2f), which has no room; ", from.from_W.x(),
+                       from.from_W.y(), from.from_W.z()) +
+                   fmt("planned again from (%.2f, %.2f, %.2f), ", route.back().x(), route.back().y(), route.back().z()) +
+                   fmt("the nearest point with room, %.2f m along a way out of %.0f segments; ", pathLength_m(route),
+                       static_cast<double>(route.size() - 1));
+      r.winner = planPaths(startAfterRoute(route));
     }
   }
-  r.winner = best;
+  if (r.winner == kProviderFailed) {
+    r.winner = -1;
+    return finish();
+  }
 
   // 5. The winner.
   if (r.winner < 0) {

@@ -161,6 +161,7 @@ PlanningStart PathPlanner::planningStart(const Eigen::Vector3d& start) const {
     if (!bounds_.contains(q) || !not_occupied_(q, 0.5 * config_.mav_radius_m)) return out;
   }
   out.from_W = esc;
+  out.lead_W = {start};
   out.escaped = out.ok = true;
   return out;
 }
@@ -221,17 +222,19 @@ PlannedPath PathPlanner::plan(const PlanningStart& from, const ResolvedGoal& goa
   if (!from.ok) {
     out.status = PlannedPath::Status::kStartInvalid;
     out.distance_to_goal_m = (goal.requested_W - from.start_W).norm();
-  } else if (!from.escaped) {
-    out = planFromValidStart(from.from_W, goal, seed);
   } else {
     out = planFromValidStart(from.from_W, goal, seed);
-    out.escaped = true;
-    if (out.ok())
-      out.path_W.insert(out.path_W.begin(), from.start_W);
-    else
-      out.path_W = {from.start_W, from.from_W};  // at least get out of the invalid spot
-    if (out.status == PlannedPath::Status::kFailed) out.status = PlannedPath::Status::kApproximate;
-    out.distance_to_goal_m = (goal.requested_W - out.path_W.back()).norm();
+    if (!from.lead_W.empty()) {
+      out.escaped = from.escaped;
+      if (out.ok()) {
+        out.path_W.insert(out.path_W.begin(), from.lead_W.begin(), from.lead_W.end());
+      } else {
+        out.path_W = from.lead_W;  // at least get out of the invalid spot or the pocket
+        out.path_W.push_back(from.from_W);
+      }
+      if (out.status == PlannedPath::Status::kFailed) out.status = PlannedPath::Status::kApproximate;
+      out.distance_to_goal_m = (goal.requested_W - out.path_W.back()).norm();
+    }
   }
   out.time_s = secondsSince(t0);
   return out;

@@ -35,12 +35,16 @@ struct PlannedPath {
   static const char* name(Status s);
 };
 
-/// Where planning starts from: the MAV's position, or an escape point next
-/// to it when its own sphere is not free (see PathPlanner).
+/// Where planning starts from: the MAV's position, an escape point next to
+/// it when its own sphere is not free (see PathPlanner), or the end of a way
+/// out of a pocket (room_search.hpp).
 struct PlanningStart {
   Eigen::Vector3d start_W = Eigen::Vector3d::Zero();  ///< the MAV's position, m
   Eigen::Vector3d from_W = Eigen::Vector3d::Zero();   ///< where the planner starts: start_W or the escape point, m
-  bool escaped = false;                               ///< from_W is an escape point
+  /// Vertices every path flies before from_W, start_W first (empty when
+  /// from_W = start_W): {start_W} for an escape, more for a way out of a pocket.
+  std::vector<Eigen::Vector3d> lead_W;
+  bool escaped = false;                               ///< from_W is an escape point from an invalid start
   bool ok = false;                                    ///< false: start invalid and no escape
 };
 

@@ -1,0 +1,79 @@
+#include "semantic_exploration/core/planning/room_search.hpp"
+
+#include <array>
+#include <cmath>
+#include <deque>
+#include <unordered_map>
+
+namespace semexp {
+
+namespace {
+
+std::uint64_t latticeKey(const Eigen::Vector3i& k) {
+  const auto c = [](int v) { return static_cast<std::uint64_t>(v + (1 << 20)) & 0x1FFFFF; };
+  return c(k.x()) | (c(k.y()) << 21) | (c(k.z()) << 42);
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> findRoom(const PathPlanner& paths, const CollisionQuery& is_free,
+                                      const Eigen::Vector3d& start_W, const RoomSearchSettings& s) {
+  if (!is_free || !(s.step_m > 0) || !paths.valid(start_W) || is_free(start_W, s.room_radius_m)) return {};
+  const int reach = static_cast<int>(std::floor(s.search_radius_m / s.step_m));
+  const auto at = [&](const Eigen::Vector3i& k) -> Eigen::Vector3d { return start_W + s.step_m * k.cast<double>(); };
+  // parent of each visited lattice point (the start is its own parent)
+  std::unordered_map<std::uint64_t, Eigen::Vector3i> parent;
+  std::deque<Eigen::Vector3i> queue{Eigen::Vector3i::Zero()};
+  parent.emplace(latticeKey(Eigen::Vector3i::Zero()), Eigen::Vector3i::Zero());
+  bool found = false;
+  Eigen::Vector3i room = Eigen::Vector3i::Zero();
+  while (!queue.empty() && !found) {
+    const Eigen::Vector3i k = queue.front();
+    queue.pop_front();
+    for (int dz = -1; dz <= 1 && !found; ++dz)
+      for (int dy = -1; dy <= 1 && !found; ++dy)
+        for (int dx = -1; dx <= 1 && !found; ++dx) {
+          const Eigen::Vector3i n = k + Eigen::Vector3i(dx, dy, dz);
+          if (n == k || n.squaredNorm() > reach * reach || parent.size() >= s.max_points) continue;
+          if (!parent.emplace(latticeKey(n), k).second) continue;  // entered already
+          if (!paths.segmentValid(at(k), at(n))) {
+            parent.erase(latticeKey(n));  // not from here; perhaps from another neighbour
+            continue;
+          }
+          if (is_free(at(n), s.room_radius_m)) {
+            found = true;
+            room = n;
+          } else {
+            queue.push_back(n);
+          }
+        }
+  }
+  if (!found) return {};
+  std::vector<Eigen::Vector3d> chain;
+  for (Eigen::Vector3i k = room;; k = parent.at(latticeKey(k))) {
+    chain.push_back(at(k));
+    if (k == Eigen::Vector3i::Zero()) break;
+  }
+  chain.back() = start_W;  // exactly
+  std::vector<Eigen::Vector3d> route{start_W};
+  // Greedy shortcut, from the start: the farthest chain point a valid segment reaches.
+  for (std::size_t i = chain.size() - 1; i > 0;) {
+    std::size_t j = 0;
+    while (j + 1 < i && !paths.segmentValid(chain[i], chain[j])) ++j;
+    route.push_back(chain[j]);
+    i = j;
+  }
+  return route;
+}
+
+PlanningStart startAfterRoute(const std::vector<Eigen::Vector3d>& route_W) {
+  PlanningStart out;
+  if (route_W.empty()) return out;
+  out.start_W = route_W.front();
+  out.from_W = route_W.back();
+  out.lead_W.assign(route_W.begin(), route_W.end() - 1);
+  out.ok = true;
+  return out;
+}
+
+}  // namespace semexp
