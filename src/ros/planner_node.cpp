@@ -306,6 +306,7 @@ bool PlannerNode::iterate(std::string& message, const ros::Time& stamp, const ro
     }
   }
   if (!r.object_retirement_events.empty()) ROS_INFO("planner: iteration %u: %s", iteration_, r.object_retirement_events.c_str());
+  if (!r.way_out.empty()) ROS_INFO("planner: iteration %u: %s", iteration_, r.way_out.c_str());
   const bool published = r.winner >= 0;
   if (published) publishWinner(r, now);
   publishResult(r, now, in.yaw_rad);

@@ -360,11 +360,12 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
     const std::vector<Eigen::Vector3d> route = findRoom(paths, prov.is_free, from.from_W, room);
     r.path_planning_s += secondsSince(t0);
     if (!route.empty()) {
-      r.message += fmt("no winning path reached its goal from (%.2f, %.2f, %.2f), which has no room; ", from.from_W.x(),
-                       from.from_W.y(), from.from_W.z()) +
-                   fmt("planned again from (%.2f, %.2f, %.2f), ", route.back().x(), route.back().y(), route.back().z()) +
-                   fmt("the nearest point with room, %.2f m along a way out of %.0f segments; ", pathLength_m(route),
-                       static_cast<double>(route.size() - 1));
+      r.way_out = fmt("no winning path reached its goal from (%.2f, %.2f, %.2f), which has no room; ", from.from_W.x(),
+                      from.from_W.y(), from.from_W.z()) +
+                  fmt("planned again from (%.2f, %.2f, %.2f), ", route.back().x(), route.back().y(), route.back().z()) +
+                  fmt("the nearest point with room, %.2f m along a way out of %.0f segments; ", pathLength_m(route),
+                      static_cast<double>(route.size() - 1));
+      r.message += r.way_out;
       r.winner = planPaths(startAfterRoute(route));
     }
   }

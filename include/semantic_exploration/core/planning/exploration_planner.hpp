@@ -97,6 +97,8 @@ struct IterationResult {
   /// Objects retired by evidence (object_retirement.hpp): not sampled, not holding "explored".
   std::vector<std::uint32_t> retired_object_ids;
   std::string object_retirement_events;  ///< objects retired or back this iteration, for the log ("" if none)
+  /// The way out of a pocket this iteration planned from, for the log ("" if none; room_search.hpp).
+  std::string way_out;
   double sampling_s = 0.0, path_planning_s = 0.0, gains_s = 0.0, yaw_s = 0.0, total_s = 0.0;  ///< wall times
   /// Wall time of frontier retirement: judging this iteration's frontiers and recording the winner's views, s.
   double retirement_s = 0.0;
