@@ -112,6 +112,7 @@ TEST_F(RoomSearchTest, AnIterationStuckInThePocketLeavesThroughThePassage) {
   EXPECT_NE(r.message.find("no winning path reached its goal from (4.60, 1.00, 0.35), which has no room; planned again from ("),
             std::string::npos)
       << r.message;
+  EXPECT_EQ(r.way_out.rfind("no winning path reached its goal from (4.60, 1.00, 0.35)", 0), 0u) << r.way_out;
   EXPECT_TRUE(r.path_W.front() == start);
   EXPECT_GT(r.path_W.back().z(), 1.0);
   EXPECT_TRUE(paths().pathValid(r.path_W));
