@@ -271,6 +271,7 @@ semexp::PlannerConfig loadPlanner(const ParamReader& p) {
   p.get(n + "ompl_termination", c.ompl_termination);
   p.get(n + "ompl_iterations", c.ompl_iterations);
   p.get(n + "lazy_planning", c.lazy_planning);
+  p.get(n + "room_search_radius_m", c.room_search_radius_m);
   int seed = static_cast<int>(c.seed);
   p.get(n + "seed", seed);
   if (seed < 0) throw ConfigError(n + "seed", "must be >= 0");

@@ -2,6 +2,8 @@
 // naming the parameter.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "semantic_exploration/core/background_map_config.hpp"
 #include "semantic_exploration/core/bounds.hpp"
 #include "semantic_exploration/core/camera.hpp"
@@ -65,6 +67,16 @@ TEST(Config, WeightsMustSumToOne) {
   EXPECT_EQ(rejected([&] { pl.validate(); }), "planner/a_ent");
   pl.a_ent = 1.0;
   pl.a_bg = pl.a_obj = 0.0;  // classic mode
+  EXPECT_EQ(rejected([&] { pl.validate(); }), "");
+}
+
+TEST(Config, RoomSearchRadiusIsBounded) {
+  PlannerConfig pl;
+  for (double r : {-0.1, 5.5, std::numeric_limits<double>::quiet_NaN()}) {
+    pl.room_search_radius_m = r;
+    EXPECT_EQ(rejected([&] { pl.validate(); }), "planner/room_search_radius_m") << r;
+  }
+  pl.room_search_radius_m = 0.0;  // off
   EXPECT_EQ(rejected([&] { pl.validate(); }), "");
 }
 

@@ -116,6 +116,12 @@ TEST_F(RoomSearchTest, AnIterationStuckInThePocketLeavesThroughThePassage) {
   EXPECT_TRUE(r.path_W.front() == start);
   EXPECT_GT(r.path_W.back().z(), 1.0);
   EXPECT_TRUE(paths().pathValid(r.path_W));
+  // Off: the iteration keeps its path inside the pocket.
+  config.room_search_radius_m = 0.0;
+  ExplorationPlanner off(config, ExplorationConfig(), bounds(), PinholeCamera(), 0.05);
+  const IterationResult stuck = off.plan(in, prov);
+  EXPECT_TRUE(stuck.way_out.empty());
+  EXPECT_TRUE(stuck.path_W.empty() || stuck.path_W.back().z() < 0.6) << stuck.message;
   // The premise: from the start itself, no candidate's path leaves the pocket.
   const PathPlanner p = paths();
   const PlanningStart from = p.planningStart(start);

@@ -58,6 +58,11 @@ struct PlannerConfig {
   /// found (candidates in decreasing order of the bound g / t_min); picks the
   /// same winner as planning every candidate (false).
   bool lazy_planning = true;
+  /// A cramped start (no free sphere of twice the clearance radius) whose
+  /// winning path does not reach its goal is planned again from the nearest
+  /// point with room within this distance (room_search.hpp): the way out of
+  /// a pocket whose passage RRT* does not sample, m; 0 = off.
+  double room_search_radius_m = 1.5;
 
   /// Whether OMPL solves end on an iteration count (reproducible) rather than wall time.
   bool ompl_by_iterations() const { return ompl_termination == "iterations"; }
@@ -112,6 +117,8 @@ struct PlannerConfig {
     require(ompl_termination == "time" || ompl_termination == "iterations", ns + "ompl_termination",
             "must be \"time\" or \"iterations\" (is \"" + ompl_termination + "\")");
     require(ompl_iterations > 0, ns + "ompl_iterations", "must be > 0");
+    require(std::isfinite(room_search_radius_m) && room_search_radius_m >= 0 && room_search_radius_m <= 5,
+            ns + "room_search_radius_m", "must be in [0, 5] m (0 = off; the search visits (r / 8 cm)^3 points)");
   }
 };
 

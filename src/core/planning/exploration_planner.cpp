@@ -349,11 +349,12 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   // exhaustive planning share, not on the candidates each mode planned.
   RoomSearchSettings room;
   room.room_radius_m = 2.0 * planner_.clearance_radius_m();
+  room.search_radius_m = planner_.room_search_radius_m;
   room.step_m = 2.0 * map_resolution_m_;
   const auto reached = [](const EvaluatedCandidate& c) {
     return c.plan.status == PlannedPath::Status::kExact || c.plan.status == PlannedPath::Status::kStraight;
   };
-  if (r.winner != kProviderFailed && r.candidates_planned > 0 && !from.escaped &&
+  if (room.search_radius_m > 0 && r.winner != kProviderFailed && r.candidates_planned > 0 && !from.escaped &&
       (r.winner < 0 || !reached(r.candidates[static_cast<std::size_t>(r.winner)])) &&
       !prov.is_free(from.from_W, room.room_radius_m)) {
     t0 = Clock::now();
