@@ -4,6 +4,7 @@
 
 #include "semexp_test/test_grid.hpp"
 #include "semantic_exploration/core/planning/exploration_planner.hpp"
+#include "semantic_exploration/core/planning/path_check.hpp"
 #include "semantic_exploration/core/planning/room_search.hpp"
 
 namespace semexp {
@@ -53,9 +54,10 @@ TEST_F(RoomSearchTest, FindsTheWayUpThroughThePassage) {
   const std::vector<Eigen::Vector3d> route = findRoom(p, is_free, start, settings);
   ASSERT_GE(route.size(), 3u);  // across to the passage's axis, then up: no single straight segment
   EXPECT_TRUE(route.front() == start);
-  // The first lattice point with room on the axis (5.0, 1.0, 0.35 + k 0.1):
-  // z = 1.35 is the lowest with z - 0.33 >= 1.0; breadth-first by steps, no
-  // other point with room is as few steps away (the room starts at z 1.33).
+  // Room needs z - 0.33 >= 1.0: on the lattice (z = 0.35 + k 0.1) the lowest
+  // level with room is z = 1.35, which breadth-first search reaches first
+  // (10 steps up the axis; several points of that level are as few steps
+  // away, and the neighbour order picks one).
   EXPECT_NEAR(route.back().z(), 1.35, 1e-9);
   EXPECT_TRUE(is_free(route.back(), settings.room_radius_m));
   EXPECT_TRUE(p.pathValid(route));
@@ -84,44 +86,63 @@ TEST_F(RoomSearchTest, PathsFromTheEndOfTheWayBeginWithIt) {
   ASSERT_GT(plan.path_W.size(), route.size());
   for (std::size_t i = 0; i < route.size(); ++i) EXPECT_TRUE(plan.path_W[i] == route[i]) << i;
   EXPECT_TRUE(p.pathValid(plan.path_W));
-  EXPECT_FALSE(plan.escaped);  // every segment keeps the full clearance
+  // Every segment keeps the full clearance, the first too (no escape's relaxed radius).
+  const PathClearance clear =
+      checkPathClearance(plan.path_W, plan.escaped, config.clearance_radius_m(), config.mav_radius_m, 0.025,
+                         [this](const Eigen::Vector3d& q, double r) { return grid.sphereFree(q, r); });
+  EXPECT_TRUE(clear.safe) << clear.why;
 }
+
+TEST_F(RoomSearchTest, TheSearchStopsAtMaxPoints) {
+  settings.max_points = 5;  // the passage is more than 5 lattice points away from any room
+  EXPECT_TRUE(findRoom(paths(), is_free, start, settings).empty());
+}
+
+struct PocketIteration : RoomSearchTest {
+  ExplorationProviders prov;
+  ExplorationInputs in;
+  PocketIteration() {
+    config.a_ent = 1.0;
+    config.a_bg = config.a_obj = 0.0;
+    config.p_frontier = 1.0;
+    config.n_candidates = 4;
+    prov.is_free = is_free;
+    prov.gains = [](const std::vector<Eigen::Vector3d>& ps) {
+      std::vector<GainSet> out(ps.size());
+      for (GainSet& g : out) g.entropy = GainImage(36, 10, 0.5f);
+      return out;
+    };
+    in.position_W = start;
+    in.frontiers_W = {{1.0, 2.0, 1.5}, {2.0, 3.0, 1.5}, {3.0, 1.0, 1.5}, {1.0, 1.0, 1.5}};  // in the room
+  }
+  IterationResult plan(bool lazy) {
+    config.lazy_planning = lazy;
+    ExplorationPlanner planner(config, ExplorationConfig(), bounds(), PinholeCamera(), 0.05);
+    return planner.plan(in, prov);
+  }
+};
 
 // One planning iteration from the pocket: RRT* alone takes no candidate out
 // of it (its approximate paths end in the pocket; checked below with the
 // iteration's own seeds), so the iteration plans again from the point with
-// room and flies the way out.
-TEST_F(RoomSearchTest, AnIterationStuckInThePocketLeavesThroughThePassage) {
-  config.a_ent = 1.0;
-  config.a_bg = config.a_obj = 0.0;
-  config.p_frontier = 1.0;
-  config.n_candidates = 4;
-  ExplorationProviders prov;
-  prov.is_free = is_free;
-  prov.gains = [](const std::vector<Eigen::Vector3d>& ps) {
-    std::vector<GainSet> out(ps.size());
-    for (GainSet& g : out) g.entropy = GainImage(36, 10, 0.5f);
-    return out;
-  };
-  ExplorationInputs in;
-  in.position_W = start;
-  in.frontiers_W = {{1.0, 2.0, 1.5}};
-  ExplorationPlanner planner(config, ExplorationConfig(), bounds(), PinholeCamera(), 0.05);
-  const IterationResult r = planner.plan(in, prov);
+// room and flies the way out, lazy and exhaustive alike.
+TEST_F(PocketIteration, LeavesThroughThePassage) {
+  const IterationResult r = plan(true);
   ASSERT_GE(r.winner, 0) << r.message;
-  EXPECT_NE(r.message.find("no winning path reached its goal from (4.60, 1.00, 0.35), which has no room; planned again from ("),
-            std::string::npos)
-      << r.message;
-  EXPECT_EQ(r.way_out.rfind("no winning path reached its goal from (4.60, 1.00, 0.35)", 0), 0u) << r.way_out;
-  EXPECT_TRUE(r.path_W.front() == start);
+  EXPECT_EQ(r.candidates.size(), 4u);
+  EXPECT_EQ(r.way_out.rfind("the winning path ended short of its goal from (4.60, 1.00, 0.35), which has no room; "
+                            "planned again from (", 0), 0u)
+      << r.way_out;
+  // The planner searches with its own settings: those of this fixture.
+  const std::vector<Eigen::Vector3d> route = findRoom(paths(), is_free, start, settings);
+  ASSERT_GE(r.path_W.size(), route.size());
+  for (std::size_t i = 0; i < route.size(); ++i) EXPECT_TRUE(r.path_W[i] == route[i]) << i;
   EXPECT_GT(r.path_W.back().z(), 1.0);
   EXPECT_TRUE(paths().pathValid(r.path_W));
-  // Off: the iteration keeps its path inside the pocket.
-  config.room_search_radius_m = 0.0;
-  ExplorationPlanner off(config, ExplorationConfig(), bounds(), PinholeCamera(), 0.05);
-  const IterationResult stuck = off.plan(in, prov);
-  EXPECT_TRUE(stuck.way_out.empty());
-  EXPECT_TRUE(stuck.path_W.empty() || stuck.path_W.back().z() < 0.6) << stuck.message;
+  const IterationResult all = plan(false);
+  EXPECT_EQ(all.winner, r.winner);
+  EXPECT_TRUE(all.path_W == r.path_W);
+  EXPECT_EQ(all.way_out, r.way_out);
   // The premise: from the start itself, no candidate's path leaves the pocket.
   const PathPlanner p = paths();
   const PlanningStart from = p.planningStart(start);
@@ -130,6 +151,41 @@ TEST_F(RoomSearchTest, AnIterationStuckInThePocketLeavesThroughThePassage) {
         p.plan(from, p.resolveGoal(from, r.candidates[i].view_W), pathSeed(config.seed, 0, i));
     EXPECT_FALSE(direct.ok() && direct.path_W.back().z() > 0.6) << i;
   }
+  // Off: the iteration keeps its path inside the pocket.
+  config.room_search_radius_m = 0.0;
+  const IterationResult stuck = plan(true);
+  EXPECT_TRUE(stuck.way_out.empty());
+  EXPECT_TRUE(stuck.path_W.empty() || stuck.path_W.back().z() < 0.6) << stuck.message;
+}
+
+// A winner that reaches its goal needs no way out, cramped or not.
+TEST_F(PocketIteration, NoSecondPassWhenTheWinnerReachesItsGoal) {
+  in.frontiers_W = {{4.6, 1.25, 0.35}};  // in the pocket: a straight path
+  const IterationResult r = plan(true);
+  ASSERT_GE(r.winner, 0) << r.message;
+  EXPECT_TRUE(r.way_out.empty()) << r.way_out;
+  EXPECT_LT(r.path_W.back().z(), 0.6);
+}
+
+// The second pass finds no winner (everything with gain lies in a closed
+// chamber no path reaches; from the room point every path ends where there
+// is nothing to see): the first pass's winner, a hop inside the pocket, stands.
+TEST_F(PocketIteration, TheFirstPassStandsWhenTheSecondHasNoWinner) {
+  grid.fill_box({0.5, 2.5, 0.1}, {1.5, 3.5, 0.6}, TestGrid::kFree);  // the chamber, sealed
+  in.frontiers_W = {{1.0, 3.0, 0.35}};
+  prov.gains = [](const std::vector<Eigen::Vector3d>& ps) {
+    std::vector<GainSet> out(ps.size());
+    for (std::size_t i = 0; i < ps.size(); ++i) out[i].entropy = GainImage(36, 10, ps[i].z() < 0.9 ? 0.5f : 0.f);
+    return out;
+  };
+  const IterationResult r = plan(true);
+  ASSERT_GE(r.winner, 0) << r.message;
+  EXPECT_NE(r.way_out.find(": no winner from there, the first pass's result kept"), std::string::npos) << r.way_out;
+  EXPECT_LT(r.path_W.back().z(), 0.6);
+  EXPECT_TRUE(r.path_W.front() == start);
+  const IterationResult all = plan(false);
+  EXPECT_EQ(all.winner, r.winner);
+  EXPECT_TRUE(all.path_W == r.path_W);
 }
 
 }  // namespace

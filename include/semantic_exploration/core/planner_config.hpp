@@ -118,7 +118,7 @@ struct PlannerConfig {
             "must be \"time\" or \"iterations\" (is \"" + ompl_termination + "\")");
     require(ompl_iterations > 0, ns + "ompl_iterations", "must be > 0");
     require(std::isfinite(room_search_radius_m) && room_search_radius_m >= 0 && room_search_radius_m <= 5,
-            ns + "room_search_radius_m", "must be in [0, 5] m (0 = off; the search visits (r / 8 cm)^3 points)");
+            ns + "room_search_radius_m", "must be in [0, 5] m (0 = off)");
   }
 };
 

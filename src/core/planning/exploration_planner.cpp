@@ -342,32 +342,50 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
     }
     return best;
   };
+  // At the view positions, before any path moved a candidate's view: the same in both modes.
+  const bool any_gain = std::any_of(r.candidates.begin(), r.candidates.end(),
+                                    [](const EvaluatedCandidate& c) { return c.gain > 0; });
   r.winner = planPaths(from);
-  // A cramped start whose best path (if any) does not reach its goal: perhaps
+  // A cramped start whose best path (if any) ends short of its goal: perhaps
   // a pocket whose way out RRT* does not sample (room_search.hpp). Plan again
-  // from the nearest point with room. Decided on the winner, which lazy and
-  // exhaustive planning share, not on the candidates each mode planned.
+  // from the nearest point with room, and keep that pass if it has a winner.
+  // Decided on what lazy and exhaustive planning share (the winner and the
+  // gains), not on the candidates each mode planned. A start that needed an
+  // escape is not searched: the escape has just moved it.
   RoomSearchSettings room;
   room.room_radius_m = 2.0 * planner_.clearance_radius_m();
   room.search_radius_m = planner_.room_search_radius_m;
   room.step_m = 2.0 * map_resolution_m_;
-  const auto reached = [](const EvaluatedCandidate& c) {
-    return c.plan.status == PlannedPath::Status::kExact || c.plan.status == PlannedPath::Status::kStraight;
+  const auto short_of_goal = [&](int w) {
+    if (w < 0) return true;
+    const std::size_t i = static_cast<std::size_t>(w);
+    return (r.candidates[i].plan.path_W.back() - goals[i].goal_W).norm() > room.room_radius_m;
   };
-  if (room.search_radius_m > 0 && r.winner != kProviderFailed && r.candidates_planned > 0 && !from.escaped &&
-      (r.winner < 0 || !reached(r.candidates[static_cast<std::size_t>(r.winner)])) &&
-      !prov.is_free(from.from_W, room.room_radius_m)) {
+  if (room.search_radius_m > 0 && r.winner != kProviderFailed && any_gain && !from.escaped &&
+      short_of_goal(r.winner) && !prov.is_free(from.from_W, room.room_radius_m)) {
     t0 = Clock::now();
     const std::vector<Eigen::Vector3d> route = findRoom(paths, prov.is_free, from.from_W, room);
     r.path_planning_s += secondsSince(t0);
     if (!route.empty()) {
-      r.way_out = fmt("no winning path reached its goal from (%.2f, %.2f, %.2f), which has no room; ", from.from_W.x(),
-                      from.from_W.y(), from.from_W.z()) +
+      r.way_out = fmt("the winning path ended short of its goal from (%.2f, %.2f, %.2f), which has no room; ",
+                      from.from_W.x(), from.from_W.y(), from.from_W.z()) +
                   fmt("planned again from (%.2f, %.2f, %.2f), ", route.back().x(), route.back().y(), route.back().z()) +
-                  fmt("the nearest point with room, %.2f m along a way out of %.0f segments; ", pathLength_m(route),
+                  fmt("the nearest point with room, %.2f m along a way out of %.0f segments", pathLength_m(route),
                       static_cast<double>(route.size() - 1));
-      r.message += r.way_out;
+      const std::vector<EvaluatedCandidate> first = r.candidates;
+      const std::vector<ViewGains> first_end_gains = end_gains;
+      const int first_planned = r.candidates_planned, first_reachable = r.candidates_reachable, first_winner = r.winner;
       r.winner = planPaths(startAfterRoute(route));
+      if (r.winner == -1) {  // nothing from there: the first pass stands
+        r.candidates = first;
+        end_gains = first_end_gains;
+        r.candidates_planned = first_planned;
+        r.candidates_reachable = first_reachable;
+        r.winner = first_winner;
+        r.way_out += ": no winner from there, the first pass's result kept";
+      }
+      r.way_out += "; ";
+      r.message += r.way_out;
     }
   }
   if (r.winner == kProviderFailed) {

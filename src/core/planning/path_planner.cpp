@@ -228,12 +228,14 @@ PlannedPath PathPlanner::plan(const PlanningStart& from, const ResolvedGoal& goa
       out.escaped = from.escaped;
       if (out.ok()) {
         out.path_W.insert(out.path_W.begin(), from.lead_W.begin(), from.lead_W.end());
-      } else {
-        out.path_W = from.lead_W;  // at least get out of the invalid spot or the pocket
+        // Several segments now; one that reaches its goal is what an exact solve gives.
+        if (out.status == PlannedPath::Status::kStraight) out.status = PlannedPath::Status::kExact;
+      } else if (from.escaped) {
+        out.path_W = from.lead_W;  // at least get out of the invalid spot
         out.path_W.push_back(from.from_W);
-      }
-      if (out.status == PlannedPath::Status::kFailed) out.status = PlannedPath::Status::kApproximate;
-      out.distance_to_goal_m = (goal.requested_W - out.path_W.back()).norm();
+        out.status = PlannedPath::Status::kApproximate;
+      }  // a way out of a pocket alone is no path to this goal: kFailed
+      if (out.ok()) out.distance_to_goal_m = (goal.requested_W - out.path_W.back()).norm();
     }
   }
   out.time_s = secondsSince(t0);

@@ -22,15 +22,17 @@ struct RoomSearchSettings {
   double room_radius_m = 0.33;    ///< a point has room when a sphere this large around it is free, m
   double search_radius_m = 1.5;   ///< lattice points farther than this from the start are not visited, m
   double step_m = 0.08;           ///< lattice spacing, m
-  std::size_t max_points = 20000; ///< visited lattice points at most (bounds the cost of a search)
+  std::size_t max_points = 20000; ///< lattice points entered at most (bounds the cost of a search)
 };
 
-/// The way from start_W to the nearest lattice point with room (by lattice
-/// steps): start_W first, the point with room last, every segment valid for
-/// `paths` (segmentValid) and shortened where a longer segment is valid too.
-/// Empty if start_W is invalid, already has room, or no point with room is
-/// reachable within the search radius. is_free: the sphere test of the room
-/// criterion (the planner's is_free).
+/// The way from start_W to the lattice point with room fewest lattice steps
+/// away (26-connected; ties by a fixed neighbour order): start_W first, the
+/// point with room last, every segment valid for `paths` (segmentValid) and
+/// shortened where a longer segment is valid too. Empty if start_W is
+/// invalid, already has room, search_radius_m is 0, or no point with room is
+/// reachable within the search radius and max_points. A search radius below
+/// one step still searches the start's 26 neighbours. is_free: the sphere
+/// test of the room criterion (the planner's is_free).
 std::vector<Eigen::Vector3d> findRoom(const PathPlanner& paths, const CollisionQuery& is_free,
                                       const Eigen::Vector3d& start_W, const RoomSearchSettings& settings);
 
