@@ -40,7 +40,7 @@ struct PlannedPath {
 /// out of a pocket (room_search.hpp).
 struct PlanningStart {
   Eigen::Vector3d start_W = Eigen::Vector3d::Zero();  ///< the MAV's position, m
-  Eigen::Vector3d from_W = Eigen::Vector3d::Zero();   ///< where the planner starts: start_W or the escape point, m
+  Eigen::Vector3d from_W = Eigen::Vector3d::Zero();   ///< where the planner starts: start_W, the escape point or the way out's end, m
   /// Vertices every path flies before from_W, start_W first (empty when
   /// from_W = start_W): {start_W} for an escape, more for a way out of a pocket.
   std::vector<Eigen::Vector3d> lead_W;
