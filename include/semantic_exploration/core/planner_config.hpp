@@ -58,11 +58,11 @@ struct PlannerConfig {
   /// found (candidates in decreasing order of the bound g / t_min); picks the
   /// same winner as planning every candidate (false).
   bool lazy_planning = true;
-  /// A cramped start (no free sphere of twice the clearance radius) that has
-  /// no winner, or whose winning path ends more than that radius short of its
-  /// goal but within it of the start, is planned again from the nearest point
-  /// with room within this distance (room_search.hpp): the way out of a pocket
-  /// whose passage RRT* does not sample, m; 0 = off.
+  /// An iteration without a winner from a cramped start (no free sphere of
+  /// twice the clearance radius) is, before it counts as failed, planned
+  /// again from the nearest point with room within this distance
+  /// (room_search.hpp): the way out of a pocket whose passage RRT* does not
+  /// sample, m; 0 = off.
   double room_search_radius_m = 1.5;
 
   /// Whether OMPL solves end on an iteration count (reproducible) rather than wall time.

@@ -346,11 +346,10 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   const bool any_gain = std::any_of(r.candidates.begin(), r.candidates.end(),
                                     [](const EvaluatedCandidate& c) { return c.gain > 0; });
   r.winner = planPaths(from);
-  // A cramped start from which no path wins, or the winning one ends short
-  // of its goal without leaving the start's cramped neighbourhood: perhaps a
-  // pocket whose way out RRT* does not sample (room_search.hpp). Plan again
-  // from the nearest point with room, and keep that pass if it has a winner.
-  // A winner that gets away, reaching its goal or not, is left alone.
+  // No winner from a cramped start, though some candidate has a gain: perhaps
+  // a pocket whose way out RRT* does not sample (room_search.hpp). Before the
+  // iteration counts as failed, plan again from the nearest point with room.
+  // An iteration with a winner is left as the paper plans it.
   // Decided on what lazy and exhaustive planning share (the winner and the
   // gains), not on the candidates each mode planned. A start that needed an
   // escape is not searched: the escape has just moved it.
@@ -358,36 +357,19 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   room.room_radius_m = 2.0 * planner_.clearance_radius_m();
   room.search_radius_m = planner_.room_search_radius_m;
   room.step_m = 2.0 * map_resolution_m_;
-  const auto stuck = [&](int w) {
-    if (w < 0) return true;
-    const std::size_t i = static_cast<std::size_t>(w);
-    const Eigen::Vector3d& end = r.candidates[i].plan.path_W.back();
-    return (end - goals[i].goal_W).norm() > room.room_radius_m && (end - from.from_W).norm() <= room.room_radius_m;
-  };
   if (room.search_radius_m > 0 && r.winner != kProviderFailed && any_gain && !from.escaped &&
-      stuck(r.winner) && !prov.is_free(from.from_W, room.room_radius_m)) {
+      r.winner == -1 && !prov.is_free(from.from_W, room.room_radius_m)) {
     t0 = Clock::now();
     const std::vector<Eigen::Vector3d> route = findRoom(paths, prov.is_free, from.from_W, room);
     r.path_planning_s += secondsSince(t0);
     if (!route.empty()) {
-      r.way_out = fmt(r.winner < 0 ? "no winner from (%.2f, %.2f, %.2f), which has no room; "
-                                   : "the winning path stayed near (%.2f, %.2f, %.2f), which has no room; ",
-                      from.from_W.x(), from.from_W.y(), from.from_W.z()) +
+      r.way_out = fmt("no winner from (%.2f, %.2f, %.2f), which has no room; ", from.from_W.x(), from.from_W.y(),
+                      from.from_W.z()) +
                   fmt("planned again from (%.2f, %.2f, %.2f), ", route.back().x(), route.back().y(), route.back().z()) +
                   fmt("the nearest point with room, %.2f m along a way out of %.0f segments", pathLength_m(route),
                       static_cast<double>(route.size() - 1));
-      const std::vector<EvaluatedCandidate> first = r.candidates;
-      const std::vector<ViewGains> first_end_gains = end_gains;
-      const int first_planned = r.candidates_planned, first_reachable = r.candidates_reachable, first_winner = r.winner;
       r.winner = planPaths(startAfterRoute(route));
-      if (r.winner == -1) {  // nothing from there: the first pass stands
-        r.candidates = first;
-        end_gains = first_end_gains;
-        r.candidates_planned = first_planned;
-        r.candidates_reachable = first_reachable;
-        r.winner = first_winner;
-        r.way_out += ": no winner from there, the first pass's result kept";
-      }
+      if (r.winner == -1) r.way_out += ": no winner from there either";
       r.way_out += "; ";
       r.message += r.way_out;
     }

@@ -6,6 +6,8 @@
 /// entrance narrowed as the camera saw its walls. RRT* samples the whole
 /// bounds and almost never lands in such a passage, so every candidate fails
 /// and the mission ends with no_reachable_candidate although a path exists.
+/// The planner searches only then: an iteration without a winner from a
+/// cramped start (exploration_planner.cpp).
 /// A breadth-first search on a lattice around the start finds the passage
 /// deterministically: it walks valid segments (the planner's own motion
 /// check) until it reaches a point with room, where sampling works again.
