@@ -357,8 +357,8 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   room.room_radius_m = 2.0 * planner_.clearance_radius_m();
   room.search_radius_m = planner_.room_search_radius_m;
   room.step_m = 2.0 * map_resolution_m_;
-  if (room.search_radius_m > 0 && r.winner != kProviderFailed && any_gain && !from.escaped &&
-      r.winner == -1 && !prov.is_free(from.from_W, room.room_radius_m)) {
+  if (r.winner == -1 && room.search_radius_m > 0 && any_gain && !from.escaped &&
+      !prov.is_free(from.from_W, room.room_radius_m)) {
     t0 = Clock::now();
     const std::vector<Eigen::Vector3d> route = findRoom(paths, prov.is_free, from.from_W, room);
     r.path_planning_s += secondsSince(t0);
