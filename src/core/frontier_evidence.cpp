@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "semantic_exploration/core/int_math.hpp"
 #include "semantic_exploration/core/occupancy_map.hpp"
 
 namespace semexp {
@@ -12,11 +13,7 @@ FrontierEvidence::FrontierEvidence(const FrontierEvidenceConfig& config) : confi
 std::uint64_t FrontierEvidence::key(const Eigen::Vector3d& p) const {
   // Leaf centres lie at (i + 0.5) r: floor(p / r) names each finest voxel once (a coarse leaf's centre names
   // one voxel of it).
-  const auto c = [this](double v) {
-    return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v / key_resolution_m_)) + (1 << 20)) &
-           0x1FFFFF;
-  };
-  return c(p.x()) | (c(p.y()) << 21) | (c(p.z()) << 42);
+  return cellKey21(p.x(), p.y(), p.z(), key_resolution_m_);
 }
 
 std::size_t FrontierEvidence::look(const OccupancyMap& map, const float* depth_m, const PinholeCamera& camera,

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -447,6 +448,23 @@ TEST(ObjectMap, FloorDivRoundsTowardsMinusInfinity) {
   EXPECT_EQ(floorDiv(std::numeric_limits<int>::min(), 16), std::numeric_limits<int>::min() / 16);
   EXPECT_EQ(floorDiv(std::numeric_limits<int>::min() + 1, 16), std::numeric_limits<int>::min() / 16);
   EXPECT_EQ(floorDiv(std::numeric_limits<int>::max(), 16), std::numeric_limits<int>::max() / 16);
+}
+
+// cellKey21 (int_math.hpp), the key of frontier retirement's cubes, frontier evidence's voxels and the way-out
+// search's lattice: hand-packed keys, distinct keys for neighbouring cells on both sides of the origin, and a
+// point's key is its cell's.
+TEST(ObjectMap, CellKeysPackTwentyOneBitsPerAxis) {
+  EXPECT_EQ(cellKey21(0, 0, 0), (std::uint64_t{1} << 20) | (std::uint64_t{1} << 41) | (std::uint64_t{1} << 62));
+  EXPECT_EQ(cellKey21(-(1 << 20), -(1 << 20), -(1 << 20)), 0u);
+  EXPECT_EQ(cellKey21(1, -1, 2), (std::uint64_t{(1 << 20) + 1}) | (std::uint64_t{(1 << 20) - 1} << 21) |
+                                     (std::uint64_t{(1 << 20) + 2} << 42));
+  std::set<std::uint64_t> keys;
+  for (int x = -3; x <= 3; ++x)
+    for (int y = -3; y <= 3; ++y)
+      for (int z = -3; z <= 3; ++z) keys.insert(cellKey21(x, y, z));
+  EXPECT_EQ(keys.size(), 343u);
+  // 0.5 m cells: -0.01 m lies in cell -1, 0.49 m in cell 0, 1.0 m in cell 2.
+  EXPECT_EQ(cellKey21(-0.01, 0.49, 1.0, 0.5), cellKey21(-1, 0, 2));
 }
 
 TEST(ObjectMap, SaveWritesMeshesAndIndex) {

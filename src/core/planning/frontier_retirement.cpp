@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "semantic_exploration/core/int_math.hpp"
+
 namespace semexp {
 
 namespace {
@@ -36,11 +38,7 @@ FrontierRetirement::FrontierRetirement(const FrontierRetirementConfig& config, c
 }
 
 std::uint64_t FrontierRetirement::key(const Eigen::Vector3d& p) const {
-  const auto c = [this](double v) {
-    return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(v / config_.cluster_size_m)) + (1 << 20)) &
-           0x1FFFFF;
-  };
-  return c(p.x()) | (c(p.y()) << 21) | (c(p.z()) << 42);
+  return cellKey21(p.x(), p.y(), p.z(), config_.cluster_size_m);
 }
 
 bool FrontierRetirement::lineOfSight(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double short_m,

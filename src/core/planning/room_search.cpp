@@ -5,14 +5,13 @@
 #include <deque>
 #include <unordered_map>
 
+#include "semantic_exploration/core/int_math.hpp"
+
 namespace semexp {
 
 namespace {
 
-std::uint64_t latticeKey(const Eigen::Vector3i& k) {
-  const auto c = [](int v) { return static_cast<std::uint64_t>(v + (1 << 20)) & 0x1FFFFF; };
-  return c(k.x()) | (c(k.y()) << 21) | (c(k.z()) << 42);
-}
+std::uint64_t latticeKey(const Eigen::Vector3i& k) { return cellKey21(k.x(), k.y(), k.z()); }
 
 }  // namespace
 
