@@ -430,6 +430,44 @@ TEST_F(ExplorationTest, NoCandidateWithPositiveGain) {
   }
 }
 
+// Every view has nothing to see (all in the invalid depth history's mask, as in front of a window): each such
+// iteration counts as a view of the frontier candidates' clusters, so that after K = 3 iterations both clusters
+// (0.5 m cubes at (2, 1, 1) and (5, 1, 1)) are retired by evidence and the fourth ends "explored" (frontiers
+// only, as classic weights pursue), where max_failed_iterations = 5 would otherwise end the mission
+// no_reachable_candidate with both clusters open. Lazy and exhaustive alike; with retirement off it still fails.
+TEST_F(ExplorationTest, FrontiersNoViewCanSeeAreRetiredInsteadOfEndingTheMission) {
+  providers.gains = [](const std::vector<Eigen::Vector3d>& ps) {
+    std::vector<GainSet> out(ps.size());
+    for (auto& g : out) g.entropy = GainImage(36, 10, 0.0f);
+    return out;
+  };
+  config.max_failed_iterations = 5;
+  for (const bool lazy : {false, true}) {
+    config.lazy_planning = lazy;
+    ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+    for (int it = 1; it <= 3; ++it) {
+      const IterationResult r = planner.plan(inputs(), providers);
+      EXPECT_FALSE(r.finished) << "iteration " << it << ": " << r.message;
+      EXPECT_EQ(r.winner, -1);
+      EXPECT_EQ(planner.failedIterations(), it);
+      EXPECT_EQ(r.active_frontiers, 2u) << "iteration " << it;
+      EXPECT_NE(r.message.find("2 frontier candidates with nothing to see"), std::string::npos) << r.message;
+    }
+    const IterationResult r = planner.plan(inputs(), providers);
+    EXPECT_TRUE(r.finished);
+    EXPECT_EQ(r.termination_reason, "explored") << r.message;
+    EXPECT_EQ(r.active_frontiers, 0u);
+    EXPECT_EQ(r.retired_clusters_evidence, 2u);
+  }
+  FrontierRetirementConfig off;
+  off.enabled = false;
+  ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05, TerminationConfig(), off);
+  IterationResult r;
+  for (int it = 1; it <= 5; ++it) r = planner.plan(inputs(), providers);
+  EXPECT_TRUE(r.finished);
+  EXPECT_EQ(r.termination_reason, "no_reachable_candidate");
+}
+
 TEST_F(ExplorationTest, ProviderFailureIsReportedNotCounted) {
   providers.gains = [](const std::vector<Eigen::Vector3d>&) -> std::vector<GainSet> {
     throw std::runtime_error("service background_map/compute_gains timed out");

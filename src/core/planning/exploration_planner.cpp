@@ -132,6 +132,24 @@ bool ExplorationPlanner::chooseObjectViews(std::vector<CandidateSample>& samples
   return ok;
 }
 
+void ExplorationPlanner::recordUnseeableFrontiers(IterationResult& r, const CollisionQuery& not_occupied,
+                                                  const LineQuery& line) {
+  // No view the sampler drew has anything to see: by the gains the planner
+  // decides with, each frontier candidate's cluster was looked at and nothing
+  // came of it. Counted as a view of the cluster (no path was flown, so no
+  // pose sees anything else), K of them retire it by evidence: otherwise a
+  // cluster whose views all lie in the invalid depth history's mask (a window)
+  // or that slips between the raycasts ends the mission no_reachable_candidate
+  // with that cluster still open.
+  std::vector<Eigen::Vector3d> targets;
+  for (const EvaluatedCandidate& c : r.candidates)
+    if (c.sample.source == CandidateSource::kFrontier) targets.push_back(c.sample.position_W);
+  if (targets.empty()) return;
+  retirement_.recordViews({}, not_occupied, targets, line);
+  r.message += fmt("; %.0f frontier candidates with nothing to see: a view of their clusters for retirement",
+                   static_cast<double>(targets.size()));
+}
+
 bool ExplorationPlanner::fail(IterationResult& r, const std::string& why) {
   ++failed_iterations_;
   r.message += why + " (" + std::to_string(failed_iterations_) + " of " +
@@ -387,6 +405,7 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
       fail(r, "no candidate reachable");
     else
       fail(r, std::to_string(r.candidates_reachable) + " candidates reachable, none with a positive gain");
+    if (!any_gain) recordUnseeableFrontiers(r, not_occupied, line_not_occupied);
     return finish();
   }
   const std::size_t wi = static_cast<std::size_t>(r.winner);

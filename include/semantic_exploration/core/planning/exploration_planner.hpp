@@ -131,6 +131,11 @@ class ExplorationPlanner {
 
  private:
   bool fail(IterationResult& r, const std::string& why);
+  /// An iteration without a winner in which no candidate has a gain at its
+  /// view position: records a view of each frontier candidate's cluster for
+  /// frontier retirement (frontier_retirement.hpp), so that K such iterations
+  /// retire what no view can see instead of ending the mission.
+  void recordUnseeableFrontiers(IterationResult& r, const CollisionQuery& not_occupied, const LineQuery& line);
   /// Moves each object sample to the view point of its object's ring
   /// (CandidateSampler::objectViewRing) whose best yaw window (of G, as the
   /// candidate will fly it) holds the most object gain, ties broken by G: one
