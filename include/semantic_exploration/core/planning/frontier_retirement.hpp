@@ -25,7 +25,10 @@
 ///    small clusters go up and down with depth noise, and each dip would
 ///    restart the run). A cluster that grows during a run and shrinks back,
 ///    but not below where the run started, has not shrunk either.
-/// A cluster's "view" is one iteration whose path it was seen from.
+/// A cluster's "view" is one iteration whose path it was seen from, or one
+/// without a winner in which no candidate had a gain at its view position and
+/// a frontier candidate was drawn in it (ExplorationPlanner: the planner's own
+/// gains found nothing to see there).
 /// Every cluster is judged by geometry again every recheck_iterations
 /// iterations (surface found since can hide it): one retired by geometry
 /// comes back once a view point is possible, one retired by evidence once
