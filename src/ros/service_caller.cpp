@@ -53,7 +53,7 @@ ServiceCaller::Result ServiceCaller::admit(const std::string& service, std::stri
 }
 
 ServiceCaller::Result ServiceCaller::finish(const std::string& service, const std::shared_ptr<CallState>& state,
-                                            bool done, std::thread&& worker, std::string& why) {
+                                            bool done, std::thread&& worker, bool last_try, std::string& why) {
   bool available = false, ok = false;
   {
     std::lock_guard<std::mutex> lock(state->mutex);
@@ -73,7 +73,10 @@ ServiceCaller::Result ServiceCaller::finish(const std::string& service, const st
       return Result::kUnavailable;
     }
     why = "service " + service + " failed";
-    drops_.drop("service_failed", why);
+    if (last_try)
+      drops_.drop("service_failed", why);
+    else
+      drops_.drop("service_retried", why + " without an answer; calling it once more");
     return Result::kFailed;
   }
   std::snprintf(buf, sizeof(buf), "service %s timed out after %.1f s%s", service.c_str(), timeout_s_,

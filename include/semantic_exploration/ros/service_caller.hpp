@@ -9,8 +9,13 @@
 /// dropped with it; at most kMaxPendingCalls abandoned calls per service are
 /// kept waiting, and a service that timed out is not called again until the
 /// caller starts a new round (newRound()): waiting twice in one planning
-/// iteration would only double the stall. Failures are counted in the node's
-/// DropCounter as service_timeout, service_failed or service_busy.
+/// iteration would only double the stall. A call that the service was found
+/// for but that came back without an answer (a connection lost under load, a
+/// handler that threw) is made once more on a new connection before it counts
+/// as failed: the planner's calls are queries, and one lost answer would
+/// otherwise change an iteration of a deterministic run. Failures are counted
+/// in the node's DropCounter as service_timeout, service_failed (after the
+/// second try; service_retried for the first) or service_busy.
 
 #include <ros/ros.h>
 
@@ -50,6 +55,9 @@ class ServiceCaller {
   template <class Srv>
   Result call(const std::string& service, Srv& srv, std::string& why);
 
+  /// Calls made again after a first try without an answer (see the file comment).
+  std::size_t retries() const { return retries_; }
+
   /// Starts a new round: services that timed out in the last one are called again.
   void newRound() { timed_out_now_.clear(); }
   /// Forgets that `service` timed out in this round (a call outside the round, e.g. a resync).
@@ -77,9 +85,13 @@ class ServiceCaller {
   void reap();
   /// kBusy (with why) if `service` has too many abandoned calls, kTimedOut if it timed out in this round, else kOk.
   Result admit(const std::string& service, std::string& why);
-  /// Outcome of a call whose worker ended in time (done) or not; records timeouts and drops.
+  /// One try of call() on a new connection, after admit().
+  template <class Srv>
+  Result attempt(const std::string& service, Srv& srv, bool last_try, std::string& why);
+  /// Outcome of a call whose worker ended in time (done) or not; records timeouts and drops (a failure of a
+  /// try that is not the last as service_retried).
   Result finish(const std::string& service, const std::shared_ptr<CallState>& state, bool done,
-                std::thread&& worker, std::string& why);
+                std::thread&& worker, bool last_try, std::string& why);
 
   ros::NodeHandle nh_;
   double timeout_s_;
@@ -87,12 +99,21 @@ class ServiceCaller {
   std::vector<PendingCall> pending_calls_;
   /// Services that timed out in the current round (-> why).
   std::map<std::string, std::string> timed_out_now_;
+  std::size_t retries_ = 0;
 };
 
 template <class Srv>
 ServiceCaller::Result ServiceCaller::call(const std::string& service, Srv& srv, std::string& why) {
   const Result admitted = admit(service, why);
   if (admitted != Result::kOk) return admitted;
+  const Result first = attempt(service, srv, false, why);
+  if (first != Result::kFailed) return first;
+  ++retries_;
+  return attempt(service, srv, true, why);
+}
+
+template <class Srv>
+ServiceCaller::Result ServiceCaller::attempt(const std::string& service, Srv& srv, bool last_try, std::string& why) {
   // The worker owns its client, request and response: a call abandoned here
   // may answer later into its own copy, which nobody reads. A fresh
   // non-persistent client per call finds a restarted service again and is
@@ -122,7 +143,7 @@ ServiceCaller::Result ServiceCaller::call(const std::string& service, Srv& srv, 
     std::unique_lock<std::mutex> lock(state->mutex);
     done = state->done_cv.wait_for(lock, std::chrono::duration<double>(timeout_s), [&state] { return state->done; });
   }
-  const Result result = finish(service, state, done, std::move(worker), why);
+  const Result result = finish(service, state, done, std::move(worker), last_try, why);
   if (result == Result::kOk) srv.response = std::move(request->response);
   return result;
 }
