@@ -8,7 +8,9 @@ lies on, within 5 cm) and each found chair at least 70% complete at 5 cm,
 against its observable surface (eval.metrics / eval.observable). With
 ~expect_setpoints the MAV flew setpoint_streamer's setpoints (mav_sim ~follow
 setpoints): setpoints were streamed and every goal was reported by the
-streamer. With ~expect_explored the mission must end `explored`."""
+streamer. With ~expect_explored the mission must end `explored`, and in
+semantic mode with every object seen from <= d_obj over
+planner/object_observed_fraction, none retired below it."""
 import json
 import os
 import shutil
@@ -47,6 +49,16 @@ class ExplorationObjects(unittest.TestCase):
                       finished.termination_reason, iterations, rospy.get_time(), time.time() - wall0)
         if rospy.get_param("~expect_explored", False):
             self.assertEqual(finished.termination_reason, "explored", finished.message)
+            if rospy.get_param("~check_objects", False):
+                # Semantic mode: every object seen from <= d_obj over the planner's threshold, none retired below it.
+                fraction = rospy.get_param("/planner/planner/object_observed_fraction")  # the planner node's own copy of the config
+                shares = dict(zip(finished.object_ids, finished.object_observed_shares))
+                rospy.loginfo("exploration_objects: shares seen from <= d_obj %s, retired %s", shares,
+                              list(finished.retired_object_ids))
+                self.assertGreaterEqual(len(shares), 4)
+                self.assertEqual(list(finished.retired_object_ids), [])
+                for oid, share in sorted(shares.items()):
+                    self.assertGreaterEqual(share, fraction, "object %d: %.3f seen from <= d_obj" % (oid, share))
         if rospy.get_param("~expect_setpoints", False):
             rospy.loginfo("exploration_objects: %d setpoints streamed, goals reported by %s", setpoints[0], set(goals))
             self.assertGreater(setpoints[0], 100)
