@@ -13,7 +13,7 @@ FrontierEvidence::FrontierEvidence(const FrontierEvidenceConfig& config) : confi
 std::uint64_t FrontierEvidence::key(const Eigen::Vector3d& p) const {
   // Leaf centres lie at (i + 0.5) r: floor(p / r) names each finest voxel once (a coarse leaf's centre names
   // one voxel of it).
-  return cellKey21(p.x(), p.y(), p.z(), key_resolution_m_);
+  return pointCellKey21(p.x(), p.y(), p.z(), key_resolution_m_);
 }
 
 std::size_t FrontierEvidence::look(const OccupancyMap& map, const float* depth_m, const PinholeCamera& camera,

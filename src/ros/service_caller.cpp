@@ -73,10 +73,7 @@ ServiceCaller::Result ServiceCaller::finish(const std::string& service, const st
       return Result::kUnavailable;
     }
     why = "service " + service + " failed";
-    if (last_try)
-      drops_.drop("service_failed", why);
-    else
-      drops_.drop("service_retried", why + " without an answer; calling it once more");
+    if (last_try) drops_.drop("service_failed", why);
     return Result::kFailed;
   }
   std::snprintf(buf, sizeof(buf), "service %s timed out after %.1f s%s", service.c_str(), timeout_s_,

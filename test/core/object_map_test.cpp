@@ -450,9 +450,9 @@ TEST(ObjectMap, FloorDivRoundsTowardsMinusInfinity) {
   EXPECT_EQ(floorDiv(std::numeric_limits<int>::max(), 16), std::numeric_limits<int>::max() / 16);
 }
 
-// cellKey21 (int_math.hpp), the key of frontier retirement's cubes, frontier evidence's voxels and the way-out
-// search's lattice: hand-packed keys, distinct keys for neighbouring cells on both sides of the origin, and a
-// point's key is its cell's.
+// cellKey21 and pointCellKey21 (int_math.hpp), the keys of frontier retirement's cubes, frontier evidence's
+// voxels and the way-out search's lattice: hand-packed keys, distinct keys for neighbouring cells on both sides
+// of the origin, a point's key is its cell's, and index 2^20 wraps onto -2^20.
 TEST(ObjectMap, CellKeysPackTwentyOneBitsPerAxis) {
   EXPECT_EQ(cellKey21(0, 0, 0), (std::uint64_t{1} << 20) | (std::uint64_t{1} << 41) | (std::uint64_t{1} << 62));
   EXPECT_EQ(cellKey21(-(1 << 20), -(1 << 20), -(1 << 20)), 0u);
@@ -464,7 +464,8 @@ TEST(ObjectMap, CellKeysPackTwentyOneBitsPerAxis) {
       for (int z = -3; z <= 3; ++z) keys.insert(cellKey21(x, y, z));
   EXPECT_EQ(keys.size(), 343u);
   // 0.5 m cells: -0.01 m lies in cell -1, 0.49 m in cell 0, 1.0 m in cell 2.
-  EXPECT_EQ(cellKey21(-0.01, 0.49, 1.0, 0.5), cellKey21(-1, 0, 2));
+  EXPECT_EQ(pointCellKey21(-0.01, 0.49, 1.0, 0.5), cellKey21(-1, 0, 2));
+  EXPECT_EQ(cellKey21(1 << 20, 0, 0), cellKey21(-(1 << 20), 0, 0));
 }
 
 TEST(ObjectMap, SaveWritesMeshesAndIndex) {

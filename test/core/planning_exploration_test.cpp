@@ -468,6 +468,35 @@ TEST_F(ExplorationTest, FrontiersNoViewCanSeeAreRetiredInsteadOfEndingTheMission
   EXPECT_EQ(r.termination_reason, "no_reachable_candidate");
 }
 
+// The same iterations without a winner, but because a wall (x = 2.9-3.1 m) cuts the frontiers off: their views
+// have a gain (0.6 at x >= 3), only no path reaches them, and paths ending short see nothing (0 at x < 3). That
+// is not evidence that the clusters cannot be seen: nothing is recorded, they stay active, and the fifth
+// iteration ends no_reachable_candidate.
+TEST_F(ExplorationTest, FrontiersCutOffByAWallAreNotRetiredByFailedIterations) {
+  providers.gains = [](const std::vector<Eigen::Vector3d>& ps) {
+    std::vector<GainSet> out(ps.size());
+    for (std::size_t i = 0; i < ps.size(); ++i) out[i].entropy = window_image(0.0, ps[i].x() >= 3.0 ? 0.6f : 0.0f);
+    return out;
+  };
+  grid.fill_box({2.9, 0.0, 0.0}, {3.1, 4.0, 2.0}, TestGrid::kOccupied);
+  config.max_failed_iterations = 5;
+  ExplorationInputs in = inputs();
+  in.frontiers_W = {{5, 1, 1}, {5, 2, 1}};
+  for (const bool lazy : {false, true}) {
+    config.lazy_planning = lazy;
+    ExplorationPlanner planner(config, exploration, room_bounds(), camera, 0.05);
+    IterationResult r;
+    for (int it = 1; it <= 5; ++it) {
+      r = planner.plan(in, providers);
+      EXPECT_EQ(r.winner, -1) << "iteration " << it << ": " << r.message;
+      EXPECT_EQ(r.active_frontiers, 2u) << "iteration " << it;
+      EXPECT_EQ(r.message.find("nothing to see"), std::string::npos) << r.message;
+    }
+    EXPECT_TRUE(r.finished);
+    EXPECT_EQ(r.termination_reason, "no_reachable_candidate") << r.message;
+  }
+}
+
 TEST_F(ExplorationTest, ProviderFailureIsReportedNotCounted) {
   providers.gains = [](const std::vector<Eigen::Vector3d>&) -> std::vector<GainSet> {
     throw std::runtime_error("service background_map/compute_gains timed out");

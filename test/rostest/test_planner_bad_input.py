@@ -218,11 +218,12 @@ class PlannerBadInputTest(unittest.TestCase):
     def test_2b_a_call_without_an_answer_is_made_once_more(self):
         """A compute_gains call that comes back without an answer is made once
         more at once, and the iteration plans as if nothing had happened (a
-        deterministic run whose call lost its answer went another way)."""
+        deterministic run whose call lost its answer went another way). Two
+        calls in a row without an answer fail the iteration: once more, not
+        more."""
         plan_once = rospy.ServiceProxy("/planner/plan_once", PlanOnce)
         with self.lock:
             type(self).fail_gains = 1
-            calls0 = self.gains_calls
         n_paths = len(self.paths)
         res = plan_once()
         self.assertTrue(res.success, res.message)
@@ -230,8 +231,18 @@ class PlannerBadInputTest(unittest.TestCase):
         self.assertTrue(self.wait_for(lambda: len(self.paths) > n_paths, 10.0), "no path after the retried call")
         self.assert_safe(self.paths[-1][1])
         with self.lock:
+            self.assertEqual(self.fail_gains, 0, "the call that failed was not made again")
+            type(self).fail_gains = 2
+            calls0 = self.gains_calls
+        n_paths = len(self.paths)
+        res = plan_once()
+        self.assertFalse(res.success, res.message)
+        self.assertIn("gain evaluation failed: service background_map/compute_gains failed", res.message)
+        time.sleep(0.5)
+        self.assertEqual(len(self.paths), n_paths, "a path was published without gains")
+        with self.lock:
             self.assertEqual(self.fail_gains, 0)
-            self.assertGreaterEqual(self.gains_calls - calls0, 2, "the failed call was not made again")
+            self.assertEqual(self.gains_calls - calls0, 2, "the failed call was made other than twice")
 
     def test_3_start_in_unknown_space_escapes(self):
         start = (4.1, 1.0, 1.0)

@@ -10,15 +10,18 @@
 /// kept waiting, and a service that timed out is not called again until the
 /// caller starts a new round (newRound()): waiting twice in one planning
 /// iteration would only double the stall. A call that the service was found
-/// for but that came back without an answer (a connection lost under load, a
-/// handler that threw) is made once more on a new connection before it counts
-/// as failed: the planner's calls are queries, and one lost answer would
-/// otherwise change an iteration of a deterministic run. Failures are counted
-/// in the node's DropCounter as service_timeout, service_failed (after the
-/// second try; service_retried for the first) or service_busy.
+/// for but that came back without an answer is made once more on a new
+/// connection, within what is left of the same timeout_s, before it counts as
+/// failed: under load a connection can lose the answer (two runs of one
+/// deterministic mission parted there), and the planner's calls are queries.
+/// roscpp does not tell that from a handler that refused the request (a bad
+/// request is then sent twice). Failures are counted in the node's
+/// DropCounter as service_timeout, service_failed or service_busy; calls made
+/// again are logged (throttled) and counted in retries().
 
 #include <ros/ros.h>
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
@@ -85,11 +88,11 @@ class ServiceCaller {
   void reap();
   /// kBusy (with why) if `service` has too many abandoned calls, kTimedOut if it timed out in this round, else kOk.
   Result admit(const std::string& service, std::string& why);
-  /// One try of call() on a new connection, after admit().
+  /// One try of call() on a new connection, after admit(), waiting at most timeout_s (wall s).
   template <class Srv>
-  Result attempt(const std::string& service, Srv& srv, bool last_try, std::string& why);
-  /// Outcome of a call whose worker ended in time (done) or not; records timeouts and drops (a failure of a
-  /// try that is not the last as service_retried).
+  Result attempt(const std::string& service, Srv& srv, double timeout_s, bool last_try, std::string& why);
+  /// Outcome of a call whose worker ended in time (done) or not; records timeouts and drops (a try without an
+  /// answer only if it was the last).
   Result finish(const std::string& service, const std::shared_ptr<CallState>& state, bool done,
                 std::thread&& worker, bool last_try, std::string& why);
 
@@ -106,14 +109,20 @@ template <class Srv>
 ServiceCaller::Result ServiceCaller::call(const std::string& service, Srv& srv, std::string& why) {
   const Result admitted = admit(service, why);
   if (admitted != Result::kOk) return admitted;
-  const Result first = attempt(service, srv, false, why);
+  const auto start = std::chrono::steady_clock::now();
+  const Result first = attempt(service, srv, timeout_s_, false, why);
   if (first != Result::kFailed) return first;
+  // The second try gets what the first left of timeout_s: a call never waits longer than one.
+  const double left_s = timeout_s_ - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ++retries_;
-  return attempt(service, srv, true, why);
+  ROS_WARN_THROTTLE(10.0, "%s without an answer; calling it once more (%zu calls made again so far)", why.c_str(),
+                    retries_);
+  return attempt(service, srv, std::max(left_s, 1e-3), true, why);
 }
 
 template <class Srv>
-ServiceCaller::Result ServiceCaller::attempt(const std::string& service, Srv& srv, bool last_try, std::string& why) {
+ServiceCaller::Result ServiceCaller::attempt(const std::string& service, Srv& srv, double timeout_s, bool last_try,
+                                             std::string& why) {
   // The worker owns its client, request and response: a call abandoned here
   // may answer later into its own copy, which nobody reads. A fresh
   // non-persistent client per call finds a restarted service again and is
@@ -123,7 +132,6 @@ ServiceCaller::Result ServiceCaller::attempt(const std::string& service, Srv& sr
   auto state = std::make_shared<CallState>();
   auto request = std::make_shared<Srv>(srv);
   ros::ServiceClient client(nh_.resolveName(service), false, ros::M_string(), ros::service_traits::md5sum<Srv>());
-  const double timeout_s = timeout_s_;
   std::thread worker([state, request, client, timeout_s]() mutable {
     const bool available = client.waitForExistence(ros::Duration(timeout_s));
     {

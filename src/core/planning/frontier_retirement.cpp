@@ -38,7 +38,7 @@ FrontierRetirement::FrontierRetirement(const FrontierRetirementConfig& config, c
 }
 
 std::uint64_t FrontierRetirement::key(const Eigen::Vector3d& p) const {
-  return cellKey21(p.x(), p.y(), p.z(), config_.cluster_size_m);
+  return pointCellKey21(p.x(), p.y(), p.z(), config_.cluster_size_m);
 }
 
 bool FrontierRetirement::lineOfSight(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double short_m,

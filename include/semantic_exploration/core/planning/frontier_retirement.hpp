@@ -118,7 +118,8 @@ class FrontierRetirement {
   /// and the frontier voxels the path was chosen to observe (a frontier
   /// candidate's goal): the clusters of the targets and every active cluster
   /// a pose sees count as viewed; whether they shrank is judged at the next
-  /// update().
+  /// update(). Without poses: an iteration without a winner whose frontier
+  /// candidates (the targets) had nothing to see (ExplorationPlanner).
   void recordViews(const std::vector<ViewPose>& poses, const CollisionQuery& not_occupied,
                    const std::vector<Eigen::Vector3d>& targets_W = {}, const LineQuery& line_not_occupied = {});
 
