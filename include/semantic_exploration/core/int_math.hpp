@@ -26,8 +26,8 @@ inline std::uint64_t cellKey21(std::int64_t x, std::int64_t y, std::int64_t z) {
 
 /// cellKey21 of the cell of edge cell_m that holds the point (x_m, y_m, z_m) (m): floor(x_m / cell_m) and so on.
 inline std::uint64_t pointCellKey21(double x_m, double y_m, double z_m, double cell_m) {
-  return cellKey21(static_cast<std::int64_t>(std::floor(x_m / cell_m)), static_cast<std::int64_t>(std::floor(y_m / cell_m)),
-                   static_cast<std::int64_t>(std::floor(z_m / cell_m)));
+  const auto cell = [cell_m](double v_m) { return static_cast<std::int64_t>(std::floor(v_m / cell_m)); };
+  return cellKey21(cell(x_m), cell(y_m), cell(z_m));
 }
 
 }  // namespace semexp

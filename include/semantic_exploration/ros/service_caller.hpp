@@ -17,7 +17,7 @@
 /// roscpp does not tell that from a handler that refused the request (a bad
 /// request is then sent twice). Failures are counted in the node's
 /// DropCounter as service_timeout, service_failed or service_busy; calls made
-/// again are logged (throttled) and counted in retries().
+/// again are logged (throttled) with a running count.
 
 #include <ros/ros.h>
 
@@ -57,9 +57,6 @@ class ServiceCaller {
   /// (also counted and logged through the DropCounter).
   template <class Srv>
   Result call(const std::string& service, Srv& srv, std::string& why);
-
-  /// Calls made again after a first try without an answer (see the file comment).
-  std::size_t retries() const { return retries_; }
 
   /// Starts a new round: services that timed out in the last one are called again.
   void newRound() { timed_out_now_.clear(); }
@@ -102,7 +99,7 @@ class ServiceCaller {
   std::vector<PendingCall> pending_calls_;
   /// Services that timed out in the current round (-> why).
   std::map<std::string, std::string> timed_out_now_;
-  std::size_t retries_ = 0;
+  std::size_t retries_ = 0;  ///< calls made again after a first try without an answer
 };
 
 template <class Srv>

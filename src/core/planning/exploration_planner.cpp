@@ -138,9 +138,10 @@ void ExplorationPlanner::recordUnseeableFrontiers(IterationResult& r, const Coll
   // decides with, each frontier candidate's cluster was looked at and nothing
   // came of it. Counted as a view of the cluster (no path was flown, so no
   // pose sees anything else), K of them retire it by evidence: otherwise a
-  // cluster whose views all lie in the invalid depth history's mask (a window)
-  // or that slips between the raycasts ends the mission no_reachable_candidate
-  // with that cluster still open.
+  // cluster whose views all lie in the invalid depth history's mask (for
+  // example at a window) or that slips between the raycasts ends the mission
+  // no_reachable_candidate with that cluster still open. Lazy and exhaustive
+  // planning decide this alike: any_gain is judged at the view positions.
   std::vector<Eigen::Vector3d> targets;
   for (const EvaluatedCandidate& c : r.candidates)
     if (c.sample.source == CandidateSource::kFrontier) targets.push_back(c.sample.position_W);

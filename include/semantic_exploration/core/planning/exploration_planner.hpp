@@ -134,7 +134,7 @@ class ExplorationPlanner {
   /// An iteration without a winner in which no candidate has a gain at its
   /// view position: records a view of each frontier candidate's cluster for
   /// frontier retirement (frontier_retirement.hpp), so that K such iterations
-  /// retire what no view can see instead of ending the mission.
+  /// can retire what no view can see before max_failed_iterations end the mission.
   void recordUnseeableFrontiers(IterationResult& r, const CollisionQuery& not_occupied, const LineQuery& line);
   /// Moves each object sample to the view point of its object's ring
   /// (CandidateSampler::objectViewRing) whose best yaw window (of G, as the
