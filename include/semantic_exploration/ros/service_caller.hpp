@@ -21,7 +21,6 @@
 
 #include <ros/ros.h>
 
-#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
@@ -111,10 +110,14 @@ ServiceCaller::Result ServiceCaller::call(const std::string& service, Srv& srv, 
   if (first != Result::kFailed) return first;
   // The second try gets what the first left of timeout_s: a call never waits longer than one.
   const double left_s = timeout_s_ - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (left_s <= 0.0) {  // no time left: it failed (a try this short would be reported as the service missing)
+    drops_.drop("service_failed", why);
+    return first;
+  }
   ++retries_;
   ROS_WARN_THROTTLE(10.0, "%s without an answer; calling it once more (%zu calls made again so far)", why.c_str(),
                     retries_);
-  return attempt(service, srv, std::max(left_s, 1e-3), true, why);
+  return attempt(service, srv, left_s, true, why);
 }
 
 template <class Srv>
