@@ -62,7 +62,7 @@ def _flights():
 
 def test_every_house_flying_rostest_is_checked():
     names = [f[0] for f in _flights()]
-    assert {"exploration_objects.test", "exploration_objects_classic.test", "exploration_objects_explored.test",
+    assert {"exploration_objects.test", "exploration_objects_classic.test",
             "exploration_objects_setpoints.test", "restart.test"} <= set(names), names
 
 
