@@ -83,11 +83,21 @@ void OccupancyMap::refreshSummaries(const std::vector<int>& cells, bool track,
     const int c = cells[j];
     if (surface_marks == SurfaceMarks::kAll) surface_counter_.occupancyChanged(store_, c, surface_rule);
     const Summary sm = summaries ? (*summaries)[j] : store_.cellSummary(c);
-    if (store_.cell_block[c] >= 0 && !sm.unknown_any && sm.min_l == sm.max_l && sm.max_l < 0) {
-      // A block of equal free voxels is a uniform leaf again: give the memory back.
-      releaseBlock(c);
-      store_.cell_value[c] = sm.min_l;
-      store_.cell_dist[c] = kNoDist;
+    if (!sm.unknown_any && sm.min_l == sm.max_l && sm.max_l < 0) {
+      // Equal free voxels are one uniform leaf, but not while they border unknown space: the cell's frontier
+      // voxels would be one coarse leaf, with no voxel of its own to count looks at (FrontierEvidence), and
+      // would forget the looks they had whenever the cell is split again. A block is released once its last
+      // frontier voxel is gone (updateFrontiers); a uniform cell that integration or markFreeSphere made
+      // free next to unknown space is split (integration only: a loaded map keeps its saved leaves).
+      const bool borders_unknown = occupancy::FrontierTracker::facesUnknown(store_, c);
+      if (store_.cell_block[c] >= 0 && !borders_unknown) {
+        releaseBlock(c);
+        store_.cell_value[c] = sm.min_l;
+        store_.cell_dist[c] = kNoDist;
+      } else if (track && store_.cell_block[c] < 0 && borders_unknown) {
+        store_.allocateBlock(c);
+        store_.cellSummary(c);  // the block's free and occupied counts (the summary itself is sm)
+      }
     }
     store_.levels[0].s[c] = sm;
     if (!track) continue;
@@ -100,7 +110,19 @@ void OccupancyMap::refreshSummaries(const std::vector<int>& cells, bool track,
   store_.propagateSummaries(cells);
 }
 
-void OccupancyMap::updateFrontiers() { frontiers_.update(store_); }
+void OccupancyMap::updateFrontiers() {
+  frontiers_.update(store_);
+  // A block of equal free voxels kept while it bordered unknown space (refreshSummaries) is released once
+  // its last frontier voxel is gone.
+  for (const int c : frontiers_.takeEmptiedBlocks()) {
+    if (store_.cell_block[c] < 0) continue;
+    const Summary& sm = store_.levels[0].s[c];
+    if (sm.unknown_any || sm.min_l != sm.max_l || sm.max_l >= 0) continue;
+    releaseBlock(c);
+    store_.cell_value[c] = sm.min_l;
+    store_.cell_dist[c] = kNoDist;
+  }
+}
 std::size_t OccupancyMap::frontierCount() const { return frontiers_.count(); }
 void OccupancyMap::forEachFrontier(const std::function<void(const Eigen::Vector3d&, double)>& f) const {
   frontiers_.forEach(store_, f);

@@ -136,16 +136,21 @@ bool OccupancyMap::applyBlocks(const MapBlocksData& m) {
     if (x < 0 || y < 0 || z < 0 || x >= store_.nb.x() || y >= store_.nb.y() || z >= store_.nb.z()) continue;
     const int cell = store_.cellIndex(x, y, z);
     const std::int8_t* q = listed_uniform ? &m.uniform_values[j - n_detailed] : m.payload.data() + j * store_.bs3;
-    const bool uniform = listed_uniform || std::all_of(q, q + store_.bs3, [&](std::int8_t a) { return a == q[0]; });
+    const bool all_equal =
+        listed_uniform || std::all_of(q, q + store_.bs3, [&](std::int8_t a) { return a == q[0]; });
+    const std::int16_t v0 = decodeL(q[0]);
+    // An all-equal free cell is written as a block: refreshSummaries releases it unless it borders unknown
+    // space, as integration does, so that a map rebuilt from updates has the original's frontier voxels.
+    const bool free_value = v0 != kUnknown && v0 < 0;
     store_.cell_dist[cell] = kNoDist;
-    if (uniform) {
+    if (all_equal && !free_value) {
       releaseBlock(cell);
-      store_.cell_value[cell] = decodeL(q[0]);
+      store_.cell_value[cell] = v0;
     } else {
       store_.cell_value[cell] = kUnknown;
       const int b = store_.cell_block[cell] >= 0 ? store_.cell_block[cell] : store_.allocateBlock(cell);
       std::int16_t* L = store_.logOdds(b);
-      for (int i = 0; i < store_.bs3; ++i) L[i] = decodeL(q[i]);
+      for (int i = 0; i < store_.bs3; ++i) L[i] = listed_uniform ? v0 : decodeL(q[i]);
       if (store_.block_surf[b] >= 0) {  // colour and distance are not replicated
         store_.releaseSurface(b);
       }

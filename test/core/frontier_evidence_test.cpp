@@ -168,6 +168,50 @@ TEST(FrontierEvidence, AResolvedVoxelIsForgotten) {
   EXPECT_FALSE(ev.retired(ahead));
 }
 
+// The ball's free blocks that touch unknown space stay blocks (OccupancyMap::refreshSummaries): released
+// into one uniform leaf, a block's frontier voxels would become one coarse leaf at its centre, which no look
+// can retire and whose voxels forget their looks when the block splits again. Every frontier leaf is one
+// voxel, and they are exactly the free voxels with an unknown face neighbour.
+TEST(FrontierEvidence, EveryFrontierOfAFreeBallIsAVoxelOfItsOwn) {
+  OccupancyMap map = freeBall();
+  const double r = map.resolution();
+  std::size_t leaves = 0, coarse = 0;
+  map.forEachFrontier([&](const Eigen::Vector3d&, double size_m) {
+    ++leaves;
+    coarse += size_m > 1.5 * r;
+  });
+  EXPECT_EQ(coarse, 0u);
+  // Brute force over the voxel centres of the ball's box and one voxel more.
+  const Eigen::Vector3d o = map.origin();
+  auto centre = [&](int i, int j, int k) {
+    return Eigen::Vector3d(o.x() + r * (i + 0.5), o.y() + r * (j + 0.5), o.z() + r * (k + 0.5));
+  };
+  auto unknown = [&](int i, int j, int k) { return map.state(centre(i, j, k)) == VoxelState::kUnknown; };
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = static_cast<int>(std::floor((-1.1 - o[a]) / r));
+    hi[a] = static_cast<int>(std::ceil((1.1 - o[a]) / r));
+  }
+  std::size_t expected = 0;
+  for (int k = lo[2]; k <= hi[2]; ++k)
+    for (int j = lo[1]; j <= hi[1]; ++j)
+      for (int i = lo[0]; i <= hi[0]; ++i)
+        if (map.state(centre(i, j, k)) == VoxelState::kFree &&
+            (unknown(i - 1, j, k) || unknown(i + 1, j, k) || unknown(i, j - 1, k) || unknown(i, j + 1, k) ||
+             unknown(i, j, k - 1) || unknown(i, j, k + 1)))
+          ++expected;
+  EXPECT_GT(expected, 1000u);
+  EXPECT_EQ(leaves, expected);
+  EXPECT_EQ(map.frontierCount(), expected);
+  // Once every voxel of the map is known, no block borders unknown space: the blocks kept for their frontier
+  // voxels are released (updateFrontiers), though the second sphere writes none of their voxels.
+  ASSERT_GT(map.blockCount(), 0u);
+  map.markFreeSphere(Eigen::Vector3d::Zero(), 6.0);  // reaches every corner of the 6 m map
+  map.updateFrontiers();
+  EXPECT_EQ(map.frontierCount(), 0u);
+  EXPECT_EQ(map.blockCount(), 0u);
+}
+
 TEST(FrontierEvidence, InvalidConfigNamesTheParameter) {
   FrontierEvidenceConfig c;
   c.looks_to_retire = 0;

@@ -51,6 +51,10 @@ bool FrontierTracker::uniformCellIsFrontier(const BlockStore& S, int cell) const
   if (S.cell_block[cell] >= 0) return false;
   const std::int16_t v = S.cell_value[cell];
   if (v == kUnknown || v >= 0) return false;
+  return facesUnknown(S, cell, true);
+}
+
+bool FrontierTracker::facesUnknown(const BlockStore& S, int cell, bool trust_summaries) {
   const int bz = cell / (S.nb.x() * S.nb.y()), by = (cell / S.nb.x()) % S.nb.y(), bx = cell % S.nb.x();
   const int m = S.bs - 1;
   for (int axis = 0; axis < 3; ++axis)
@@ -64,7 +68,7 @@ bool FrontierTracker::uniformCellIsFrontier(const BlockStore& S, int cell) const
         if (S.cell_value[nc] == kUnknown) return true;
         continue;
       }
-      if (!S.levels[0].s[nc].unknown_any) continue;
+      if (trust_summaries && !S.levels[0].s[nc].unknown_any) continue;
       const std::int16_t* L = S.logOdds(nbk);
       const int layer = sgn > 0 ? 0 : m;  // the neighbour's face touching this cell
       for (int a = 0; a < S.bs; ++a)
@@ -167,6 +171,7 @@ void FrontierTracker::checkCell(const BlockStore& S, int cell, bool full) {
     } else if (after == 0 && had) {
       fl &= static_cast<std::uint8_t>(~kBlockFrontier);
       --block_count_;
+      emptied_.push_back(cell);
     }
     return;
   }
@@ -231,6 +236,7 @@ void FrontierTracker::reset(std::size_t cells, int fwords) {
   bits_.clear();
   zeros_.assign(static_cast<std::size_t>(fwords), 0);
   cand_.clear();
+  emptied_.clear();
   blocks_.clear();
   cells_.clear();
   voxels_ = 0;

@@ -34,6 +34,14 @@ class FrontierTracker {
   /// Is this uniform cell a frontier / does this cell's block hold frontier bits?
   bool cellIsListedFrontier(int cell) const;
   bool blockHasFrontier(int cell) const;
+  /// Does a voxel of a face-adjacent cell that touches `cell` hold unknown?
+  /// (A free uniform cell that does is a coarse frontier leaf.) With
+  /// trust_summaries, a neighbour block whose level-0 summary has no unknown
+  /// voxel is not read (the summaries must be current).
+  static bool facesUnknown(const BlockStore& store, int cell, bool trust_summaries = false);
+  /// Cells whose block lost its last frontier voxel in the updates since the
+  /// last call (the map releases those that are uniform free: OccupancyMap::updateFrontiers).
+  std::vector<int> takeEmptiedBlocks() { std::vector<int> out; out.swap(emptied_); return out; }
 
   // ------------------------------------- persistence (OccupancyMap::save/load)
   /// fwords frontier bits of block slot b (all zero for a block without frontiers).
@@ -60,6 +68,7 @@ class FrontierTracker {
   std::vector<std::uint64_t> bits_;   ///< fwords_ per block slot
   std::vector<std::uint64_t> zeros_;  ///< fwords_ zero words (blockBits of slots beyond bits_)
   std::vector<int> cand_;             ///< changed since the last update()
+  std::vector<int> emptied_;          ///< cells whose block lost its last frontier bit (takeEmptiedBlocks)
   std::vector<int> blocks_;           ///< cells whose block has frontier bits (entries without the flag are stale)
   std::vector<int> cells_;            ///< uniform cells that are frontiers (entries without the flag are stale)
   std::size_t voxels_ = 0;            ///< set frontier bits over all blocks
