@@ -19,7 +19,9 @@
 /// one ray seen again. looks_to_retire looks retire a voxel. A voxel that
 /// stops being a frontier is forgotten. Coarse frontier leaves (uniform
 /// cells larger than a voxel) are never retired: their centre names no
-/// voxel of their own.
+/// voxel of their own. Integration leaves none (free cells next to unknown
+/// space stay voxel blocks, OccupancyMap::refreshSummaries); a map loaded
+/// from a file saved before that may hold some.
 
 #include <Eigen/Geometry>
 #include <cmath>

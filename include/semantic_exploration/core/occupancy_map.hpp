@@ -105,7 +105,8 @@ class OccupancyMap {
   void markFreeSphere(const Eigen::Vector3d& centre_W, double radius_m);
 
   /// Re-checks frontier candidates (previous frontiers + cells changed since
-  /// the last call) at the finest allocated level. Call after integrate().
+  /// the last call) at the finest allocated level, and gives back as uniform
+  /// leaves the free blocks whose last frontier voxel is gone. Call after integrate().
   void updateFrontiers();
 
   // -------------------------------------------------------------- queries
@@ -217,7 +218,10 @@ class OccupancyMap {
   void saveTo(std::ostream& f) const;  ///< the own format's bytes (save())
   /// Recomputes summaries of `cells` and their ancestors (`summaries`: the
   /// cells' own, if already computed); a block of equal free voxels becomes a
-  /// uniform leaf again. `track` also queues the cells for the next update
+  /// uniform leaf again unless it borders unknown space, and with `track` a
+  /// uniform free cell that borders unknown space is split into a block (so
+  /// that its frontier voxels are voxels; updateFrontiers() releases the block
+  /// once they are gone). `track` also queues the cells for the next update
   /// message and frontier check. SurfaceMarks::kAll marks the cells (and
   /// those whose count reads them) for the surface count; kByCaller leaves
   /// that to a caller that knows more precisely what changed (integrate()).
