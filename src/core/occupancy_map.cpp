@@ -77,24 +77,23 @@ IntegrationStats OccupancyMap::integrate(const float* depth_m, const std::uint8_
 }
 
 void OccupancyMap::refreshSummaries(const std::vector<int>& cells, bool track,
-                                    const std::vector<Summary>* summaries, SurfaceMarks surface_marks) {
+                                    const std::vector<Summary>* summaries, SurfaceMarks surface_marks,
+                                    FreeCells free_cells) {
   const occupancy::SurfaceRule surface_rule = surfaceMarkingRule();
   for (std::size_t j = 0; j < cells.size(); ++j) {
     const int c = cells[j];
     if (surface_marks == SurfaceMarks::kAll) surface_counter_.occupancyChanged(store_, c, surface_rule);
     const Summary sm = summaries ? (*summaries)[j] : store_.cellSummary(c);
-    if (!sm.unknown_any && sm.min_l == sm.max_l && sm.max_l < 0) {
+    if (free_cells == FreeCells::kByFrontier && !sm.unknown_any && sm.min_l == sm.max_l && sm.max_l < 0) {
       // Equal free voxels are one uniform leaf, but not while they border unknown space: the cell's frontier
       // voxels would be one coarse leaf, with no voxel of its own to count looks at (FrontierEvidence), and
-      // would forget the looks they had whenever the cell is split again. A block is released once its last
-      // frontier voxel is gone (updateFrontiers); a uniform cell that integration or markFreeSphere made
-      // free next to unknown space is split (integration only: a loaded map keeps its saved leaves).
+      // would forget the looks they had whenever the cell is split again.
       const bool borders_unknown = occupancy::FrontierTracker::facesUnknown(store_, c);
       if (store_.cell_block[c] >= 0 && !borders_unknown) {
         releaseBlock(c);
         store_.cell_value[c] = sm.min_l;
         store_.cell_dist[c] = kNoDist;
-      } else if (track && store_.cell_block[c] < 0 && borders_unknown) {
+      } else if (store_.cell_block[c] < 0 && borders_unknown) {
         store_.allocateBlock(c);
         store_.cellSummary(c);  // the block's free and occupied counts (the summary itself is sm)
       }

@@ -136,40 +136,39 @@ bool OccupancyMap::applyBlocks(const MapBlocksData& m) {
     if (x < 0 || y < 0 || z < 0 || x >= store_.nb.x() || y >= store_.nb.y() || z >= store_.nb.z()) continue;
     const int cell = store_.cellIndex(x, y, z);
     const std::int8_t* q = listed_uniform ? &m.uniform_values[j - n_detailed] : m.payload.data() + j * store_.bs3;
-    const bool all_equal =
-        listed_uniform || std::all_of(q, q + store_.bs3, [&](std::int8_t a) { return a == q[0]; });
-    const std::int16_t v0 = decodeL(q[0]);
-    // An all-equal free cell is written as a block: refreshSummaries releases it unless it borders unknown
-    // space, as integration does, so that a map rebuilt from updates has the original's frontier voxels.
-    const bool free_value = v0 != kUnknown && v0 < 0;
+    const bool uniform = listed_uniform || std::all_of(q, q + store_.bs3, [&](std::int8_t a) { return a == q[0]; });
     store_.cell_dist[cell] = kNoDist;
-    if (all_equal && !free_value) {
+    if (uniform) {
       releaseBlock(cell);
-      store_.cell_value[cell] = v0;
+      store_.cell_value[cell] = decodeL(q[0]);
     } else {
       store_.cell_value[cell] = kUnknown;
       const int b = store_.cell_block[cell] >= 0 ? store_.cell_block[cell] : store_.allocateBlock(cell);
       std::int16_t* L = store_.logOdds(b);
-      for (int i = 0; i < store_.bs3; ++i) L[i] = listed_uniform ? v0 : decodeL(q[i]);
+      for (int i = 0; i < store_.bs3; ++i) L[i] = decodeL(q[i]);
       if (store_.block_surf[b] >= 0) {  // colour and distance are not replicated
         store_.releaseSurface(b);
       }
     }
     changed.push_back(cell);
   }
-  refreshSummaries(changed, false);
+  // A uniform free cell that now borders unknown space is split into a block by refreshSummaries, as in
+  // integration: the written cells and their uniform free face neighbours (unknown written next to one).
+  std::vector<int> refresh = changed;
+  for (const int cell : changed)
+    store_.forEachFaceNeighbour(cell, [&](int nc) {
+      if (store_.cell_block[nc] < 0 && store_.cell_value[nc] != kUnknown && store_.cell_value[nc] < 0)
+        refresh.push_back(nc);
+    });
+  std::sort(refresh.begin(), refresh.end());
+  refresh.erase(std::unique(refresh.begin(), refresh.end()), refresh.end());
+  refreshSummaries(refresh, false);
   // Frontiers: an overwritten cell may gain or lose frontier voxels, and so may its face neighbours
   // (their unknown neighbour may now be known, or known voxels unknown again); the next
   // updateFrontiers() re-checks them all.
   for (const int cell : changed) {
     frontiers_.markCandidate(cell);
-    const Eigen::Vector3i bc = store_.cellCoords(cell);
-    for (int axis = 0; axis < 3; ++axis)
-      for (int sgn = -1; sgn <= 1; sgn += 2) {
-        Eigen::Vector3i n = bc;
-        n[axis] += sgn;
-        if (n[axis] >= 0 && n[axis] < store_.nb[axis]) frontiers_.markCandidate(store_.cellIndex(n.x(), n.y(), n.z()));
-      }
+    store_.forEachFaceNeighbour(cell, [&](int nc) { frontiers_.markCandidate(nc); });
   }
   return true;
 }
@@ -272,7 +271,7 @@ OccupancyMap OccupancyMap::load(const std::string& path) {
     getVec(f, m.frontiers_.mutableBlockBits(m.store_, b), m.store_.fwords);
   }
   for (int c = 0; c < static_cast<int>(m.store_.cell_block.size()); ++c) cells.push_back(c);
-  m.refreshSummaries(cells, false);
+  m.refreshSummaries(cells, false, nullptr, SurfaceMarks::kAll, FreeCells::kAsTheyAre);  // blocks as saved
   std::vector<int> fb(get<std::uint64_t>(f));
   getVec(f, fb.data(), fb.size());
   std::vector<int> fc(get<std::uint64_t>(f));

@@ -44,6 +44,38 @@ std::vector<float> constantDepth(const PinholeCamera& cam, float d) {
   return std::vector<float>(static_cast<std::size_t>(cam.width) * cam.height, d);
 }
 
+// Frontier leaves larger than one voxel.
+std::size_t coarseFrontierLeaves(const OccupancyMap& map) {
+  std::size_t n = 0;
+  map.forEachFrontier([&](const Eigen::Vector3d&, double size_m) { n += size_m > 1.5 * map.resolution(); });
+  return n;
+}
+
+// Free voxels with an unknown face neighbour whose centres lie in [lo_m, hi_m], by brute force.
+std::size_t frontierVoxelsByBruteForce(const OccupancyMap& map, const Eigen::Vector3d& lo_m,
+                                       const Eigen::Vector3d& hi_m) {
+  const Eigen::Vector3d o = map.origin();
+  const double r = map.resolution();
+  auto centre = [&](int i, int j, int k) {
+    return Eigen::Vector3d(o.x() + r * (i + 0.5), o.y() + r * (j + 0.5), o.z() + r * (k + 0.5));
+  };
+  auto unknown = [&](int i, int j, int k) { return map.state(centre(i, j, k)) == VoxelState::kUnknown; };
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = static_cast<int>(std::ceil((lo_m[a] - o[a]) / r - 0.5));
+    hi[a] = static_cast<int>(std::floor((hi_m[a] - o[a]) / r - 0.5));
+  }
+  std::size_t n = 0;
+  for (int k = lo[2]; k <= hi[2]; ++k)
+    for (int j = lo[1]; j <= hi[1]; ++j)
+      for (int i = lo[0]; i <= hi[0]; ++i)
+        if (map.state(centre(i, j, k)) == VoxelState::kFree &&
+            (unknown(i - 1, j, k) || unknown(i + 1, j, k) || unknown(i, j - 1, k) || unknown(i, j + 1, k) ||
+             unknown(i, j, k - 1) || unknown(i, j, k + 1)))
+          ++n;
+  return n;
+}
+
 }  // namespace
 
 TEST(FrontierEvidence, ThreeLooksFromDifferentPlacesRetireAVoxelThatStaysAFrontier) {
@@ -174,32 +206,11 @@ TEST(FrontierEvidence, AResolvedVoxelIsForgotten) {
 // voxel, and they are exactly the free voxels with an unknown face neighbour.
 TEST(FrontierEvidence, EveryFrontierOfAFreeBallIsAVoxelOfItsOwn) {
   OccupancyMap map = freeBall();
-  const double r = map.resolution();
-  std::size_t leaves = 0, coarse = 0;
-  map.forEachFrontier([&](const Eigen::Vector3d&, double size_m) {
-    ++leaves;
-    coarse += size_m > 1.5 * r;
-  });
-  EXPECT_EQ(coarse, 0u);
-  // Brute force over the voxel centres of the ball's box and one voxel more.
-  const Eigen::Vector3d o = map.origin();
-  auto centre = [&](int i, int j, int k) {
-    return Eigen::Vector3d(o.x() + r * (i + 0.5), o.y() + r * (j + 0.5), o.z() + r * (k + 0.5));
-  };
-  auto unknown = [&](int i, int j, int k) { return map.state(centre(i, j, k)) == VoxelState::kUnknown; };
-  int lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = static_cast<int>(std::floor((-1.1 - o[a]) / r));
-    hi[a] = static_cast<int>(std::ceil((1.1 - o[a]) / r));
-  }
-  std::size_t expected = 0;
-  for (int k = lo[2]; k <= hi[2]; ++k)
-    for (int j = lo[1]; j <= hi[1]; ++j)
-      for (int i = lo[0]; i <= hi[0]; ++i)
-        if (map.state(centre(i, j, k)) == VoxelState::kFree &&
-            (unknown(i - 1, j, k) || unknown(i + 1, j, k) || unknown(i, j - 1, k) || unknown(i, j + 1, k) ||
-             unknown(i, j, k - 1) || unknown(i, j, k + 1)))
-          ++expected;
+  std::size_t leaves = 0;
+  map.forEachFrontier([&](const Eigen::Vector3d&, double) { ++leaves; });
+  EXPECT_EQ(coarseFrontierLeaves(map), 0u);
+  const std::size_t expected = frontierVoxelsByBruteForce(map, Eigen::Vector3d(-1.1, -1.1, -1.1),
+                                                          Eigen::Vector3d(1.1, 1.1, 1.1));
   EXPECT_GT(expected, 1000u);
   EXPECT_EQ(leaves, expected);
   EXPECT_EQ(map.frontierCount(), expected);
@@ -210,6 +221,30 @@ TEST(FrontierEvidence, EveryFrontierOfAFreeBallIsAVoxelOfItsOwn) {
   map.updateFrontiers();
   EXPECT_EQ(map.frontierCount(), 0u);
   EXPECT_EQ(map.blockCount(), 0u);
+}
+
+// The same through integration: depth frames of the standard room, whose uniform path makes whole cells free
+// in one update. After each second frame the frontier leaves are voxels, exactly the brute-force set.
+TEST(FrontierEvidence, FramesOfARoomLeaveEveryFrontierAVoxelOfItsOwn) {
+  const semexp_test::BoxRoom room = semexp_test::standardRoom();
+  const Bounds bounds = room.bounds(0.2);
+  OccupancyMap map(BackgroundMapConfig{}, bounds);
+  const PinholeCamera cam;
+  const Eigen::Isometry3d poses[] = {lookPose({-1.5, 0.0, 1.2}, 0.0, 0.0), lookPose({-1.5, 0.0, 1.2}, 1.2, 0.0),
+                                     lookPose({0.5, 0.2, 1.5}, 2.5, 0.3), lookPose({0.5, 0.2, 1.5}, -2.0, -0.3),
+                                     lookPose({2.0, -0.5, 1.0}, 3.1, 0.0), lookPose({2.0, -0.5, 1.0}, -1.6, 0.2)};
+  int checked = 0;
+  for (int f = 0; f < 6; ++f) {
+    map.integrate(room.render(cam, poses[f]).data(), nullptr, cam, poses[f]);
+    map.updateFrontiers();
+    if (f % 2 == 0) continue;
+    ++checked;
+    EXPECT_EQ(coarseFrontierLeaves(map), 0u) << "frame " << f;
+    const std::size_t expected = frontierVoxelsByBruteForce(map, bounds.min_m, bounds.max_m);
+    EXPECT_GT(expected, 1000u) << "frame " << f;
+    EXPECT_EQ(map.frontierCount(), expected) << "frame " << f;
+  }
+  EXPECT_EQ(checked, 3);
 }
 
 TEST(FrontierEvidence, InvalidConfigNamesTheParameter) {

@@ -118,6 +118,10 @@ TEST(MapSnapshot, AMapRestoredFromThePlannersReplicaHasTheSameVoxelsAndFrontiers
   EXPECT_NEAR(restored.freeVolume(), map.freeVolume(), 1e-9);
   restored.updateFrontiers();
   EXPECT_EQ(restored.frontierCount(), map.frontierCount());
+  // The same blocks, and no pool grown by cells allocated on the way (a uniform free cell becomes a block only
+  // where it borders unknown space).
+  EXPECT_EQ(restored.blockCount(), map.blockCount());
+  EXPECT_LE(restored.memoryBytes(), map.memoryBytes());
   // The same replica twice gives the same bytes (blocks in key order).
   const MapBlocksData again = replica.snapshot();
   EXPECT_EQ(again.coords, from_replica.coords);

@@ -217,18 +217,22 @@ class OccupancyMap {
  private:
   void saveTo(std::ostream& f) const;  ///< the own format's bytes (save())
   /// Recomputes summaries of `cells` and their ancestors (`summaries`: the
-  /// cells' own, if already computed); a block of equal free voxels becomes a
-  /// uniform leaf again unless it borders unknown space, and with `track` a
-  /// uniform free cell that borders unknown space is split into a block (so
-  /// that its frontier voxels are voxels; updateFrontiers() releases the block
-  /// once they are gone). `track` also queues the cells for the next update
-  /// message and frontier check. SurfaceMarks::kAll marks the cells (and
-  /// those whose count reads them) for the surface count; kByCaller leaves
-  /// that to a caller that knows more precisely what changed (integrate()).
+  /// cells' own, if already computed). `track` also queues the cells for the
+  /// next update message and frontier check. SurfaceMarks::kAll marks the
+  /// cells (and those whose count reads them) for the surface count;
+  /// kByCaller leaves that to a caller that knows more precisely what changed
+  /// (integrate()). FreeCells::kByFrontier: a cell of equal free voxels is a
+  /// uniform leaf unless it borders unknown space, then a block, so that its
+  /// frontier voxels are voxels (updateFrontiers() releases the block once
+  /// they are gone); the borders are read from the voxels, not the summaries,
+  /// so every written cell must hold its new values. kAsTheyAre leaves blocks
+  /// and leaves as they are (load(): the saved frontier table names them).
   enum class SurfaceMarks { kAll, kByCaller };
+  enum class FreeCells { kByFrontier, kAsTheyAre };
   void refreshSummaries(const std::vector<int>& cells, bool track = true,
                         const std::vector<occupancy::Summary>* summaries = nullptr,
-                        SurfaceMarks surface_marks = SurfaceMarks::kAll);
+                        SurfaceMarks surface_marks = SurfaceMarks::kAll,
+                        FreeCells free_cells = FreeCells::kByFrontier);
   void releaseBlock(int cell);  ///< store_.releaseBlock, telling the frontier tracker first
   occupancy::SurfaceRule surfaceRule(double d_m) const;  ///< surfaceObservedWithin's rule for d_m
   occupancy::SurfaceRule surfaceMarkingRule() const;     ///< the rule whose reach marks changed cells

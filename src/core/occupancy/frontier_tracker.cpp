@@ -325,7 +325,7 @@ bool FrontierTracker::restore(const BlockStore& S, const std::vector<int>& block
 
 std::size_t FrontierTracker::memoryBytes() const {
   return flags_.capacity() + (bits_.capacity() + zeros_.capacity()) * sizeof(std::uint64_t) +
-         (cand_.capacity() + blocks_.capacity() + cells_.capacity()) * sizeof(int);
+         (cand_.capacity() + emptied_.capacity() + blocks_.capacity() + cells_.capacity()) * sizeof(int);
 }
 
 }  // namespace occupancy

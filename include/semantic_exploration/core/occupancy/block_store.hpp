@@ -79,6 +79,18 @@ class BlockStore {
   Eigen::Vector3i cellCoords(int cell) const {
     return {cell % nb.x(), (cell / nb.x()) % nb.y(), cell / (nb.x() * nb.y())};
   }
+  /// Calls f(neighbour cell index) for each face neighbour of `cell` inside the grid.
+  template <class F>
+  void forEachFaceNeighbour(int cell, F&& f) const {
+    const Eigen::Vector3i c = cellCoords(cell);
+    for (int axis = 0; axis < 3; ++axis)
+      for (int sgn = -1; sgn <= 1; sgn += 2) {
+        Eigen::Vector3i n = c;
+        n[axis] += sgn;
+        if (n[axis] >= 0 && n[axis] < nb[axis]) f(cellIndex(n.x(), n.y(), n.z()));
+      }
+  }
+
   std::size_t cellCount() const { return cell_block.size(); }
   /// Index of voxel (x, y, z) of a cell, each in [0, bs).
   int voxelIndex(int x, int y, int z) const { return x + bs * (y + bs * z); }
