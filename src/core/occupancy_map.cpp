@@ -40,6 +40,12 @@ void OccupancyMap::releaseBlock(int cell) {
   store_.releaseBlock(cell);
 }
 
+void OccupancyMap::releaseFreeBlock(int cell, std::int16_t l) {
+  releaseBlock(cell);
+  store_.cell_value[cell] = l;
+  store_.cell_dist[cell] = kNoDist;  // free voxels carry no surface distance
+}
+
 // ------------------------------------------------------------ integration
 
 IntegrationStats OccupancyMap::integrate(const cv::Mat& depth, const cv::Mat& rgb, const PinholeCamera& camera,
@@ -84,15 +90,13 @@ void OccupancyMap::refreshSummaries(const std::vector<int>& cells, bool track,
     const int c = cells[j];
     if (surface_marks == SurfaceMarks::kAll) surface_counter_.occupancyChanged(store_, c, surface_rule);
     const Summary sm = summaries ? (*summaries)[j] : store_.cellSummary(c);
-    if (free_cells == FreeCells::kByFrontier && !sm.unknown_any && sm.min_l == sm.max_l && sm.max_l < 0) {
+    if (free_cells == FreeCells::kByFrontier && sm.uniformFree()) {
       // Equal free voxels are one uniform leaf, but not while they border unknown space: the cell's frontier
       // voxels would be one coarse leaf, with no voxel of its own to count looks at (FrontierEvidence), and
       // would forget the looks they had whenever the cell is split again.
       const bool borders_unknown = occupancy::FrontierTracker::facesUnknown(store_, c);
       if (store_.cell_block[c] >= 0 && !borders_unknown) {
-        releaseBlock(c);
-        store_.cell_value[c] = sm.min_l;
-        store_.cell_dist[c] = kNoDist;
+        releaseFreeBlock(c, sm.min_l);
       } else if (store_.cell_block[c] < 0 && borders_unknown) {
         store_.allocateBlock(c);
         store_.cellSummary(c);  // the block's free and occupied counts (the summary itself is sm)
@@ -116,10 +120,7 @@ void OccupancyMap::updateFrontiers() {
   for (const int c : frontiers_.takeEmptiedBlocks()) {
     if (store_.cell_block[c] < 0) continue;
     const Summary& sm = store_.levels[0].s[c];
-    if (sm.unknown_any || sm.min_l != sm.max_l || sm.max_l >= 0) continue;
-    releaseBlock(c);
-    store_.cell_value[c] = sm.min_l;
-    store_.cell_dist[c] = kNoDist;
+    if (sm.uniformFree()) releaseFreeBlock(c, sm.min_l);
   }
 }
 std::size_t OccupancyMap::frontierCount() const { return frontiers_.count(); }

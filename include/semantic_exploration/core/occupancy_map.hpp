@@ -234,6 +234,7 @@ class OccupancyMap {
                         SurfaceMarks surface_marks = SurfaceMarks::kAll,
                         FreeCells free_cells = FreeCells::kByFrontier);
   void releaseBlock(int cell);  ///< store_.releaseBlock, telling the frontier tracker first
+  void releaseFreeBlock(int cell, std::int16_t l);  ///< releaseBlock of a block whose voxels are all free at l
   occupancy::SurfaceRule surfaceRule(double d_m) const;  ///< surfaceObservedWithin's rule for d_m
   occupancy::SurfaceRule surfaceMarkingRule() const;     ///< the rule whose reach marks changed cells
   void clearAll();

@@ -43,6 +43,8 @@ struct Summary {
   std::int16_t max_l;        ///< max log-odds over known voxels below (INT16_MIN if none)
   std::uint8_t known_any;    ///< some voxel below is known
   std::uint8_t unknown_any;  ///< some voxel below is unknown
+  /// Every voxel below known and free at one value.
+  bool uniformFree() const { return !unknown_any && min_l == max_l && max_l < 0; }
 };
 
 /// One level of the summary pyramid: dims nodes per axis, x fastest.
