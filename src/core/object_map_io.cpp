@@ -38,7 +38,7 @@ TsdfSummary ObjectMap::summarize(const MappedObject& object, double d_obj_m) con
 }
 
 Mesh ObjectMap::mesh(const MappedObject& object) const {
-  Mesh m = object.tsdf.extractMesh(static_cast<float>(config_.mesh_min_weight));
+  Mesh m = object.tsdf.extractMesh(config_.meshGate());
   dropMeshFragments(m, config_.mesh_fragment_gap_m);
   return m;
 }

@@ -371,7 +371,7 @@ void TsdfMapT<V>::mergeFrom(const TsdfMapT& other) {
 }
 
 template <class V>
-Mesh TsdfMapT<V>::extractMesh(float min_weight) const {
+Mesh TsdfMapT<V>::extractMesh(const MeshGate& gate) const {
   const auto& table = MarchingCubesTable::get();
   const int B = params_.block_size;
   const float res = static_cast<float>(params_.resolution_m);
@@ -401,7 +401,7 @@ Mesh TsdfMapT<V>::extractMesh(float min_weight) const {
               break;
             }
             const V& vx = (*blk)[(cx % B) + B * ((cy % B) + B * (cz % B))];
-            if (vx.weight() <= 0.f || vx.weight() < min_weight) {
+            if (!gate.passes(vx.weight(), vx.minDistance())) {
               ok = false;
               break;
             }

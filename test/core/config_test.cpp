@@ -184,6 +184,18 @@ TEST(Config, OtherBadValues) {
   om.mesh_min_weight = 4.0;
   om.max_weight = 3.0;  // no voxel could ever reach the minimum: every mesh would stay empty
   EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/mesh_min_weight");
+  om = ObjectMapConfig();
+  om.mesh_max_sdf_std_m = -0.001;
+  EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/mesh_max_sdf_std_m");
+  om = ObjectMapConfig();
+  om.depth_noise.sigma_min_m = 0.0;
+  EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/depth_noise/sigma_min_m");
+  om = ObjectMapConfig();
+  om.depth_noise.s_per_m = -0.002;
+  EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/depth_noise/s_per_m");
+  om = ObjectMapConfig();
+  om.depth_noise.sigma_max_m = 0.001;  // under sigma_min_m
+  EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/depth_noise/sigma_max_m");
   Bounds b;
   b.max_m.z() = b.min_m.z();
   EXPECT_EQ(rejected([&] { b.validate(); }), "bounds/max_m");

@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "semantic_exploration/core/tsdf.hpp"
 #include "semexp_test/cameras.hpp"
 #include "semexp_test/object_scenes.hpp"
@@ -79,6 +82,68 @@ TEST(TsdfUpdate, MeshLeavesOutCubesBelowTheMinimumWeight) {
   EXPECT_TRUE(map.extractMesh(4.5f).empty());
   view.into(map, 255, true);
   EXPECT_EQ(map.extractMesh(4.f).triangles.size(), all);
+}
+
+// The depth noise model of Table I: sigma(d) = max(sigma_min, min(s d^2, sigma_max)).
+TEST(TsdfUpdate, DepthNoiseFollowsTableI) {
+  const semexp::DepthNoise n;  // 0.005 m, 0.002 1/m, 0.2 m
+  EXPECT_DOUBLE_EQ(n.sigma(0.5), 0.005);   // s d^2 = 0.0005: the floor
+  EXPECT_DOUBLE_EQ(n.sigma(2.0), 0.008);   // 0.002 * 4
+  EXPECT_DOUBLE_EQ(n.sigma(3.0), 0.018);   // 0.002 * 9
+  EXPECT_DOUBLE_EQ(n.sigma(20.0), 0.2);    // 0.8, capped
+  EXPECT_DOUBLE_EQ(n.sigma(std::numeric_limits<double>::infinity()), 0.2);  // never observed: the cap
+}
+
+// MeshGate::passes, hand-computed: a voxel passes max_sdf_std_m = e when sigma(d)^2 <= e^2 w.
+TEST(TsdfUpdate, MeshGateAsksWeightByTheNoiseOfTheNearestView) {
+  semexp::MeshGate g;  // off: every observed voxel
+  EXPECT_TRUE(g.passes(0.0625f, 3.0f));
+  EXPECT_FALSE(g.passes(0.f, 1.0f));
+  g.min_weight = 2.f;
+  EXPECT_FALSE(g.passes(1.9375f, 1.0f));
+  EXPECT_TRUE(g.passes(2.f, 1.0f));
+  g.min_weight = 0.f;
+  g.max_sdf_std_m = 0.005f;
+  // Seen from 2 m at best: sigma 8 mm needs w >= (8 / 5)^2 = 2.56.
+  EXPECT_FALSE(g.passes(2.5f, 2.0f));
+  EXPECT_TRUE(g.passes(2.5625f, 2.0f));
+  // From 3 m: sigma 18 mm needs w >= 12.96; from 1.2 m the floor, 5 mm, needs w >= 1 (1.0625 clear of the bound).
+  EXPECT_FALSE(g.passes(12.9375f, 3.0f));
+  EXPECT_TRUE(g.passes(13.f, 3.0f));
+  EXPECT_TRUE(g.passes(1.0625f, 1.2f));
+  EXPECT_FALSE(g.passes(50.f, std::numeric_limits<float>::infinity()));  // sigma_max: needs w >= 1600
+  // A sensor twice as noisy needs four times the weight: from 2 m, w >= 10.24.
+  g.noise.sigma_min_m = 0.01;
+  g.noise.s_per_m = 0.004;
+  EXPECT_FALSE(g.passes(10.1875f, 2.0f));
+  EXPECT_TRUE(g.passes(10.25f, 2.0f));
+}
+
+// The gate on the wall of MeshLeavesOutCubesBelowTheMinimumWeight, seen from about 1 m, where the noise is
+// the floor sigma_min for every voxel (s d^2 < sigma_min up to 1.58 m): the surface's cubes hold between 5/6
+// and 1 per view. After 3 views (w in [2.5, 3]) a gate asking w >= 2.4 keeps the whole mesh and one asking
+// w >= 3.2 leaves nothing; with the noise doubled the first asks w >= 9.6: nothing after 9 views, all of it after 12 (w >= 10).
+TEST(TsdfUpdate, MeshGateAsksFourTimesTheViewsOfASensorTwiceAsNoisy) {
+  const WallAhead view;
+  TsdfMap map(params());
+  for (int k = 0; k < 3; ++k) view.into(map, 255, true);
+  const std::size_t all = map.extractMesh().triangles.size();
+  ASSERT_GT(all, 20u);
+  semexp::MeshGate g;
+  g.max_sdf_std_m = static_cast<float>(0.005 / std::sqrt(2.4));
+  EXPECT_EQ(map.extractMesh(g).triangles.size(), all);
+  semexp::MeshGate tight = g;
+  tight.max_sdf_std_m = static_cast<float>(0.005 / std::sqrt(3.2));
+  EXPECT_TRUE(map.extractMesh(tight).empty());
+  semexp::MeshGate noisy = g;
+  noisy.noise.sigma_min_m = 0.01;
+  noisy.noise.s_per_m = 0.004;
+  EXPECT_TRUE(map.extractMesh(noisy).empty());
+  for (int k = 3; k < 9; ++k) view.into(map, 255, true);
+  EXPECT_TRUE(map.extractMesh(noisy).empty());  // 9 views: w <= 9
+  EXPECT_EQ(map.extractMesh(g).triangles.size(), all);
+  for (int k = 9; k < 12; ++k) view.into(map, 255, true);
+  EXPECT_EQ(map.extractMesh(noisy).triangles.size(), all);  // 12 views: w >= 12 * 5/6 = 10
 }
 
 // revision() keys per-object caches (the object map node's summaries): it must change with every call that

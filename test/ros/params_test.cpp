@@ -200,6 +200,23 @@ TEST(Params, NodeConfigsLoadAndNameTheParameterAtFault) {
             "depth_history/width");
 }
 
+// The nested depth_noise block of object_map (the mesh's SDF error gate) loads by its full names.
+TEST(Params, ObjectMapDepthNoiseLoadsAndNamesTheParameter) {
+  XmlRpcValue root;
+  root["object_map"]["mesh_max_sdf_std_m"] = 0.005;
+  root["object_map"]["depth_noise"]["sigma_min_m"] = 0.01;
+  root["object_map"]["depth_noise"]["s_per_m"] = 0.004;
+  const auto om = semexp_ros::loadObjectMap(ParamReader(root));
+  EXPECT_DOUBLE_EQ(om.mesh_max_sdf_std_m, 0.005);
+  EXPECT_DOUBLE_EQ(om.depth_noise.sigma_min_m, 0.01);
+  EXPECT_DOUBLE_EQ(om.depth_noise.s_per_m, 0.004);
+  EXPECT_DOUBLE_EQ(om.depth_noise.sigma_max_m, 0.2);  // default kept
+  EXPECT_FLOAT_EQ(om.meshGate().max_sdf_std_m, 0.005f);
+  EXPECT_DOUBLE_EQ(om.meshGate().noise.sigma(2.0), 0.016);
+  root["object_map"]["depth_noise"]["sigma_max_m"] = 0.001;
+  EXPECT_EQ(rejected([&] { semexp_ros::loadObjectMap(ParamReader(root)); }), "object_map/depth_noise/sigma_max_m");
+}
+
 TEST(Params, RecordedReadsListEveryParameterWithItsDefault) {
   XmlRpcValue root = cameraTree();
   root["camera"]["d_max_m"] = 5.0;

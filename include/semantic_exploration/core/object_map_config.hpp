@@ -6,6 +6,7 @@
 #include <string>
 
 #include "semantic_exploration/core/config_error.hpp"
+#include "semantic_exploration/core/mesh_gate.hpp"
 #include "semantic_exploration/core/object_masks.hpp"
 
 namespace semexp {
@@ -133,6 +134,26 @@ struct ObjectMapConfig {
   /// matching and the observed share keep every voxel. Full-weight
   /// observations, <= max_weight; 0 = every observed voxel.
   double mesh_min_weight = 0.0;
+  /// Meshes also leave out each marching cube one of whose voxels has a
+  /// fused SDF whose standard error exceeds this (MeshGate::max_sdf_std_m):
+  /// depth_noise at the nearest distance the voxel was seen from over the
+  /// square root of its weight. Unlike mesh_min_weight it asks more
+  /// observations of a surface seen only from far, and four times as many
+  /// of a sensor twice as noisy (with depth_noise set to that sensor's). m;
+  /// 0 = off (the paper's extraction).
+  double mesh_max_sdf_std_m = 0.0;
+  /// The camera's depth noise (Table I; the simulator's noise block), for
+  /// mesh_max_sdf_std_m.
+  DepthNoise depth_noise;
+
+  /// The voxels saved and published meshes are extracted over.
+  MeshGate meshGate() const {
+    MeshGate g;
+    g.min_weight = static_cast<float>(mesh_min_weight);
+    g.max_sdf_std_m = static_cast<float>(mesh_max_sdf_std_m);
+    g.noise = depth_noise;
+    return g;
+  }
 
   DepthEdgeParams depthEdgeParams() const {
     return {mask_depth_edge_m, mask_depth_edge_rel, mask_depth_edge_window_px};
@@ -169,6 +190,9 @@ struct ObjectMapConfig {
     require(std::isfinite(mesh_fragment_gap_m) && mesh_fragment_gap_m >= 0, ns + "mesh_fragment_gap_m", "must be >= 0 m");
     require(std::isfinite(mesh_min_weight) && mesh_min_weight >= 0 && mesh_min_weight <= max_weight,
             ns + "mesh_min_weight", "must be in [0, max_weight] observations");
+    require(std::isfinite(mesh_max_sdf_std_m) && mesh_max_sdf_std_m >= 0, ns + "mesh_max_sdf_std_m",
+            "must be >= 0 m");
+    depth_noise.validate(ns + "depth_noise/");
     require(foreground_border_px >= 0 && foreground_border_px <= 64, ns + "foreground_border_px",
             "must be in [0, 64] px");
     require(std::isfinite(foreground_prior) && foreground_prior >= 0 && foreground_prior <= 1,

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "semantic_exploration/core/camera.hpp"
+#include "semantic_exploration/core/mesh_gate.hpp"
 #include "semantic_exploration/core/marching_cubes.hpp"
 #include "semantic_exploration/core/tsdf_revision.hpp"
 
@@ -328,7 +329,13 @@ class TsdfMapT {
   /// Marching-cubes mesh of the zero crossing where foreground probability
   /// > 0.5, with colour, over the cubes whose 8 voxels each hold a weight of
   /// at least min_weight (and more than 0), in observations.
-  Mesh extractMesh(float min_weight = 0.f) const;
+  Mesh extractMesh(float min_weight = 0.f) const {
+    MeshGate gate;
+    gate.min_weight = min_weight;
+    return extractMesh(gate);
+  }
+  /// The same over the cubes whose 8 voxels each pass `gate`.
+  Mesh extractMesh(const MeshGate& gate) const;
 
   /// Summary of the surface voxels (|sdf| < one voxel) whose foreground
   /// probability exceeds 0.5 (the mesh's surface; with tracked, exceeds
