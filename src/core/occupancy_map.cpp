@@ -14,6 +14,7 @@ namespace semexp {
 
 using occupancy::kNoDist;
 using occupancy::kScale;
+using occupancy::isFreeValue;
 using occupancy::kUnknown;
 using occupancy::Summary;
 using occupancy::toFixed;
@@ -181,7 +182,7 @@ double OccupancyMap::freeVolume() const {
     const int b = store_.cell_block[c];
     if (b < 0) {
       const std::int16_t v = store_.cell_value[c];
-      if (v != kUnknown && v < 0) n += store_.bs3;
+      if (isFreeValue(v)) n += store_.bs3;
       continue;
     }
     n += store_.block_nfree[b];

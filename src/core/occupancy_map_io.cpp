@@ -15,6 +15,7 @@ namespace semexp {
 
 using occupancy::kNoDist;
 using occupancy::kScale;
+using occupancy::isFreeValue;
 using occupancy::kUnknown;
 using occupancy::Summary;
 
@@ -157,7 +158,7 @@ bool OccupancyMap::applyBlocks(const MapBlocksData& m) {
   std::vector<int> refresh = changed;
   for (const int cell : changed)
     store_.forEachFaceNeighbour(cell, [&](int nc) {
-      if (store_.cell_block[nc] < 0 && store_.cell_value[nc] != kUnknown && store_.cell_value[nc] < 0)
+      if (store_.cell_block[nc] < 0 && isFreeValue(store_.cell_value[nc]))
         refresh.push_back(nc);
     });
   std::sort(refresh.begin(), refresh.end());

@@ -50,7 +50,7 @@ std::int16_t voxelValueOrKnown(const BlockStore& S, int x, int y, int z) {
 bool FrontierTracker::uniformCellIsFrontier(const BlockStore& S, int cell) const {
   if (S.cell_block[cell] >= 0) return false;
   const std::int16_t v = S.cell_value[cell];
-  if (v == kUnknown || v >= 0) return false;
+  if (!isFreeValue(v)) return false;
   return facesUnknown(S, cell, true);
 }
 

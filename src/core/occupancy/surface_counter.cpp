@@ -18,7 +18,6 @@ SurfaceCount countSurface(const BlockStore& store, int cell, const SurfaceRule& 
   if (!s.known_any || s.max_l < 0) return out;  // nothing occupied in it
   const double d_mm = rule.d_mm;
   const auto within = [d_mm](std::uint16_t d) { return d != kNoDist && d <= d_mm; };
-  const auto isFree = [](std::int16_t v) { return v != kUnknown && v < 0; };
   const int m = store.bs - 1;
   // With a free margin, carving stops q d^2 in front of a depth d and the voxels in between stay unknown, so a
   // surface seen only from far has no free neighbour. It still bounds observed free space across that gap:
@@ -44,7 +43,7 @@ SurfaceCount countSurface(const BlockStore& store, int cell, const SurfaceRule& 
       for (const auto& dir : kDir)
         for (int st = 1; st <= steps + 1; ++st) {
           const std::int16_t v = store.voxelValue(x + st * dir[0], y + st * dir[1], z + st * dir[2]);
-          if (isFree(v)) return true;
+          if (isFreeValue(v)) return true;
           if (v != kUnknown) break;  // occupied: the walk left the gap
         }
       return false;
@@ -77,7 +76,7 @@ SurfaceCount countSurface(const BlockStore& store, int cell, const SurfaceRule& 
     for (int a = 0; a < 3; ++a)
       for (int sign = -1; sign <= 1; sign += 2) {
         const std::int16_t v = value(i, xyz, a, sign, 1);
-        if (isFree(v)) return true;
+        if (isFreeValue(v)) return true;
         unknown_next |= v == kUnknown;
       }
     const int gap_steps = unknown_next && D ? gapSteps(D[i]) : 0;
@@ -86,7 +85,7 @@ SurfaceCount countSurface(const BlockStore& store, int cell, const SurfaceRule& 
         if (value(i, xyz, a, sign, 1) != kUnknown) continue;
         for (int st = 2; st <= gap_steps + 1; ++st) {
           const std::int16_t v = value(i, xyz, a, sign, st);
-          if (isFree(v)) return true;
+          if (isFreeValue(v)) return true;
           if (v != kUnknown) break;  // occupied: the walk left the gap
         }
       }

@@ -27,6 +27,8 @@ namespace semexp {
 namespace occupancy {
 
 constexpr std::int16_t kUnknown = INT16_MIN;  ///< log-odds of a voxel never updated
+/// A stored log-odds that is known and free (< 0).
+inline bool isFreeValue(std::int16_t l) { return l != kUnknown && l < 0; }
 constexpr double kScale = 1000.0;             ///< stored log-odds per unit log-odds (int16 thousandths)
 constexpr std::uint16_t kNoDist = 0xFFFF;     ///< minimum distance of a voxel never observed
 
