@@ -13,6 +13,7 @@ namespace semexp {
 
 using occupancy::kNoDist;
 using occupancy::kScale;
+using occupancy::isFreeValue;
 using occupancy::kUnknown;
 using occupancy::Summary;
 
@@ -126,8 +127,7 @@ bool OccupancyMap::sphereFreeRec(int k, int ix, int iy, int iz, const Eigen::Vec
         for (int x = vlo[0]; x <= vhi[0]; ++x) {
           const double ex = std::max({x - c.x(), 0.0, c.x() - (x + 1)});
           if (ex * ex + ey * ey + ez * ez >= r2) continue;
-          const std::int16_t l = Lv[(x - lo[0]) + store_.bs * ((y - lo[1]) + store_.bs * (z - lo[2]))];
-          if (l == kUnknown || l >= 0) return false;
+          if (!isFreeValue(Lv[(x - lo[0]) + store_.bs * ((y - lo[1]) + store_.bs * (z - lo[2]))])) return false;
         }
       }
     }

@@ -188,6 +188,11 @@ TEST(Config, OtherBadValues) {
   om.mesh_max_sdf_std_m = -0.001;
   EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/mesh_max_sdf_std_m");
   om = ObjectMapConfig();
+  om.mesh_max_sdf_std_m = 0.0004;  // under sigma_min_m / sqrt(max_weight) = 0.5 mm: no voxel could ever pass
+  EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/mesh_max_sdf_std_m");
+  om.mesh_max_sdf_std_m = 0.0005;
+  EXPECT_NO_THROW(om.validate());
+  om = ObjectMapConfig();
   om.depth_noise.sigma_min_m = 0.0;
   EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/depth_noise/sigma_min_m");
   om = ObjectMapConfig();

@@ -493,6 +493,16 @@ TEST(ObjectMap, SaveWritesMeshesAndIndex) {
   ASSERT_TRUE(readPly(sparse_files[0], s));
   EXPECT_EQ(s.triangles.size(), sparse.mesh(*sparse.object(1)).triangles.size());
   EXPECT_LT(s.triangles.size(), m.triangles.size() / 2);
+  // ... and under the configured SDF error gate: asking w >= 4.5 of voxels seen at the noise floor (5 mm).
+  ObjectMapConfig gated = config();
+  gated.mesh_max_sdf_std_m = 0.005 / std::sqrt(4.5);
+  const ObjectMap strict = twoObjects(cam, gated);
+  const auto strict_files = strict.save((dir / "gated").string(), 1.0, &error);
+  ASSERT_EQ(strict_files.size(), 3u);
+  Mesh g;
+  ASSERT_TRUE(readPly(strict_files[0], g));
+  EXPECT_EQ(g.triangles.size(), strict.mesh(*strict.object(1)).triangles.size());
+  EXPECT_LT(g.triangles.size(), m.triangles.size() / 2);
   std::ifstream f(files[2]);
   const std::string json((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
   EXPECT_NE(json.find("\"class_name\": \"chair\""), std::string::npos);

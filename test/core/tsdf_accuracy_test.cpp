@@ -163,23 +163,16 @@ TEST(TsdfAccuracy, ABandOfThreeSigmaOfTheSensorsNoiseKeepsTheMeshOnTheSurface) {
   EXPECT_LT(doubled_matched, 1.5 * clean);  // 3 sigma of the doubled noise: within 1.5x of clean
 }
 
-// A chair (4 cm legs, a 5 cm seat, a 4 cm back) in rings of views from 1, 2 and 3 m with the simulator's depth
-// noise (sigma = max(0.5 cm, 0.002 d^2)) and with it doubled (3.6 cm at 3 m, about the parts' thickness).
-// Noisy rays leave zero crossings in the air beside the thin parts that only a few observations support
-// (measured: 3.8% and 11.6% of the mesh's vertices over 2 cm from the chair, 0.99 and 1.83 cm RMSE).
-// An object_map/mesh_min_weight of 2 is the least weight that leaves under 1% there with the
-// simulator's noise (0.9%, 0.49 cm, 6% fewer vertices); with the noise doubled it leaves 3.1%, and 4 is
-// needed (0.5%, 0.53 cm, 16% fewer vertices).
 // The test scenes' chair seen from rings at 1, 2 and 3 m (five laps of 12 views each), depth noise
-// noise_factor times the simulator's; integrated once per noise factor and program.
+// noise_factor times the simulator's; integrated once per noise factor and program (the two tests below
+// share it).
 const TsdfMap& noisyChair(double noise_factor) {
   static std::map<double, std::unique_ptr<TsdfMap>> maps;
-  std::unique_ptr<TsdfMap>& m = maps[noise_factor];
-  if (m) return *m;
+  if (const auto it = maps.find(noise_factor); it != maps.end()) return *it->second;
   const BoxUnion c = chair(0.0, 0.0);
   TsdfParams p = semexp_test::objectTsdfParams();
   p.behind_surface_quadratic_per_m = 0.006;  // config/semantic.yaml's band
-  m = std::make_unique<TsdfMap>(p);
+  auto m = std::make_unique<TsdfMap>(p);
   PinholeCamera cam;
   std::mt19937 rng(7);
   for (int lap = 0; lap < 5; ++lap)
@@ -190,7 +183,7 @@ const TsdfMap& noisyChair(double noise_factor) {
         addQuadraticDepthNoise(depth, rng, 0.002 * noise_factor, 0.005 * noise_factor);
         m->integrate(cam, T_WC, depth, cv::Mat(), labels > 0, true);
       }
-  return *m;
+  return *(maps[noise_factor] = std::move(m));
 }
 
 struct MeshError {
@@ -206,6 +199,13 @@ MeshError meshError(const semexp::Mesh& mesh) {
   return {rmse(v, c), static_cast<double>(off) / std::max<std::size_t>(1, v.size()), v.size()};
 }
 
+// A chair (4 cm legs, a 5 cm seat, a 4 cm back) in rings of views from 1, 2 and 3 m with the simulator's depth
+// noise (sigma = max(0.5 cm, 0.002 d^2)) and with it doubled (3.6 cm at 3 m, about the parts' thickness).
+// Noisy rays leave zero crossings in the air beside the thin parts that only a few observations support
+// (measured: 3.8% and 11.6% of the mesh's vertices over 2 cm from the chair, 0.99 and 1.83 cm RMSE).
+// An object_map/mesh_min_weight of 2 is the least weight that leaves under 1% there with the
+// simulator's noise (0.9%, 0.49 cm, 6% fewer vertices); with the noise doubled it leaves 3.1%, and 4 is
+// needed (0.5%, 0.53 cm, 16% fewer vertices).
 TEST(TsdfAccuracy, AMinimumWeightKeepsNoisyZeroCrossingsOutOfTheMesh) {
   for (const double noise_factor : {1.0, 2.0}) {
     std::vector<MeshError> m;  // min weight 0, 2, 4
@@ -236,7 +236,7 @@ TEST(TsdfAccuracy, AnSdfErrorGateHoldsTheMeshErrorOfANoisierSensor) {
   for (int i = 0; i < 2; ++i) {
     const double f = i + 1.0;
     semexp::MeshGate g;
-    g.max_sdf_std_m = 0.005f;
+    g.max_sdf_std_m = 0.005;
     g.noise.sigma_min_m = 0.005 * f;
     g.noise.s_per_m = 0.002 * f;
     all[i] = meshError(noisyChair(f).extractMesh());
@@ -252,4 +252,3 @@ TEST(TsdfAccuracy, AnSdfErrorGateHoldsTheMeshErrorOfANoisierSensor) {
 }
 
 }  // namespace
-

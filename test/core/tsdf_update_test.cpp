@@ -20,13 +20,13 @@ TsdfParams params() { return objectTsdfParams(); }
 
 const Sphere kSphere(Eigen::Vector3d(0.1, -0.05, 0.02), 0.25);
 
-// The tiny camera at the origin looking along +x at a wall whose face lies 1 m ahead.
+// The tiny camera at the origin looking along +x at a wall whose face lies distance_m (default 1 m) ahead.
 struct WallAhead {
   PinholeCamera cam = tinyCamera();
   Eigen::Isometry3d T_WC = lookAlong(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
   cv::Mat depth;
-  WallAhead() {
-    const Box wall(Eigen::Vector3d(1.0, -2.0, -2.0), Eigen::Vector3d(1.5, 2.0, 2.0));
+  explicit WallAhead(double distance_m = 1.0) {
+    const Box wall(Eigen::Vector3d(distance_m, -3.0, -3.0), Eigen::Vector3d(distance_m + 0.5, 3.0, 3.0));
     cv::Mat labels;
     renderShapes(cam, T_WC, {&wall}, depth, labels);
   }
@@ -94,7 +94,7 @@ TEST(TsdfUpdate, DepthNoiseFollowsTableI) {
   EXPECT_DOUBLE_EQ(n.sigma(std::numeric_limits<double>::infinity()), 0.2);  // never observed: the cap
 }
 
-// MeshGate::passes, hand-computed: a voxel passes max_sdf_std_m = e when sigma(d)^2 <= e^2 w.
+// MeshGate::passes, hand-computed: a voxel passes max_sdf_std_m = e when w >= (sigma(d) / e)^2.
 TEST(TsdfUpdate, MeshGateAsksWeightByTheNoiseOfTheNearestView) {
   semexp::MeshGate g;  // off: every observed voxel
   EXPECT_TRUE(g.passes(0.0625f, 3.0f));
@@ -103,26 +103,31 @@ TEST(TsdfUpdate, MeshGateAsksWeightByTheNoiseOfTheNearestView) {
   EXPECT_FALSE(g.passes(1.9375f, 1.0f));
   EXPECT_TRUE(g.passes(2.f, 1.0f));
   g.min_weight = 0.f;
-  g.max_sdf_std_m = 0.005f;
+  g.max_sdf_std_m = 0.005;
+  // From 1.2 m the noise is the floor, 5 mm: w >= 1, one full view, passes on the bound.
+  EXPECT_TRUE(g.passes(1.f, 1.2f));
+  EXPECT_FALSE(g.passes(0.9375f, 1.2f));
   // Seen from 2 m at best: sigma 8 mm needs w >= (8 / 5)^2 = 2.56.
   EXPECT_FALSE(g.passes(2.5f, 2.0f));
   EXPECT_TRUE(g.passes(2.5625f, 2.0f));
-  // From 3 m: sigma 18 mm needs w >= 12.96; from 1.2 m the floor, 5 mm, needs w >= 1 (1.0625 clear of the bound).
+  // From 3 m: sigma 18 mm needs w >= 12.96.
   EXPECT_FALSE(g.passes(12.9375f, 3.0f));
   EXPECT_TRUE(g.passes(13.f, 3.0f));
-  EXPECT_TRUE(g.passes(1.0625f, 1.2f));
-  EXPECT_FALSE(g.passes(50.f, std::numeric_limits<float>::infinity()));  // sigma_max: needs w >= 1600
-  // A sensor twice as noisy needs four times the weight: from 2 m, w >= 10.24.
+  EXPECT_FALSE(g.passes(50.f, std::numeric_limits<float>::infinity()));  // sigma_max, 0.2 m: needs w >= 1600
+  // A sensor twice as noisy needs four times the weight: at the floor w >= 4, from 2 m w >= 10.24.
   g.noise.sigma_min_m = 0.01;
   g.noise.s_per_m = 0.004;
+  EXPECT_TRUE(g.passes(4.f, 1.0f));
+  EXPECT_FALSE(g.passes(3.9375f, 1.0f));
   EXPECT_FALSE(g.passes(10.1875f, 2.0f));
   EXPECT_TRUE(g.passes(10.25f, 2.0f));
 }
 
 // The gate on the wall of MeshLeavesOutCubesBelowTheMinimumWeight, seen from about 1 m, where the noise is
 // the floor sigma_min for every voxel (s d^2 < sigma_min up to 1.58 m): the surface's cubes hold between 5/6
-// and 1 per view. After 3 views (w in [2.5, 3]) a gate asking w >= 2.4 keeps the whole mesh and one asking
-// w >= 3.2 leaves nothing; with the noise doubled the first asks w >= 9.6: nothing after 9 views, all of it after 12 (w >= 10).
+// and 1 per view (13/16 with the weight's 1/16 steps). After 3 views (w >= 2.4375) a gate asking w >= 2.4
+// keeps the whole mesh and one asking w >= 3.2 leaves nothing; with the noise doubled the first asks
+// w >= 9.6: nothing after 9 views (w <= 9), all of it after 12 (w >= 9.75).
 TEST(TsdfUpdate, MeshGateAsksFourTimesTheViewsOfASensorTwiceAsNoisy) {
   const WallAhead view;
   TsdfMap map(params());
@@ -130,20 +135,43 @@ TEST(TsdfUpdate, MeshGateAsksFourTimesTheViewsOfASensorTwiceAsNoisy) {
   const std::size_t all = map.extractMesh().triangles.size();
   ASSERT_GT(all, 20u);
   semexp::MeshGate g;
-  g.max_sdf_std_m = static_cast<float>(0.005 / std::sqrt(2.4));
+  g.max_sdf_std_m = 0.005 / std::sqrt(2.4);
   EXPECT_EQ(map.extractMesh(g).triangles.size(), all);
   semexp::MeshGate tight = g;
-  tight.max_sdf_std_m = static_cast<float>(0.005 / std::sqrt(3.2));
+  tight.max_sdf_std_m = 0.005 / std::sqrt(3.2);
   EXPECT_TRUE(map.extractMesh(tight).empty());
   semexp::MeshGate noisy = g;
   noisy.noise.sigma_min_m = 0.01;
   noisy.noise.s_per_m = 0.004;
   EXPECT_TRUE(map.extractMesh(noisy).empty());
   for (int k = 3; k < 9; ++k) view.into(map, 255, true);
-  EXPECT_TRUE(map.extractMesh(noisy).empty());  // 9 views: w <= 9
+  EXPECT_TRUE(map.extractMesh(noisy).empty());
   EXPECT_EQ(map.extractMesh(g).triangles.size(), all);
   for (int k = 9; k < 12; ++k) view.into(map, 255, true);
-  EXPECT_EQ(map.extractMesh(noisy).triangles.size(), all);  // 12 views: w >= 12 * 5/6 = 10
+  EXPECT_EQ(map.extractMesh(noisy).triangles.size(), all);
+}
+
+// The gate reads each voxel's nearest observation distance: the same three views of a wall 3 m away (voxels
+// seen from 3 to 3.7 m, sigma = s d^2 >= 18 mm, needing w >= 12.96 at e = 5 mm) leave nothing, where the
+// wall 1 m away (w >= 1 needed) keeps its whole mesh; with a noise model flat at the floor (s = 0) the far
+// wall keeps all of it too.
+TEST(TsdfUpdate, MeshGateAsksMoreOfASurfaceSeenOnlyFromFar) {
+  const WallAhead near_view(1.0), far_view(3.0);
+  TsdfMap near_map(params()), far_map(params());
+  for (int k = 0; k < 3; ++k) {
+    near_view.into(near_map, 255, true);
+    far_view.into(far_map, 255, true);
+  }
+  const std::size_t near_all = near_map.extractMesh().triangles.size(), far_all = far_map.extractMesh().triangles.size();
+  ASSERT_GT(near_all, 20u);
+  ASSERT_GT(far_all, 20u);
+  semexp::MeshGate g;
+  g.max_sdf_std_m = 0.005;
+  EXPECT_EQ(near_map.extractMesh(g).triangles.size(), near_all);
+  EXPECT_TRUE(far_map.extractMesh(g).empty());
+  semexp::MeshGate flat = g;
+  flat.noise.s_per_m = 0.0;
+  EXPECT_EQ(far_map.extractMesh(flat).triangles.size(), far_all);
 }
 
 // revision() keys per-object caches (the object map node's summaries): it must change with every call that

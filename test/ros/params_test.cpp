@@ -211,7 +211,7 @@ TEST(Params, ObjectMapDepthNoiseLoadsAndNamesTheParameter) {
   EXPECT_DOUBLE_EQ(om.depth_noise.sigma_min_m, 0.01);
   EXPECT_DOUBLE_EQ(om.depth_noise.s_per_m, 0.004);
   EXPECT_DOUBLE_EQ(om.depth_noise.sigma_max_m, 0.2);  // default kept
-  EXPECT_FLOAT_EQ(om.meshGate().max_sdf_std_m, 0.005f);
+  EXPECT_DOUBLE_EQ(om.meshGate().max_sdf_std_m, 0.005);
   EXPECT_DOUBLE_EQ(om.meshGate().noise.sigma(2.0), 0.016);
   root["object_map"]["depth_noise"]["sigma_max_m"] = 0.001;
   EXPECT_EQ(rejected([&] { semexp_ros::loadObjectMap(ParamReader(root)); }), "object_map/depth_noise/sigma_max_m");

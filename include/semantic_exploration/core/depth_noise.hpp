@@ -18,7 +18,7 @@ struct DepthNoise {
   double sigma_max_m = 0.2;    ///< cap, m (Table I)
 
   /// Standard deviation of a depth measured at d_m, m; sigma_max_m for a
-  /// depth that is not finite (never observed).
+  /// depth that is not finite (no distance recorded).
   double sigma(double d_m) const {
     if (!std::isfinite(d_m)) return sigma_max_m;
     return std::max(sigma_min_m, std::min(s_per_m * d_m * d_m, sigma_max_m));

@@ -165,7 +165,8 @@ class ObjectMap {
   TsdfSummary summarize(const MappedObject& object, double d_obj_m) const;
 
   /// The object's mesh as saved and published: TsdfMap::extractMesh over the
-  /// voxels of at least mesh_min_weight, without the pieces farther than
+  /// voxels that pass ObjectMapConfig::meshGate() (mesh_min_weight and the SDF
+  /// error gate mesh_max_sdf_std_m), without the pieces farther than
   /// mesh_fragment_gap_m from its main surface.
   Mesh mesh(const MappedObject& object) const;
 

@@ -135,12 +135,12 @@ struct ObjectMapConfig {
   /// observations, <= max_weight; 0 = every observed voxel.
   double mesh_min_weight = 0.0;
   /// Meshes also leave out each marching cube one of whose voxels has a
-  /// fused SDF whose standard error exceeds this (MeshGate::max_sdf_std_m):
-  /// depth_noise at the nearest distance the voxel was seen from over the
-  /// square root of its weight. Unlike mesh_min_weight it asks more
-  /// observations of a surface seen only from far, and four times as many
-  /// of a sensor twice as noisy (with depth_noise set to that sensor's). m;
-  /// 0 = off (the paper's extraction).
+  /// fused SDF whose standard error, as estimated by MeshGate::max_sdf_std_m
+  /// (depth_noise at the nearest distance the voxel was seen from over the
+  /// square root of its weight: a lower bound), exceeds this. Unlike
+  /// mesh_min_weight it asks more observations of a surface seen only from
+  /// far, and four times as many of a sensor twice as noisy (with
+  /// depth_noise set to that sensor's). m; 0 = off (the paper's extraction).
   double mesh_max_sdf_std_m = 0.0;
   /// The camera's depth noise (Table I; the simulator's noise block), for
   /// mesh_max_sdf_std_m.
@@ -150,7 +150,7 @@ struct ObjectMapConfig {
   MeshGate meshGate() const {
     MeshGate g;
     g.min_weight = static_cast<float>(mesh_min_weight);
-    g.max_sdf_std_m = static_cast<float>(mesh_max_sdf_std_m);
+    g.max_sdf_std_m = mesh_max_sdf_std_m;
     g.noise = depth_noise;
     return g;
   }
@@ -190,9 +190,12 @@ struct ObjectMapConfig {
     require(std::isfinite(mesh_fragment_gap_m) && mesh_fragment_gap_m >= 0, ns + "mesh_fragment_gap_m", "must be >= 0 m");
     require(std::isfinite(mesh_min_weight) && mesh_min_weight >= 0 && mesh_min_weight <= max_weight,
             ns + "mesh_min_weight", "must be in [0, max_weight] observations");
+    depth_noise.validate(ns + "depth_noise/");
     require(std::isfinite(mesh_max_sdf_std_m) && mesh_max_sdf_std_m >= 0, ns + "mesh_max_sdf_std_m",
             "must be >= 0 m");
-    depth_noise.validate(ns + "depth_noise/");
+    // Else no voxel could ever pass (even at the noise floor and max_weight): every mesh would stay empty.
+    require(mesh_max_sdf_std_m == 0 || depth_noise.sigma_min_m <= mesh_max_sdf_std_m * std::sqrt(max_weight),
+            ns + "mesh_max_sdf_std_m", "must be 0 or >= depth_noise/sigma_min_m / sqrt(max_weight)");
     require(foreground_border_px >= 0 && foreground_border_px <= 64, ns + "foreground_border_px",
             "must be in [0, 64] px");
     require(std::isfinite(foreground_prior) && foreground_prior >= 0 && foreground_prior <= 1,

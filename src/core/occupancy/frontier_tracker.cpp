@@ -91,8 +91,7 @@ void FrontierTracker::recheckBlock(const BlockStore& S, int cell, bool full) {
   const int gx0 = bx * S.bs, gy0 = by * S.bs, gz0 = bz * S.bs;
   const int m = S.bs - 1, s1 = S.bs, s2 = S.bs * S.bs;
   auto isFrontier = [&](int i) {
-    const std::int16_t l = L[i];
-    if (l == kUnknown || l >= 0) return false;
+    if (!isFreeValue(L[i])) return false;
     const int x = i & m, y = (i >> S.bshift) & m, z = i >> (2 * S.bshift);
     if (x < m ? L[i + 1] == kUnknown : voxelValueOrKnown(S, gx0 + x + 1, gy0 + y, gz0 + z) == kUnknown) return true;
     if (x > 0 ? L[i - 1] == kUnknown : voxelValueOrKnown(S, gx0 + x - 1, gy0 + y, gz0 + z) == kUnknown) return true;

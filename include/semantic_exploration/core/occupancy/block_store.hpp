@@ -27,10 +27,11 @@ namespace semexp {
 namespace occupancy {
 
 constexpr std::int16_t kUnknown = INT16_MIN;  ///< log-odds of a voxel never updated
-/// A stored log-odds that is known and free (< 0).
-inline bool isFreeValue(std::int16_t l) { return l != kUnknown && l < 0; }
 constexpr double kScale = 1000.0;             ///< stored log-odds per unit log-odds (int16 thousandths)
 constexpr std::uint16_t kNoDist = 0xFFFF;     ///< minimum distance of a voxel never observed
+
+/// A stored log-odds that is known and free: kUnknown is negative too, so `< 0` alone would count it.
+constexpr bool isFreeValue(std::int16_t l) { return l != kUnknown && l < 0; }
 
 /// Log-odds (natural) -> stored thousandths.
 inline std::int16_t toFixed(double l) { return static_cast<std::int16_t>(std::lround(l * kScale)); }
