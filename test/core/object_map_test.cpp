@@ -483,26 +483,20 @@ TEST(ObjectMap, SaveWritesMeshesAndIndex) {
   Mesh m;
   ASSERT_TRUE(readPly(files[0], m));
   EXPECT_GT(m.triangles.size(), 100u);
-  // The saved mesh is the one the map gives (and publishes), under the configured minimum weight.
-  ObjectMapConfig four = config();
+  // The saved mesh is the one the map gives (and publishes), under the configured minimum weight and under
+  // the configured SDF error gate (asking w >= 4.5 of voxels seen at the noise floor, 5 mm).
+  ObjectMapConfig four = config(), gated = config();
   four.mesh_min_weight = 4.0;
-  const ObjectMap sparse = twoObjects(cam, four);
-  const auto sparse_files = sparse.save((dir / "sparse").string(), 1.0, &error);
-  ASSERT_EQ(sparse_files.size(), 3u);
-  Mesh s;
-  ASSERT_TRUE(readPly(sparse_files[0], s));
-  EXPECT_EQ(s.triangles.size(), sparse.mesh(*sparse.object(1)).triangles.size());
-  EXPECT_LT(s.triangles.size(), m.triangles.size() / 2);
-  // ... and under the configured SDF error gate: asking w >= 4.5 of voxels seen at the noise floor (5 mm).
-  ObjectMapConfig gated = config();
   gated.mesh_max_sdf_std_m = 0.005 / std::sqrt(4.5);
-  const ObjectMap strict = twoObjects(cam, gated);
-  const auto strict_files = strict.save((dir / "gated").string(), 1.0, &error);
-  ASSERT_EQ(strict_files.size(), 3u);
-  Mesh g;
-  ASSERT_TRUE(readPly(strict_files[0], g));
-  EXPECT_EQ(g.triangles.size(), strict.mesh(*strict.object(1)).triangles.size());
-  EXPECT_LT(g.triangles.size(), m.triangles.size() / 2);
+  for (const auto& [name, c] : {std::make_pair("sparse", four), std::make_pair("gated", gated)}) {
+    const ObjectMap sparse = twoObjects(cam, c);
+    const auto sparse_files = sparse.save((dir / name).string(), 1.0, &error);
+    ASSERT_EQ(sparse_files.size(), 3u) << name;
+    Mesh s;
+    ASSERT_TRUE(readPly(sparse_files[0], s)) << name;
+    EXPECT_EQ(s.triangles.size(), sparse.mesh(*sparse.object(1)).triangles.size()) << name;
+    EXPECT_LT(s.triangles.size(), m.triangles.size() / 2) << name;
+  }
   std::ifstream f(files[2]);
   const std::string json((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
   EXPECT_NE(json.find("\"class_name\": \"chair\""), std::string::npos);
