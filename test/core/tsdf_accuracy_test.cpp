@@ -106,6 +106,14 @@ double surfaceVoxelsOffShape(const TsdfMap& map, const Shape& shape) {
   return n ? static_cast<double>(off) / static_cast<double>(n) : 1.0;
 }
 
+// The simulator's depth noise (Table I) with sigma_min and s times `factor`.
+semexp::DepthNoise scaledNoise(double factor) {
+  semexp::DepthNoise n;
+  n.sigma_min_m *= factor;
+  n.s_per_m *= factor;
+  return n;
+}
+
 // Integrates `laps` rings of 12 views of `box` (radius and height above its centre in m, each lap turned by
 // 0.1 rad) with the simulator's depth noise times `noise_factor` (sigma = max(0.005, 0.002 d^2) m at 1).
 void integrateNoisyRings(TsdfMap& map, const Box& box, double radius_m, double dz_m, int laps, double noise_factor) {
@@ -115,7 +123,7 @@ void integrateNoisyRings(TsdfMap& map, const Box& box, double radius_m, double d
     for (const auto& T_WC : ring(box.centre(), radius_m, dz_m, 12, 0.1 * lap)) {
       cv::Mat depth, labels;
       renderShapes(cam, T_WC, {&box}, depth, labels);
-      addQuadraticDepthNoise(depth, rng, 0.002 * noise_factor, 0.005 * noise_factor);
+      addQuadraticDepthNoise(depth, rng, scaledNoise(noise_factor));
       map.integrate(cam, T_WC, depth, cv::Mat(), labels > 0, true);
     }
 }
@@ -180,7 +188,7 @@ const TsdfMap& noisyChair(double noise_factor) {
       for (const auto& T_WC : ring(Eigen::Vector3d(0.0, 0.0, 0.45), r, 0.8, 12, 0.1 * lap)) {
         cv::Mat depth, labels;
         renderShapes(cam, T_WC, {&c}, depth, labels);
-        addQuadraticDepthNoise(depth, rng, 0.002 * noise_factor, 0.005 * noise_factor);
+        addQuadraticDepthNoise(depth, rng, scaledNoise(noise_factor));
         m->integrate(cam, T_WC, depth, cv::Mat(), labels > 0, true);
       }
   return *(maps[noise_factor] = std::move(m));
@@ -237,8 +245,7 @@ TEST(TsdfAccuracy, AnSdfErrorGateHoldsTheMeshErrorOfANoisierSensor) {
     const double f = i + 1.0;
     semexp::MeshGate g;
     g.max_sdf_std_m = 0.005;
-    g.noise.sigma_min_m = 0.005 * f;
-    g.noise.s_per_m = 0.002 * f;
+    g.noise = scaledNoise(f);  // the noise the chair was seen with
     all[i] = meshError(noisyChair(f).extractMesh());
     gated[i] = meshError(noisyChair(f).extractMesh(g));
     std::printf("noise x%.0f, SDF error gate 5 mm: %zu of %zu vertices, RMSE %.2f cm (%.2f cm ungated), %.1f%% over 2 cm off\n",

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "semantic_exploration/core/camera.hpp"
+#include "semantic_exploration/core/depth_noise.hpp"
 #include "shapes.hpp"
 
 namespace semexp_test {
@@ -51,17 +52,15 @@ inline void renderShapes(const semexp::PinholeCamera& cam, const Eigen::Isometry
   });
 }
 
-/// Adds the simulator's depth noise to every return of a z-depth image
-/// (CV_32FC1): Gaussian, sigma(d) = max(sigma_min_m, min(s_per_m d^2, sigma_max_m)),
-/// the paper's Table I model and values by default.
-inline void addQuadraticDepthNoise(cv::Mat& depth_m, std::mt19937& rng, double s_per_m = 0.002,
-                                   double sigma_min_m = 0.005, double sigma_max_m = 0.2) {
+/// Adds depth noise to every return of a z-depth image (CV_32FC1): Gaussian
+/// with the standard deviation noise.sigma(d) (the simulator's model; Table I's
+/// values by default).
+inline void addQuadraticDepthNoise(cv::Mat& depth_m, std::mt19937& rng, const semexp::DepthNoise& noise = {}) {
   for (int v = 0; v < depth_m.rows; ++v)
     for (int u = 0; u < depth_m.cols; ++u) {
       float& d = depth_m.at<float>(v, u);
       if (d <= 0.f) continue;
-      const double sigma = std::max(sigma_min_m, std::min(s_per_m * d * d, sigma_max_m));
-      d += static_cast<float>(std::normal_distribution<double>(0.0, sigma)(rng));
+      d += static_cast<float>(std::normal_distribution<double>(0.0, noise.sigma(d))(rng));
     }
 }
 
