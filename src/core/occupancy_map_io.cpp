@@ -71,9 +71,8 @@ MapBlocksData OccupancyMap::takeUpdate() {
   std::size_t j = 0;
   for (int cell : dirty_cells_) {
     dirty_[cell] = 0;
-    m.coords.push_back(cell % store_.nb.x());
-    m.coords.push_back((cell / store_.nb.x()) % store_.nb.y());
-    m.coords.push_back(cell / (store_.nb.x() * store_.nb.y()));
+    const Eigen::Vector3i c = store_.cellCoords(cell);
+    m.coords.insert(m.coords.end(), {c.x(), c.y(), c.z()});
     encodeCell(cell, m.payload.data() + j * store_.bs3);
     ++j;
   }
@@ -97,7 +96,8 @@ MapBlocksData OccupancyMap::snapshot(bool uniform_as_values) const {
   std::vector<std::int8_t> block(static_cast<std::size_t>(store_.bs3));
   for (int cell = 0; cell < static_cast<int>(store_.cell_block.size()); ++cell) {
     if (!store_.levels[0].s[cell].known_any) continue;
-    const std::int32_t c[3] = {cell % store_.nb.x(), (cell / store_.nb.x()) % store_.nb.y(), cell / (store_.nb.x() * store_.nb.y())};
+    const Eigen::Vector3i cc = store_.cellCoords(cell);
+    const std::int32_t c[3] = {cc.x(), cc.y(), cc.z()};
     encodeCell(cell, block.data());
     // A voxel block may hold one value too (its voxels converged to the clamp): checked on the encoded values.
     if (uniform_as_values && std::all_of(block.begin(), block.end(), [&](std::int8_t q) { return q == block[0]; })) {
@@ -287,19 +287,14 @@ void OccupancyMap::exportOctomap(const std::string& path) const {
   tree.setClampingThresMax(1.0 / (1.0 + std::exp(-cfg_.log_odds_max)));
   for (int cell = 0; cell < static_cast<int>(store_.cell_block.size()); ++cell) {
     if (!store_.levels[0].s[cell].known_any) continue;
-    const int bz = cell / (store_.nb.x() * store_.nb.y()), by = (cell / store_.nb.x()) % store_.nb.y(), bx = cell % store_.nb.x();
     const int b = store_.cell_block[cell];
-    int i = 0;
-    for (int z = 0; z < store_.bs; ++z)
-      for (int y = 0; y < store_.bs; ++y)
-        for (int x = 0; x < store_.bs; ++x, ++i) {
-          const std::int16_t l = b < 0 ? store_.cell_value[cell] : store_.block_l[static_cast<std::size_t>(b) * store_.bs3 + i];
-          if (l == kUnknown) continue;
-          const Eigen::Vector3d c =
-              store_.origin + (Eigen::Vector3d(bx * store_.bs + x, by * store_.bs + y, bz * store_.bs + z) + Eigen::Vector3d::Constant(0.5)) * store_.res;
-          tree.setNodeValue(octomap::point3d(static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z())),
-                            static_cast<float>(l / kScale), true);
-        }
+    for (int i = 0; i < store_.bs3; ++i) {
+      const std::int16_t l = b < 0 ? store_.cell_value[cell] : store_.block_l[static_cast<std::size_t>(b) * store_.bs3 + i];
+      if (l == kUnknown) continue;
+      const Eigen::Vector3d c = store_.voxelCentre(store_.mapVoxel(cell, i));
+      tree.setNodeValue(octomap::point3d(static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z())),
+                        static_cast<float>(l / kScale), true);
+    }
   }
   tree.updateInnerOccupancy();
   writeFileAtomically(path, [&tree](std::ostream& f) {

@@ -241,9 +241,7 @@ RaycastHit OccupancyMap::raycast(const Eigen::Vector3d& origin_W, const Eigen::V
     hit.state = stateOf(l);
     hit.distance_m = t_in;
     if (vox >= 0) {
-      const int bz = cell / (store_.nb.x() * store_.nb.y()), by = (cell / store_.nb.x()) % store_.nb.y(), bx = cell % store_.nb.x();
-      const Eigen::Vector3i vi(bx * store_.bs + vox % store_.bs, by * store_.bs + (vox / store_.bs) % store_.bs, bz * store_.bs + vox / (store_.bs * store_.bs));
-      hit.voxel_centre_W = store_.origin + (vi.cast<double>() + Eigen::Vector3d::Constant(0.5)) * store_.res;
+      hit.voxel_centre_W = store_.voxelCentre(store_.mapVoxel(cell, vox));
     } else {
       // centre of the finest voxel at the entry point
       const Eigen::Vector3d p = ((origin_W + d * (t_in + 1e-7 * store_.res)) - store_.origin) / store_.res;
@@ -292,16 +290,14 @@ std::vector<GainImages> OccupancyMap::computeGains(const std::vector<Eigen::Vect
         if (l != kUnknown && l >= 0) {
           g.hit_depth_m[i] = static_cast<float>(a);
           // leaf centre and its minimum observed distance
-          const int bz = cell / (store_.nb.x() * store_.nb.y()), by = (cell / store_.nb.x()) % store_.nb.y(), bx = cell % store_.nb.x();
           Eigen::Vector3d centre;
           std::uint16_t dmm;
           if (vox >= 0) {
-            const Eigen::Vector3i vi(bx * store_.bs + vox % store_.bs, by * store_.bs + (vox / store_.bs) % store_.bs, bz * store_.bs + vox / (store_.bs * store_.bs));
-            centre = store_.origin + (vi.cast<double>() + Eigen::Vector3d::Constant(0.5)) * store_.res;
+            centre = store_.voxelCentre(store_.mapVoxel(cell, vox));
             const int sl = store_.block_surf[store_.cell_block[cell]];
             dmm = sl < 0 ? kNoDist : store_.surf_dist[static_cast<std::size_t>(sl) * store_.bs3 + vox];
           } else {
-            centre = store_.origin + (Eigen::Vector3d(bx, by, bz) * store_.bs + Eigen::Vector3d::Constant(0.5 * store_.bs)) * store_.res;
+            centre = store_.cellCentre(cell);
             dmm = store_.cell_dist[cell];
           }
           const double d_node = dmm == kNoDist ? std::numeric_limits<double>::infinity() : dmm / 1000.0;
@@ -331,26 +327,21 @@ void OccupancyMap::forEachOccupied(
   for (int cell = 0; cell < static_cast<int>(store_.cell_block.size()); ++cell) {
     const Summary& s = store_.levels[0].s[cell];
     if (!s.known_any || s.max_l < 0) continue;
-    const int bz = cell / (store_.nb.x() * store_.nb.y()), by = (cell / store_.nb.x()) % store_.nb.y(), bx = cell % store_.nb.x();
     const int b = store_.cell_block[cell];
     if (b < 0) {
-      f(store_.origin + (Eigen::Vector3d(bx, by, bz) * store_.bs + Eigen::Vector3d::Constant(0.5 * store_.bs)) * store_.res, store_.bs * store_.res, grey);
+      f(store_.cellCentre(cell), store_.bs * store_.res, grey);
       continue;
     }
     const std::int16_t* L = store_.logOdds(b);
-    int i = 0;
-    for (int z = 0; z < store_.bs; ++z)
-      for (int y = 0; y < store_.bs; ++y)
-        for (int x = 0; x < store_.bs; ++x, ++i) {
-          if (L[i] == kUnknown || L[i] < 0) continue;
-          const std::uint8_t* c = grey;
-          if (cfg_.integrate_colour && store_.block_surf[b] >= 0) {
-            const std::uint8_t* cc = store_.surf_rgbw.data() + 4 * (static_cast<std::size_t>(store_.block_surf[b]) * store_.bs3 + i);
-            if (cc[3] > 0) c = cc;
-          }
-          f(store_.origin + (Eigen::Vector3d(bx * store_.bs + x, by * store_.bs + y, bz * store_.bs + z) + Eigen::Vector3d::Constant(0.5)) * store_.res,
-            store_.res, c);
-        }
+    for (int i = 0; i < store_.bs3; ++i) {
+      if (L[i] == kUnknown || L[i] < 0) continue;
+      const std::uint8_t* c = grey;
+      if (cfg_.integrate_colour && store_.block_surf[b] >= 0) {
+        const std::uint8_t* cc = store_.surf_rgbw.data() + 4 * (static_cast<std::size_t>(store_.block_surf[b]) * store_.bs3 + i);
+        if (cc[3] > 0) c = cc;
+      }
+      f(store_.voxelCentre(store_.mapVoxel(cell, i)), store_.res, c);
+    }
   }
 }
 

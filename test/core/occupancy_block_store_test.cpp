@@ -34,6 +34,27 @@ TEST(BlockStore, GeometrySnapsTheOriginAndRoundsCellsOut) {
   EXPECT_EQ(s.voxelValue(-1, 0, 0), kUnknown);
 }
 
+TEST(BlockStore, VoxelAndCellCentresFromCellAndVoxelIndices) {
+  // origin -0.1 (as above), 0.1 m voxels, cells of 4; 3 x 2 x 1 cells.
+  BlockStore s(0.1, 4, box(-0.05, 0.75, 0.8, 0.4), false);
+  ASSERT_EQ(s.nb, Eigen::Vector3i(3, 2, 1));
+  const int cell = s.cellIndex(2, 1, 0);  // 5
+  EXPECT_EQ(s.cellCoords(cell), Eigen::Vector3i(2, 1, 0));
+  // voxel (1, 2, 3) of that cell: index 1 + 4 (2 + 4 * 3) = 57; map voxel (8 + 1, 4 + 2, 0 + 3).
+  EXPECT_EQ(s.mapVoxel(cell, s.voxelIndex(1, 2, 3)), Eigen::Vector3i(9, 6, 3));
+  EXPECT_EQ(s.mapVoxel(cell, 57), Eigen::Vector3i(9, 6, 3));
+  // centre of map voxel (9, 6, 3): origin (-0.1, 0, 0) + (9.5, 6.5, 3.5) * 0.1.
+  const Eigen::Vector3d v = s.voxelCentre(Eigen::Vector3i(9, 6, 3));
+  EXPECT_NEAR(v.x(), 0.85, 1e-12);
+  EXPECT_NEAR(v.y(), 0.65, 1e-12);
+  EXPECT_NEAR(v.z(), 0.35, 1e-12);
+  // centre of the whole cell (2, 1, 0): origin + (2, 1, 0) * 0.4 + 0.2.
+  const Eigen::Vector3d c = s.cellCentre(cell);
+  EXPECT_NEAR(c.x(), 0.9, 1e-12);
+  EXPECT_NEAR(c.y(), 0.6, 1e-12);
+  EXPECT_NEAR(c.z(), 0.2, 1e-12);
+}
+
 TEST(BlockStore, SlotsAreReusedLastInFirstOut) {
   BlockStore s(0.1, 4, box(0.0, 1.2, 0.4, 0.4), false);
   ASSERT_EQ(s.cellCount(), 3u);

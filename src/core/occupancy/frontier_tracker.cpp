@@ -55,11 +55,11 @@ bool FrontierTracker::uniformCellIsFrontier(const BlockStore& S, int cell) const
 }
 
 bool FrontierTracker::facesUnknown(const BlockStore& S, int cell, bool trust_summaries) {
-  const int bz = cell / (S.nb.x() * S.nb.y()), by = (cell / S.nb.x()) % S.nb.y(), bx = cell % S.nb.x();
+  const Eigen::Vector3i c = S.cellCoords(cell);
   const int m = S.bs - 1;
   for (int axis = 0; axis < 3; ++axis)
     for (int sgn = -1; sgn <= 1; sgn += 2) {
-      Eigen::Vector3i n(bx, by, bz);
+      Eigen::Vector3i n = c;
       n[axis] += sgn;
       if (n[axis] < 0 || n[axis] >= S.nb[axis]) continue;
       const int nc = S.cellIndex(n.x(), n.y(), n.z());
@@ -87,8 +87,8 @@ void FrontierTracker::recheckBlock(const BlockStore& S, int cell, bool full) {
   const int b = S.cell_block[cell];
   std::uint64_t* F = bits_.data() + static_cast<std::size_t>(b) * fwords_;
   const std::int16_t* L = S.logOdds(b);
-  const int bz = cell / (S.nb.x() * S.nb.y()), by = (cell / S.nb.x()) % S.nb.y(), bx = cell % S.nb.x();
-  const int gx0 = bx * S.bs, gy0 = by * S.bs, gz0 = bz * S.bs;
+  const Eigen::Vector3i bc = S.cellCoords(cell);
+  const int gx0 = bc.x() * S.bs, gy0 = bc.y() * S.bs, gz0 = bc.z() * S.bs;
   const int m = S.bs - 1, s1 = S.bs, s2 = S.bs * S.bs;
   auto isFrontier = [&](int i) {
     if (!isFreeValue(L[i])) return false;
@@ -123,7 +123,7 @@ void FrontierTracker::recheckBlock(const BlockStore& S, int cell, bool full) {
   // No unknown voxel inside: only faces next to a cell with unknown space can hold frontiers.
   for (int axis = 0; axis < 3; ++axis)
     for (int sgn = -1; sgn <= 1; sgn += 2) {
-      Eigen::Vector3i n(bx, by, bz);
+      Eigen::Vector3i n = bc;
       n[axis] += sgn;
       if (n[axis] < 0 || n[axis] >= S.nb[axis]) continue;
       if (!S.levels[0].s[S.cellIndex(n.x(), n.y(), n.z())].unknown_any) continue;
@@ -198,21 +198,14 @@ void FrontierTracker::update(const BlockStore& S) {
   for (int c : cand_) flags_[c] |= kVisited;
   for (int c : cand_) checkCell(S, c, true);
   std::vector<int> extra;
-  for (int c : cand_) {
-    const int bz = c / (S.nb.x() * S.nb.y()), by = (c / S.nb.x()) % S.nb.y(), bx = c % S.nb.x();
-    for (int axis = 0; axis < 3; ++axis)
-      for (int sgn = -1; sgn <= 1; sgn += 2) {
-        Eigen::Vector3i n(bx, by, bz);
-        n[axis] += sgn;
-        if (n[axis] < 0 || n[axis] >= S.nb[axis]) continue;
-        const int nc = S.cellIndex(n.x(), n.y(), n.z());
-        std::uint8_t& fl = flags_[nc];
-        if ((fl & kVisited) || !(fl & (kBlockFrontier | kCoarseFrontier))) continue;
-        fl |= kVisited;
-        extra.push_back(nc);
-        checkCell(S, nc, false);
-      }
-  }
+  for (int c : cand_)
+    S.forEachFaceNeighbour(c, [&](int nc) {
+      std::uint8_t& fl = flags_[nc];
+      if ((fl & kVisited) || !(fl & (kBlockFrontier | kCoarseFrontier))) return;
+      fl |= kVisited;
+      extra.push_back(nc);
+      checkCell(S, nc, false);
+    });
   const std::uint8_t clear = static_cast<std::uint8_t>(~(kVisited | kCandidate));
   for (int c : cand_) flags_[c] &= clear;
   for (int c : extra) flags_[c] &= clear;
@@ -281,16 +274,15 @@ void FrontierTracker::forEach(const BlockStore& S, const std::function<void(cons
       while (bits) {
         const int i = w * 64 + __builtin_ctzll(bits);
         bits &= bits - 1;
-        const Eigen::Vector3d v(bc.x() * bs + (i & (bs - 1)), bc.y() * bs + ((i >> bshift) & (bs - 1)),
+        const Eigen::Vector3i v(bc.x() * bs + (i & (bs - 1)), bc.y() * bs + ((i >> bshift) & (bs - 1)),
                                 bc.z() * bs + (i >> (2 * bshift)));
-        f(S.origin + (v + Eigen::Vector3d::Constant(0.5)) * S.res, S.res);
+        f(S.voxelCentre(v), S.res);
       }
     }
   }
   for (int cell : cells_) {
     if (!(flags_[cell] & kCoarseFrontier)) continue;
-    const Eigen::Vector3i bc = S.cellCoords(cell);
-    f(S.origin + (bc.cast<double>() * bs + Eigen::Vector3d::Constant(0.5 * bs)) * S.res, bs * S.res);
+    f(S.cellCentre(cell), bs * S.res);
   }
 }
 

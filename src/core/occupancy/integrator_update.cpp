@@ -101,7 +101,7 @@ void Integrator::freeCell(BlockStore& store, const Frame& fr, TaskOut& out, int 
       if (stateChanged(v, nv)) out.state_changed.push_back(cell);
     }
     if (cfg_.integrate_min_distance) {
-      const Eigen::Vector3d c = store.origin + (bc.cast<double>() * bs + Eigen::Vector3d::Constant(0.5 * bs)) * res;
+      const Eigen::Vector3d c = store.cellCentre(cell);
       const std::uint16_t dm = toMm(static_cast<float>((c - fr.cam_W).norm()));
       if (dm < store.cell_dist[cell]) {
         store.cell_dist[cell] = dm;
@@ -113,7 +113,7 @@ void Integrator::freeCell(BlockStore& store, const Frame& fr, TaskOut& out, int 
   std::int16_t* L = store.logOdds(b);
   std::uint16_t* D = store.block_surf[b] >= 0 && cfg_.integrate_min_distance ? store.dist(store.block_surf[b]) : nullptr;
   bool changed = false, state_changed = false, dist_lowered = false;
-  const Eigen::Vector3d c0 = store.origin + (bc.cast<double>() * bs + Eigen::Vector3d::Constant(0.5)) * res - fr.cam_W;
+  const Eigen::Vector3d c0 = store.voxelCentre(bc * bs) - fr.cam_W;
   int i = 0;
   for (int z = 0; z < bs; ++z)
     for (int y = 0; y < bs; ++y)
@@ -173,7 +173,7 @@ void Integrator::updateCellVoxels(BlockStore& store, const Frame& fr, TaskOut& o
   }
   const Eigen::Vector3i bc = store.cellCoords(cell);
   const double res = store.res;
-  const Eigen::Vector3d c0_W = store.origin + (bc.cast<double>() * bs + Eigen::Vector3d::Constant(0.5)) * res;
+  const Eigen::Vector3d c0_W = store.voxelCentre(bc * bs);
   const Eigen::Vector3f c0 = (fr.R_CW * c0_W + fr.t_CW).cast<float>();
   const Eigen::Vector3f ex = (fr.R_CW.col(0) * res).cast<float>();
   const Eigen::Vector3f ey = (fr.R_CW.col(1) * res).cast<float>();

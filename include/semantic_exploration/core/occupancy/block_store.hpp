@@ -99,6 +99,18 @@ class BlockStore {
   std::size_t cellCount() const { return cell_block.size(); }
   /// Index of voxel (x, y, z) of a cell, each in [0, bs).
   int voxelIndex(int x, int y, int z) const { return x + bs * (y + bs * z); }
+  /// Map voxel coordinates of voxel `vox` (voxelIndex order) of `cell`.
+  Eigen::Vector3i mapVoxel(int cell, int vox) const {
+    return cellCoords(cell) * bs + Eigen::Vector3i(vox % bs, (vox / bs) % bs, vox / (bs * bs));
+  }
+  /// Centre of the map voxel with coordinates v, world, m.
+  Eigen::Vector3d voxelCentre(const Eigen::Vector3i& v) const {
+    return origin + (v.cast<double>() + Eigen::Vector3d::Constant(0.5)) * res;
+  }
+  /// Centre of `cell` (the whole cell: a uniform leaf), world, m.
+  Eigen::Vector3d cellCentre(int cell) const {
+    return origin + (cellCoords(cell).cast<double>() * bs + Eigen::Vector3d::Constant(0.5 * bs)) * res;
+  }
 
   // ---------------------------------------------------------- per cell
   std::vector<std::int32_t> cell_block;  ///< block slot or -1 (uniform leaf)
