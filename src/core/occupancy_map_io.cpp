@@ -288,10 +288,11 @@ void OccupancyMap::exportOctomap(const std::string& path) const {
   for (int cell = 0; cell < static_cast<int>(store_.cell_block.size()); ++cell) {
     if (!store_.levels[0].s[cell].known_any) continue;
     const int b = store_.cell_block[cell];
+    const Eigen::Vector3i base = store_.cellCoords(cell) * store_.bs;
     for (int i = 0; i < store_.bs3; ++i) {
       const std::int16_t l = b < 0 ? store_.cell_value[cell] : store_.block_l[static_cast<std::size_t>(b) * store_.bs3 + i];
       if (l == kUnknown) continue;
-      const Eigen::Vector3d c = store_.voxelCentre(store_.mapVoxel(cell, i));
+      const Eigen::Vector3d c = store_.voxelCentre(base + store_.voxelInCell(i));
       tree.setNodeValue(octomap::point3d(static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z())),
                         static_cast<float>(l / kScale), true);
     }

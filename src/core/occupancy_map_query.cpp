@@ -333,6 +333,7 @@ void OccupancyMap::forEachOccupied(
       continue;
     }
     const std::int16_t* L = store_.logOdds(b);
+    const Eigen::Vector3i base = store_.cellCoords(cell) * store_.bs;
     for (int i = 0; i < store_.bs3; ++i) {
       if (L[i] == kUnknown || L[i] < 0) continue;
       const std::uint8_t* c = grey;
@@ -340,7 +341,7 @@ void OccupancyMap::forEachOccupied(
         const std::uint8_t* cc = store_.surf_rgbw.data() + 4 * (static_cast<std::size_t>(store_.block_surf[b]) * store_.bs3 + i);
         if (cc[3] > 0) c = cc;
       }
-      f(store_.voxelCentre(store_.mapVoxel(cell, i)), store_.res, c);
+      f(store_.voxelCentre(base + store_.voxelInCell(i)), store_.res, c);
     }
   }
 }

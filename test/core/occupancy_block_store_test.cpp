@@ -53,6 +53,22 @@ TEST(BlockStore, VoxelAndCellCentresFromCellAndVoxelIndices) {
   EXPECT_NEAR(c.x(), 0.9, 1e-12);
   EXPECT_NEAR(c.y(), 0.6, 1e-12);
   EXPECT_NEAR(c.z(), 0.2, 1e-12);
+  // Every voxel of every cell, x fastest, and the centres exactly equal to the formula the map's queries used.
+  for (int k = 0; k < static_cast<int>(s.cellCount()); ++k) {
+    const Eigen::Vector3i b = s.cellCoords(k);
+    EXPECT_EQ(s.cellCentre(k),
+              s.origin + (Eigen::Vector3d(b.x(), b.y(), b.z()) * s.bs + Eigen::Vector3d::Constant(0.5 * s.bs)) * s.res);
+    for (int z = 0, i = 0; z < s.bs; ++z)
+      for (int y = 0; y < s.bs; ++y)
+        for (int x = 0; x < s.bs; ++x, ++i) {
+          ASSERT_EQ(s.voxelIndex(x, y, z), i);
+          ASSERT_EQ(s.voxelInCell(i), Eigen::Vector3i(x, y, z));
+          const Eigen::Vector3i v = s.mapVoxel(k, i);
+          ASSERT_EQ(v, b * s.bs + Eigen::Vector3i(x, y, z));
+          ASSERT_EQ(s.voxelCentre(v), s.origin + (Eigen::Vector3d(b.x() * s.bs + x, b.y() * s.bs + y, b.z() * s.bs + z) +
+                                                  Eigen::Vector3d::Constant(0.5)) * s.res);
+        }
+  }
 }
 
 TEST(BlockStore, SlotsAreReusedLastInFirstOut) {

@@ -264,19 +264,17 @@ bool FrontierTracker::cellIsListedFrontier(int cell) const { return flags_[cell]
 bool FrontierTracker::blockHasFrontier(int cell) const { return flags_[cell] & kBlockFrontier; }
 
 void FrontierTracker::forEach(const BlockStore& S, const std::function<void(const Eigen::Vector3d&, double)>& f) const {
-  const int bs = S.bs, bshift = S.bshift;
+  const int bs = S.bs;
   for (int cell : blocks_) {
     if (!(flags_[cell] & kBlockFrontier)) continue;
-    const Eigen::Vector3i bc = S.cellCoords(cell);
+    const Eigen::Vector3i base = S.cellCoords(cell) * S.bs;
     const std::uint64_t* F = blockBits(S.cell_block[cell]);
     for (int w = 0; w < fwords_; ++w) {
       std::uint64_t bits = F[w];
       while (bits) {
         const int i = w * 64 + __builtin_ctzll(bits);
         bits &= bits - 1;
-        const Eigen::Vector3i v(bc.x() * bs + (i & (bs - 1)), bc.y() * bs + ((i >> bshift) & (bs - 1)),
-                                bc.z() * bs + (i >> (2 * bshift)));
-        f(S.voxelCentre(v), S.res);
+        f(S.voxelCentre(base + S.voxelInCell(i)), S.res);
       }
     }
   }

@@ -99,15 +99,18 @@ class BlockStore {
   std::size_t cellCount() const { return cell_block.size(); }
   /// Index of voxel (x, y, z) of a cell, each in [0, bs).
   int voxelIndex(int x, int y, int z) const { return x + bs * (y + bs * z); }
-  /// Map voxel coordinates of voxel `vox` (voxelIndex order) of `cell`.
-  Eigen::Vector3i mapVoxel(int cell, int vox) const {
-    return cellCoords(cell) * bs + Eigen::Vector3i(vox % bs, (vox / bs) % bs, vox / (bs * bs));
+  /// (x, y, z) in [0, bs) of voxel `vox` in [0, bs3) of a cell: the inverse of voxelIndex.
+  Eigen::Vector3i voxelInCell(int vox) const {
+    const int m = bs - 1;
+    return {vox & m, (vox >> bshift) & m, vox >> (2 * bshift)};
   }
-  /// Centre of the map voxel with coordinates v, world, m.
+  /// Map voxel coordinates (voxels from the origin) of voxel `vox` in [0, bs3) of `cell` in [0, cellCount()).
+  Eigen::Vector3i mapVoxel(int cell, int vox) const { return cellCoords(cell) * bs + voxelInCell(vox); }
+  /// Centre of the map voxel with coordinates v (voxels from the origin), world, m.
   Eigen::Vector3d voxelCentre(const Eigen::Vector3i& v) const {
     return origin + (v.cast<double>() + Eigen::Vector3d::Constant(0.5)) * res;
   }
-  /// Centre of `cell` (the whole cell: a uniform leaf), world, m.
+  /// Centre of `cell` in [0, cellCount()) (the whole cell: a uniform leaf), world, m.
   Eigen::Vector3d cellCentre(int cell) const {
     return origin + (cellCoords(cell).cast<double>() * bs + Eigen::Vector3d::Constant(0.5 * bs)) * res;
   }
