@@ -1,6 +1,7 @@
 #include "semantic_exploration/core/atomic_file.hpp"
 #include "semantic_exploration/core/object_map.hpp"
 #include "semantic_exploration/core/object_mesh.hpp"
+#include "semantic_exploration/core/tsdf_io.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -38,9 +39,7 @@ TsdfSummary ObjectMap::summarize(const MappedObject& object, double d_obj_m) con
 }
 
 Mesh ObjectMap::mesh(const MappedObject& object) const {
-  Mesh m = object.tsdf.extractMesh(config_.meshGate());
-  dropMeshFragments(m, config_.mesh_fragment_gap_m);
-  return m;
+  return objectMesh(object.tsdf, config_.meshGate(), config_.mesh_fragment_gap_m);
 }
 
 std::vector<std::string> ObjectMap::save(const std::string& directory, double d_obj_m, std::string* error) const {
@@ -65,6 +64,16 @@ std::vector<std::string> ObjectMap::save(const std::string& directory, double d_
       return files;
     }
     files.push_back(path);
+    std::string tsdf_entry;
+    if (config_.save_tsdf) {
+      const std::string tsdf_name = name.substr(0, name.size() - 4) + ".tsdf";
+      if (!saveTsdf(o.tsdf, (dir / tsdf_name).string(), &why)) {
+        if (error) *error = why;
+        return files;
+      }
+      files.push_back((dir / tsdf_name).string());
+      tsdf_entry = ", \"tsdf\": \"" + jsonEscape(tsdf_name) + "\"";
+    }
     const TsdfSummary s = summarize(o, d_obj_m);
     char buf[320];
     std::snprintf(buf, sizeof(buf),
@@ -75,7 +84,7 @@ std::vector<std::string> ObjectMap::save(const std::string& directory, double d_
     json += std::string(first ? "" : ",") + "\n  {\"id\": " + std::to_string(o.id) +
             ", \"class_id\": " + std::to_string(o.class_id) + ", \"class_name\": \"" + jsonEscape(o.class_name) +
             "\", " + buf + "\"bbox_min\": " + vec(s.bbox_min_W) + ", \"bbox_max\": " + vec(s.bbox_max_W) +
-            ", \"centroid\": " + vec(s.centroid_W) + ", \"mesh\": \"" + jsonEscape(name) + "\"}";
+            ", \"centroid\": " + vec(s.centroid_W) + ", \"mesh\": \"" + jsonEscape(name) + "\"" + tsdf_entry + "}";
     first = false;
   }
   char tail[64];
@@ -89,9 +98,9 @@ std::vector<std::string> ObjectMap::save(const std::string& directory, double d_
     return files;
   }
   files.push_back(index);
-  // Meshes of objects merged away since an earlier save into this directory would read as objects still
-  // there: once the new index is in place, they go.
-  const std::regex mesh_name("object_[0-9]+_.*\\.ply");
+  // Meshes (and TSDFs) of objects merged away since an earlier save into this directory would read as
+  // objects still there: once the new index is in place, they go.
+  const std::regex mesh_name("object_[0-9]+_.*\\.(ply|tsdf)");
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();
     if (!std::regex_match(name, mesh_name) || !entry.is_regular_file(ec)) continue;

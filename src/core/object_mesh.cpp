@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "semantic_exploration/core/neighbour_cells.hpp"
-#include "semantic_exploration/core/tsdf.hpp"  // VoxelIndexHash
 
 namespace semexp {
 
@@ -88,6 +87,12 @@ std::size_t dropMeshFragments(Mesh& mesh, double gap_m) {
   const std::size_t dropped = n - out.vertices_W.size();
   mesh = std::move(out);
   return dropped;
+}
+
+Mesh objectMesh(const TsdfMap& tsdf, const MeshGate& gate, double fragment_gap_m) {
+  Mesh m = tsdf.extractMesh(gate);
+  dropMeshFragments(m, fragment_gap_m);
+  return m;
 }
 
 }  // namespace semexp

@@ -344,6 +344,20 @@ std::size_t TsdfMapT<V>::dropForegroundBeyond(const Eigen::Vector3f& normal_W, f
 }
 
 template <class V>
+void TsdfMapT<V>::loadBlocks(std::vector<SavedBlock> blocks) {
+  for (const SavedBlock& b : blocks)
+    if (b.voxels.size() != static_cast<std::size_t>(voxels_per_block_))
+      throw std::invalid_argument("TsdfMap::loadBlocks: a block must hold block_size^3 voxels");
+  revision_.bump();
+  for (SavedBlock& b : blocks) {
+    Block& dst = allocate(b.index);
+    dst.voxels = std::move(b.voxels);
+    dst.has_negative = b.has_negative;
+  }
+  rebuildIndex();
+}
+
+template <class V>
 void TsdfMapT<V>::mergeFrom(const TsdfMapT& other) {
   if (other.params_.resolution_m != params_.resolution_m || other.params_.block_size != params_.block_size)
     throw std::invalid_argument("TsdfMap::mergeFrom: maps differ in resolution or block size");
@@ -377,6 +391,7 @@ Mesh TsdfMapT<V>::extractMesh(const MeshGate& gate) const {
   const float res = static_cast<float>(params_.resolution_m);
   Mesh mesh;
   std::unordered_map<std::uint64_t, std::uint32_t> vertex_of_edge;
+  const float fg_sum_min = 8.f * gate.min_foreground;  // the mean of 8 over the bound: 0.5 gives exactly 4
   for (const auto& kv : blocks_) {
     // The block and its +x/+y/+z neighbours hold the 8 corners of every cube starting in this block.
     const Block* nb[8];
@@ -410,7 +425,7 @@ Mesh TsdfMapT<V>::extractMesh(const MeshGate& gate) const {
             fg += vx.foreground();
             if (sdf[c] < 0.f) mc_case |= 1 << c;
           }
-          if (!ok || mc_case == 0 || mc_case == 255 || fg <= 4.f) continue;
+          if (!ok || mc_case == 0 || mc_case == 255 || fg <= fg_sum_min) continue;
           const Eigen::Vector3i g = base + Eigen::Vector3i(x, y, z);
           const auto& tris = table.triangles[mc_case];
           for (int k = 0; tris[k] >= 0; k += 3) {

@@ -145,6 +145,8 @@ semexp::ObjectMapConfig loadObjectMap(const ParamReader& p) {
   p.get(n + "mesh_fragment_gap_m", c.mesh_fragment_gap_m);
   p.get(n + "mesh_min_weight", c.mesh_min_weight);
   p.get(n + "mesh_max_sdf_std_m", c.mesh_max_sdf_std_m);
+  p.get(n + "mesh_min_foreground", c.mesh_min_foreground);
+  p.get(n + "save_tsdf", c.save_tsdf);
   p.get(n + "depth_noise/sigma_min_m", c.depth_noise.sigma_min_m);
   p.get(n + "depth_noise/s_per_m", c.depth_noise.s_per_m);
   p.get(n + "depth_noise/sigma_max_m", c.depth_noise.sigma_max_m);

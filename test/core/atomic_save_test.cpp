@@ -18,6 +18,7 @@
 #include "semantic_exploration/core/occupancy_map.hpp"
 #include "semexp_test/cameras.hpp"
 #include "semexp_test/rendering.hpp"
+#include "semexp_test/temp_dir.hpp"
 
 using namespace semexp;
 using namespace semexp_test;
@@ -32,26 +33,7 @@ std::string readAll(const fs::path& p) {
 
 void writeText(const fs::path& p, const std::string& s) { std::ofstream(p, std::ios::binary) << s; }
 
-/// A fresh directory per test, removed afterwards.
-class SaveTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("semexp_save_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  /// Names in the directory (temporary files included).
-  std::vector<std::string> listing() const {
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(dir_)) names.push_back(e.path().filename().string());
-    std::sort(names.begin(), names.end());
-    return names;
-  }
-  fs::path dir_;
-};
+using SaveTest = TempDirTest;
 
 /// While alive, files this process writes may not grow past `bytes` (writes
 /// then fail with EFBIG, as on a full device).

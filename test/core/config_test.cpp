@@ -193,6 +193,15 @@ TEST(Config, OtherBadValues) {
   om.mesh_max_sdf_std_m = 0.0005;
   EXPECT_NO_THROW(om.validate());
   om = ObjectMapConfig();
+  for (const double p : {0.49, 1.0, std::nan("")}) {  // under the paper's 0.5, or a bound no mean can exceed
+    om.mesh_min_foreground = p;
+    EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/mesh_min_foreground") << p;
+  }
+  om.mesh_min_foreground = 0.6;
+  EXPECT_NO_THROW(om.validate());
+  EXPECT_FLOAT_EQ(om.meshGate().min_foreground, 0.6f);
+  EXPECT_FLOAT_EQ(ObjectMapConfig().meshGate().min_foreground, 0.5f);  // the paper's extraction by default
+  om = ObjectMapConfig();
   om.depth_noise.sigma_min_m = 0.0;
   EXPECT_EQ(rejected([&] { om.validate(); }), "object_map/depth_noise/sigma_min_m");
   om = ObjectMapConfig();

@@ -176,6 +176,42 @@ TEST(TsdfUpdate, MeshGateAsksMoreOfASurfaceSeenOnlyFromFar) {
 
 // revision() keys per-object caches (the object map node's summaries): it must change with every call that
 // can change a voxel, stay with the ones that read, and differ between maps.
+// The mesh's foreground bound (MeshGate::min_foreground) on a hand-made map: one 8^3 block holding a
+// horizontal plane between voxel layers z 3 and 4 (sdf (z + 0.5 - 4) voxels), foreground 140/254 = 0.551 for
+// x < 4 and 203/254 = 0.799 for x >= 4, weight 1. The cubes inside the block are x, y in 0-6 (x 7 needs the
+// absent +x block), 49 of them cross the plane, 2 triangles each; their mean foreground is 0.551 for x 0-2,
+// 0.675 for x 3 (four voxels of each) and 0.799 for x 4-6.
+TEST(TsdfUpdate, TheMeshKeepsCubesOverTheForegroundBound) {
+  const TsdfParams params = objectTsdfParams();
+  TsdfMap map(params);
+  TsdfMap::SavedBlock block;
+  block.index = Eigen::Vector3i::Zero();
+  block.voxels.resize(512);
+  block.has_negative = true;
+  for (int z = 0, i = 0; z < 8; ++z)
+    for (int y = 0; y < 8; ++y)
+      for (int x = 0; x < 8; ++x, ++i) {
+        TsdfVoxel& v = block.voxels[i];
+        v.setSdf((z + 0.5f - 4.f) * static_cast<float>(params.resolution_m), static_cast<float>(params.truncation_m));
+        v.setWeight(1.f);
+        v.foreground_q = x < 4 ? 140 : 203;
+      }
+  map.loadBlocks({block});
+  const auto triangles = [&](float min_foreground) {
+    MeshGate gate;
+    gate.min_foreground = min_foreground;
+    return map.extractMesh(gate).triangles.size();
+  };
+  EXPECT_EQ(map.extractMesh().triangles.size(), 98u);  // the paper's 0.5: 7 x 7 cubes
+  EXPECT_EQ(triangles(0.5f), 98u);
+  EXPECT_EQ(triangles(0.55f), 98u);   // 0.551 > 0.55
+  EXPECT_EQ(triangles(0.56f), 56u);   // x 3-6
+  EXPECT_EQ(triangles(0.7f), 42u);    // x 4-6
+  EXPECT_EQ(triangles(0.8f), 0u);     // 0.799 is not over 0.8
+  // Every vertex lies on the plane z = 4 voxels.
+  for (const auto& p : map.extractMesh().vertices_W) EXPECT_NEAR(p.z(), 4 * params.resolution_m, 1e-6);
+}
+
 TEST(TsdfUpdate, RevisionChangesWithEveryChangeAndDiffersBetweenMaps) {
   const WallAhead view;
   TsdfMap a(params()), b(params());

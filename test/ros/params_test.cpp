@@ -206,7 +206,11 @@ TEST(Params, ObjectMapDepthNoiseLoadsAndNamesTheParameter) {
   root["object_map"]["mesh_max_sdf_std_m"] = 0.005;
   root["object_map"]["depth_noise"]["sigma_min_m"] = 0.01;
   root["object_map"]["depth_noise"]["s_per_m"] = 0.004;
+  root["object_map"]["mesh_min_foreground"] = 0.6;
+  root["object_map"]["save_tsdf"] = true;
   const auto om = semexp_ros::loadObjectMap(ParamReader(root));
+  EXPECT_DOUBLE_EQ(om.mesh_min_foreground, 0.6);
+  EXPECT_TRUE(om.save_tsdf);
   EXPECT_DOUBLE_EQ(om.mesh_max_sdf_std_m, 0.005);
   EXPECT_DOUBLE_EQ(om.depth_noise.sigma_min_m, 0.01);
   EXPECT_DOUBLE_EQ(om.depth_noise.s_per_m, 0.004);

@@ -7,8 +7,15 @@
 namespace semexp {
 
 /// Which voxels a mesh is extracted over (TsdfMapT::extractMesh): every one
-/// of a marching cube's 8 voxels must pass.
+/// of a marching cube's 8 voxels must pass, and their mean foreground
+/// probability must exceed min_foreground.
 struct MeshGate {
+  /// The mean foreground probability of a cube's 8 voxels must exceed this,
+  /// [0.5, 1). 0.5 is the paper's extraction (the object's surface is where
+  /// foreground > 0.5). A higher bound leaves out surface that a detection
+  /// lifted only just over 0.5: a mask bled onto a wall or floor seen once
+  /// or twice, where the object's own surface is confirmed by many.
+  float min_foreground = 0.5f;
   /// Least weight of a voxel, in full-weight observations (more than 0 is
   /// always needed: the voxel was observed).
   float min_weight = 0.f;

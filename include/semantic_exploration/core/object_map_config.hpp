@@ -145,6 +145,18 @@ struct ObjectMapConfig {
   /// The camera's depth noise (Table I; the simulator's noise block), for
   /// mesh_max_sdf_std_m.
   DepthNoise depth_noise;
+  /// Meshes also leave out each marching cube whose 8 voxels' mean
+  /// foreground probability is at or under this (MeshGate::min_foreground).
+  /// 0.5 is the paper's extraction. Above it, surface that a bled mask lifted
+  /// only just over 0.5 in one or two detections stays out: a wall strip
+  /// behind a chair, seen from afar, held foreground 0.5-0.6 where the
+  /// chair's own surface held a median of 0.83 (docs/BENCHMARKS.md).
+  /// Probability, [0.5, 1); the TSDF, matching and the observed share keep 0.5.
+  double mesh_min_foreground = 0.5;
+  /// ObjectMap::save also writes each object's TSDF (object_<id>_<class>.tsdf,
+  /// tsdf_io.hpp) beside its mesh, so that meshes can be extracted again
+  /// offline under another gate (remesh_objects) without flying again.
+  bool save_tsdf = false;
 
   /// The voxels saved and published meshes are extracted over.
   MeshGate meshGate() const {
@@ -152,6 +164,7 @@ struct ObjectMapConfig {
     g.min_weight = static_cast<float>(mesh_min_weight);
     g.max_sdf_std_m = mesh_max_sdf_std_m;
     g.noise = depth_noise;
+    g.min_foreground = static_cast<float>(mesh_min_foreground);
     return g;
   }
 
@@ -196,6 +209,8 @@ struct ObjectMapConfig {
     // Else no voxel could ever pass (even at the noise floor and max_weight): every mesh would stay empty.
     require(mesh_max_sdf_std_m == 0 || depth_noise.sigma_min_m <= mesh_max_sdf_std_m * std::sqrt(max_weight),
             ns + "mesh_max_sdf_std_m", "must be 0 or >= depth_noise/sigma_min_m / sqrt(max_weight)");
+    require(std::isfinite(mesh_min_foreground) && mesh_min_foreground >= 0.5 && mesh_min_foreground < 1,
+            ns + "mesh_min_foreground", "must be in [0.5, 1) (no mean foreground exceeds 1)");
     require(foreground_border_px >= 0 && foreground_border_px <= 64, ns + "foreground_border_px",
             "must be in [0, 64] px");
     require(std::isfinite(foreground_prior) && foreground_prior >= 0 && foreground_prior <= 1,

@@ -6,6 +6,8 @@
 #include <cstddef>
 
 #include "semantic_exploration/core/marching_cubes.hpp"
+#include "semantic_exploration/core/mesh_gate.hpp"
+#include "semantic_exploration/core/tsdf.hpp"
 
 namespace semexp {
 
@@ -15,5 +17,9 @@ namespace semexp {
 /// all of it is not the object's. gap_m <= 0 keeps everything.
 /// @return vertices dropped
 std::size_t dropMeshFragments(Mesh& mesh, double gap_m);
+
+/// An object's mesh as saved and published: TsdfMap::extractMesh over the
+/// voxels that pass `gate`, then dropMeshFragments at fragment_gap_m.
+Mesh objectMesh(const TsdfMap& tsdf, const MeshGate& gate, double fragment_gap_m);
 
 }  // namespace semexp

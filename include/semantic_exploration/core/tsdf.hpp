@@ -326,15 +326,16 @@ class TsdfMapT {
   /// belongs to another object. Returns the voxels changed.
   std::size_t dropForegroundBeyond(const Eigen::Vector3f& normal_W, float offset_m);
 
-  /// Marching-cubes mesh of the zero crossing where foreground probability
-  /// > 0.5, with colour, over the cubes whose 8 voxels each hold a weight of
+  /// Marching-cubes mesh of the zero crossing where the mean foreground
+  /// probability of a cube's 8 voxels exceeds 0.5, with colour, over the cubes whose 8 voxels each hold a weight of
   /// at least min_weight (and more than 0), in observations.
   Mesh extractMesh(float min_weight = 0.f) const {
     MeshGate gate;
     gate.min_weight = min_weight;
     return extractMesh(gate);
   }
-  /// The same over the cubes whose 8 voxels each pass `gate`.
+  /// The same over the cubes whose 8 voxels each pass `gate` and whose
+  /// mean foreground exceeds gate.min_foreground.
   Mesh extractMesh(const MeshGate& gate) const;
 
   /// Summary of the surface voxels (|sdf| < one voxel) whose foreground
@@ -364,6 +365,23 @@ class TsdfMapT {
   std::size_t voxelCount() const { return blocks_.size() * voxels_per_block_; }
   /// Bytes of voxel payload (excluding hash-map overhead).
   std::size_t voxelBytes() const { return voxelCount() * sizeof(VoxelT); }
+
+  /// A block as saved (tsdf_io.hpp): its index, its block_size^3 voxels (x
+  /// fastest) and Block::has_negative.
+  struct SavedBlock {
+    Eigen::Vector3i index;
+    std::vector<VoxelT> voxels;
+    bool has_negative = false;
+  };
+  /// Calls f(block index, voxels (block_size^3, x fastest), has_negative) for every allocated block.
+  template <class F>
+  void forEachBlock(F&& f) const {
+    for (const auto& kv : blocks_) f(kv.first, kv.second.voxels, kv.second.has_negative);
+  }
+  /// Sets the blocks given (allocating them) to their saved content: loads a
+  /// saved map (tsdf_io.hpp).
+  /// @throws std::invalid_argument if a block does not hold block_size^3 voxels
+  void loadBlocks(std::vector<SavedBlock> blocks);
 
   /// Calls f(global voxel index, voxel) for every allocated voxel.
   template <class F>

@@ -1,0 +1,48 @@
+#!/usr/bin/env python3
+"""Scores saved object maps against a run's ground truth, as the mission
+report does (semantic_exploration.eval.final): for each objects directory,
+the map objects matched to ground-truth objects with their accuracy RMSE and
+completeness, the spurious and the duplicated. Used to compare meshes of one
+flight extracted again under other gates (remesh_objects) without flying
+again. Prints one JSON document per directory.
+
+Example:
+  score_objects.py --gt-dir results/run/ground_truth results/run/objects results/run/objects_fg06
+"""
+import argparse
+import json
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--gt-dir", required=True, help="ground truth exported by the simulator (the run's ground_truth)")
+    ap.add_argument("--classes", nargs="+", default=["chair"], help="classes of interest")
+    ap.add_argument("objects", nargs="+", help="saved object map directories (with objects.json)")
+    args = ap.parse_args(argv)
+    sys.path.insert(0, HERE)
+    import run_mission as mission
+    mission._import_package()
+    from semantic_exploration.eval.final import evaluate
+
+    gt = {"gt_dir": os.path.abspath(args.gt_dir)}
+    rc = 0
+    for d in args.objects:
+        if not os.path.exists(os.path.join(d, "objects.json")):
+            print("[score_objects] %s holds no objects.json" % d, file=sys.stderr)
+            rc = 1
+            continue
+        # No background map and no snapshot series here: only the objects are scored.
+        res = evaluate(d, gt, args.classes, {"object_map": {"success": True, "dir": os.path.abspath(d)}})
+        if "error" in res:
+            print("[score_objects] %s: %s" % (d, res["error"]), file=sys.stderr)
+            rc = 1
+        print(json.dumps({"objects_dir": os.path.abspath(d), "evaluation": res}), flush=True)
+    return rc
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,150 @@
+#include "semantic_exploration/core/tsdf_io.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <tuple>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include "semantic_exploration/core/atomic_file.hpp"
+
+namespace semexp {
+
+namespace {
+
+constexpr const char* kFormat = "semexp_tsdf";
+constexpr int kVersion = 1;
+constexpr std::size_t kVoxelBytes = 10;
+
+// Little-endian packing, whatever the host's byte order.
+void put16(std::uint8_t* p, std::uint16_t v) {
+  p[0] = static_cast<std::uint8_t>(v & 0xff);
+  p[1] = static_cast<std::uint8_t>(v >> 8);
+}
+std::uint16_t get16(const std::uint8_t* p) { return static_cast<std::uint16_t>(p[0] | (p[1] << 8)); }
+void put32(std::uint8_t* p, std::int32_t s) {
+  const auto v = static_cast<std::uint32_t>(s);
+  for (int k = 0; k < 4; ++k) p[k] = static_cast<std::uint8_t>((v >> (8 * k)) & 0xff);
+}
+std::int32_t get32(const std::uint8_t* p) {
+  std::uint32_t v = 0;
+  for (int k = 0; k < 4; ++k) v |= static_cast<std::uint32_t>(p[k]) << (8 * k);
+  return static_cast<std::int32_t>(v);
+}
+
+bool fail(std::string* error, const std::string& why) {
+  if (error) *error = why;
+  return false;
+}
+
+}  // namespace
+
+bool saveTsdf(const TsdfMap& map, const std::string& path, std::string* error) {
+  const TsdfParams& p = map.params();
+  std::ostringstream header;
+  header.precision(17);
+  header << kFormat << " " << kVersion << "\n"
+         << "resolution_m " << p.resolution_m << "\ntruncation_m " << p.truncation_m << "\nbehind_surface_m "
+         << p.behind_surface_m << "\nbehind_surface_quadratic_per_m " << p.behind_surface_quadratic_per_m
+         << "\nfull_weight_depth_m " << p.full_weight_depth_m << "\nforeground_prior " << p.foreground_prior
+         << "\nforeground_prior_weight " << p.foreground_prior_weight << "\nblock_size " << p.block_size
+         << "\nmax_weight " << p.max_weight << "\nblocks " << map.blockCount() << "\n";
+  const std::size_t n = static_cast<std::size_t>(p.block_size) * p.block_size * p.block_size;
+  try {
+    writeFileAtomically(path, [&](std::ostream& f) {
+      f << header.str();
+      // Blocks in index order (z, y, x), not the hash map's: one map always gives the same bytes.
+      std::vector<std::tuple<int, int, int, const std::vector<TsdfVoxel>*, bool>> blocks;
+      map.forEachBlock([&](const Eigen::Vector3i& b, const std::vector<TsdfVoxel>& voxels, bool has_negative) {
+        blocks.emplace_back(b.z(), b.y(), b.x(), &voxels, has_negative);
+      });
+      std::sort(blocks.begin(), blocks.end());
+      std::vector<std::uint8_t> buf(13 + n * kVoxelBytes);
+      for (const auto& [bz, by, bx, block, has_negative] : blocks) {
+        const Eigen::Vector3i b(bx, by, bz);
+        const std::vector<TsdfVoxel>& voxels = *block;
+        for (int k = 0; k < 3; ++k) put32(&buf[4 * k], b[k]);
+        buf[12] = has_negative ? 1 : 0;
+        std::uint8_t* q = &buf[13];
+        for (const TsdfVoxel& v : voxels) {
+          put16(q, static_cast<std::uint16_t>(v.sdf_q));
+          put16(q + 2, v.weight_q);
+          put16(q + 4, v.min_distance_mm);
+          q[6] = v.foreground_q;
+          std::memcpy(q + 7, v.rgb, 3);
+          q += kVoxelBytes;
+        }
+        f.write(reinterpret_cast<const char*>(buf.data()), static_cast<std::streamsize>(buf.size()));
+      }
+    });
+  } catch (const std::exception& e) {
+    return fail(error, e.what());
+  }
+  return true;
+}
+
+std::unique_ptr<TsdfMap> loadTsdf(const std::string& path, std::string* error) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) {
+    fail(error, "cannot open " + path);
+    return nullptr;
+  }
+  const auto bad = [&](const std::string& why) {
+    fail(error, path + ": " + why);
+    return nullptr;
+  };
+  std::string format;
+  int version = 0;
+  if (!(f >> format >> version) || format != kFormat) return bad("not a semexp_tsdf file");
+  if (version != kVersion) return bad("format version " + std::to_string(version) + ", this build reads 1");
+  TsdfParams p;
+  std::size_t blocks = 0;
+  const auto field = [&](const char* key, auto& value) {
+    std::string k;
+    return static_cast<bool>(f >> k >> value) && k == key;
+  };
+  if (!(field("resolution_m", p.resolution_m) && field("truncation_m", p.truncation_m) &&
+        field("behind_surface_m", p.behind_surface_m) &&
+        field("behind_surface_quadratic_per_m", p.behind_surface_quadratic_per_m) &&
+        field("full_weight_depth_m", p.full_weight_depth_m) && field("foreground_prior", p.foreground_prior) &&
+        field("foreground_prior_weight", p.foreground_prior_weight) && field("block_size", p.block_size) &&
+        field("max_weight", p.max_weight) && field("blocks", blocks)))
+    return bad("header unreadable");
+  if (f.get() != '\n') return bad("header unreadable");
+  std::unique_ptr<TsdfMap> map;
+  try {
+    map = std::make_unique<TsdfMap>(p);
+  } catch (const std::exception& e) {
+    return bad(e.what());
+  }
+  const std::size_t n = static_cast<std::size_t>(p.block_size) * p.block_size * p.block_size;
+  std::vector<TsdfMap::SavedBlock> saved;  // not reserved from the header: a corrupt count must not allocate
+  std::vector<std::uint8_t> buf(13 + n * kVoxelBytes);
+  for (std::size_t i = 0; i < blocks; ++i) {
+    if (!f.read(reinterpret_cast<char*>(buf.data()), static_cast<std::streamsize>(buf.size())))
+      return bad("truncated at block " + std::to_string(i) + " of " + std::to_string(blocks));
+    TsdfMap::SavedBlock b;
+    b.index = Eigen::Vector3i(get32(&buf[0]), get32(&buf[4]), get32(&buf[8]));
+    if ((b.index.cast<std::int64_t>().cwiseAbs() * p.block_size).maxCoeff() >= TsdfParams::kMaxVoxelIndex)
+      return bad("block " + std::to_string(i) + " lies outside the map's index range");
+        b.has_negative = buf[12] != 0;
+    b.voxels.resize(n);
+    const std::uint8_t* q = &buf[13];
+    for (TsdfVoxel& v : b.voxels) {
+      v.sdf_q = static_cast<std::int16_t>(get16(q));
+      v.weight_q = get16(q + 2);
+      v.min_distance_mm = get16(q + 4);
+      v.foreground_q = q[6];
+      std::memcpy(v.rgb, q + 7, 3);
+      q += kVoxelBytes;
+    }
+    saved.push_back(std::move(b));
+  }
+  if (f.peek() != std::char_traits<char>::eof()) return bad("bytes after the last block");
+  map->loadBlocks(std::move(saved));
+  return map;
+}
+
+}  // namespace semexp
