@@ -87,8 +87,15 @@ std::vector<std::string> ObjectMap::save(const std::string& directory, double d_
             ", \"centroid\": " + vec(s.centroid_W) + ", \"mesh\": \"" + jsonEscape(name) + "\"" + tsdf_entry + "}";
     first = false;
   }
-  char tail[64];
-  std::snprintf(tail, sizeof(tail), "\n], \"d_obj_m\": %.3f}\n", d_obj_m);
+  // The gate the meshes were extracted under, for the record and for remesh_objects (readSavedMeshSettings).
+  const ObjectMapConfig& c = config_;
+  char tail[512];
+  std::snprintf(tail, sizeof(tail),
+                "\n], \"d_obj_m\": %.3f,\n\"mesh_gate\": {\"mesh_min_weight\": %.17g, \"mesh_max_sdf_std_m\": %.17g, "
+                "\"mesh_min_foreground\": %.17g, \"mesh_fragment_gap_m\": %.17g, \"depth_noise\": "
+                "{\"sigma_min_m\": %.17g, \"s_per_m\": %.17g, \"sigma_max_m\": %.17g}}}\n",
+                d_obj_m, c.mesh_min_weight, c.mesh_max_sdf_std_m, c.mesh_min_foreground, c.mesh_fragment_gap_m,
+                c.depth_noise.sigma_min_m, c.depth_noise.s_per_m, c.depth_noise.sigma_max_m);
   json += tail;
   const std::string index = (dir / "objects.json").string();
   try {

@@ -1,6 +1,7 @@
 #include "semantic_exploration/core/tsdf_io.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <tuple>
 #include <fstream>
@@ -113,38 +114,59 @@ std::unique_ptr<TsdfMap> loadTsdf(const std::string& path, std::string* error) {
         field("max_weight", p.max_weight) && field("blocks", blocks)))
     return bad("header unreadable");
   if (f.get() != '\n') return bad("header unreadable");
-  std::unique_ptr<TsdfMap> map;
+  // The header is checked before anything is allocated from it (block_size^3 voxels per block).
+  const auto nonNegative = [](double v) { return std::isfinite(v) && v >= 0.0; };
+  if (!(nonNegative(p.resolution_m) && p.resolution_m > 0 && nonNegative(p.truncation_m) && p.truncation_m > 0 &&
+        nonNegative(p.behind_surface_m) && nonNegative(p.behind_surface_quadratic_per_m) &&
+        nonNegative(p.full_weight_depth_m) && nonNegative(p.foreground_prior) && p.foreground_prior <= 1 &&
+        nonNegative(p.foreground_prior_weight) && p.block_size >= 2 && p.block_size <= 64 &&
+        (p.block_size & (p.block_size - 1)) == 0 && std::isfinite(p.max_weight) && p.max_weight >= 1 &&
+        p.max_weight <= TsdfVoxel::kMaxWeight))
+    return bad("a parameter in the header is out of range");
+  const auto max_weight_q = static_cast<std::uint16_t>(std::ceil(p.max_weight * 16.0));
   try {
-    map = std::make_unique<TsdfMap>(p);
-  } catch (const std::exception& e) {
+    auto map = std::make_unique<TsdfMap>(p);
+    const std::size_t n = static_cast<std::size_t>(p.block_size) * p.block_size * p.block_size;
+    std::vector<TsdfMap::SavedBlock> saved;  // not reserved from the header: a corrupt count must not allocate
+    std::vector<std::uint8_t> buf(13 + n * kVoxelBytes);
+    for (std::size_t i = 0; i < blocks; ++i) {
+      const std::string at = "block " + std::to_string(i) + " of " + std::to_string(blocks);
+      if (!f.read(reinterpret_cast<char*>(buf.data()), static_cast<std::streamsize>(buf.size())))
+        return bad("truncated at " + at);
+      TsdfMap::SavedBlock b;
+      b.index = Eigen::Vector3i(get32(&buf[0]), get32(&buf[4]), get32(&buf[8]));
+      if ((b.index.cast<std::int64_t>().cwiseAbs() * p.block_size).maxCoeff() >= TsdfParams::kMaxVoxelIndex)
+        return bad(at + " lies outside the map's index range");
+      // Index order (the writer's) also rules out a block given twice.
+      if (i > 0) {
+        const Eigen::Vector3i& q = saved.back().index;
+        if (std::make_tuple(b.index.z(), b.index.y(), b.index.x()) <= std::make_tuple(q.z(), q.y(), q.x()))
+          return bad(at + " is out of index order or repeated");
+      }
+      // The flag is sticky (a voxel once given a negative SDF may have turned positive since): kept as saved,
+      // and set wherever a voxel is negative now, so that ray casts never step over a surface.
+      b.has_negative = buf[12] != 0;
+      b.voxels.resize(n);
+      const std::uint8_t* q = &buf[13];
+      for (TsdfVoxel& v : b.voxels) {
+        v.sdf_q = static_cast<std::int16_t>(get16(q));
+        v.weight_q = get16(q + 2);
+        v.min_distance_mm = get16(q + 4);
+        v.foreground_q = q[6];
+        std::memcpy(v.rgb, q + 7, 3);
+        q += kVoxelBytes;
+        if (v.sdf_q < -32767 || v.foreground_q > 254 || v.weight_q > max_weight_q)
+          return bad(at + " holds a voxel out of range (sdf, foreground or weight)");
+        b.has_negative = b.has_negative || v.sdf_q < 0;
+      }
+      saved.push_back(std::move(b));
+    }
+    if (f.peek() != std::char_traits<char>::eof()) return bad("bytes after the last block");
+    map->loadBlocks(std::move(saved));
+    return map;
+  } catch (const std::exception& e) {  // allocation: the file cannot be held
     return bad(e.what());
   }
-  const std::size_t n = static_cast<std::size_t>(p.block_size) * p.block_size * p.block_size;
-  std::vector<TsdfMap::SavedBlock> saved;  // not reserved from the header: a corrupt count must not allocate
-  std::vector<std::uint8_t> buf(13 + n * kVoxelBytes);
-  for (std::size_t i = 0; i < blocks; ++i) {
-    if (!f.read(reinterpret_cast<char*>(buf.data()), static_cast<std::streamsize>(buf.size())))
-      return bad("truncated at block " + std::to_string(i) + " of " + std::to_string(blocks));
-    TsdfMap::SavedBlock b;
-    b.index = Eigen::Vector3i(get32(&buf[0]), get32(&buf[4]), get32(&buf[8]));
-    if ((b.index.cast<std::int64_t>().cwiseAbs() * p.block_size).maxCoeff() >= TsdfParams::kMaxVoxelIndex)
-      return bad("block " + std::to_string(i) + " lies outside the map's index range");
-        b.has_negative = buf[12] != 0;
-    b.voxels.resize(n);
-    const std::uint8_t* q = &buf[13];
-    for (TsdfVoxel& v : b.voxels) {
-      v.sdf_q = static_cast<std::int16_t>(get16(q));
-      v.weight_q = get16(q + 2);
-      v.min_distance_mm = get16(q + 4);
-      v.foreground_q = q[6];
-      std::memcpy(v.rgb, q + 7, 3);
-      q += kVoxelBytes;
-    }
-    saved.push_back(std::move(b));
-  }
-  if (f.peek() != std::char_traits<char>::eof()) return bad("bytes after the last block");
-  map->loadBlocks(std::move(saved));
-  return map;
 }
 
 }  // namespace semexp

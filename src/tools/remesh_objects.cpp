@@ -1,7 +1,9 @@
 // remesh_objects: extracts the meshes of a saved object map again under
 // another mesh gate, from the TSDFs the object map saves with
 // object_map/save_tsdf true. The flags are the object_map parameters of the
-// same names (config/semantic.yaml); unset ones take the core defaults.
+// same names (config/semantic.yaml); unset ones keep the gate the saved
+// meshes were extracted under (objects.json's mesh_gate), or the core
+// defaults where the index records none.
 //
 //   rosrun semantic_exploration remesh_objects IN_DIR OUT_DIR
 //       [--mesh_min_foreground P] [--mesh_min_weight W] [--mesh_max_sdf_std_m E]
@@ -25,6 +27,14 @@ int main(int argc, char** argv) {
     return 2;
   }
   semexp::ObjectMapConfig c;
+  std::string why;
+  if (semexp::readSavedMeshSettings(argv[1], c, &why))
+    std::cout << "remesh_objects: starting from the saved gate (mesh_min_weight " << c.mesh_min_weight
+              << ", mesh_max_sdf_std_m " << c.mesh_max_sdf_std_m << ", mesh_min_foreground " << c.mesh_min_foreground
+              << ", mesh_fragment_gap_m " << c.mesh_fragment_gap_m << ", depth_noise " << c.depth_noise.sigma_min_m
+              << " m / " << c.depth_noise.s_per_m << " 1/m / " << c.depth_noise.sigma_max_m << " m)\n";
+  else
+    std::cout << "remesh_objects: " << why << "; starting from the defaults\n";
   const std::map<std::string, double*> flags = {
       {"--mesh_min_foreground", &c.mesh_min_foreground},
       {"--mesh_min_weight", &c.mesh_min_weight},

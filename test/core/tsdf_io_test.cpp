@@ -69,15 +69,19 @@ std::vector<std::array<Corner, 3>> triangleSet(const Mesh& m) {
 }
 
 TEST_F(TsdfIoTest, ALoadedMapHoldsEverySavedVoxel) {
-  TsdfParams params = objectTsdfParams();
-  params.full_weight_depth_m = 0.9;  // every saved parameter differs from its default
+  TsdfParams params = objectTsdfParams();  // every saved parameter differs from the TsdfParams defaults
+  params.resolution_m = 0.03;
+  params.truncation_m = 0.09;
+  params.behind_surface_m = 0.05;
+  params.block_size = 16;
+  params.full_weight_depth_m = 0.9;
   params.behind_surface_quadratic_per_m = 0.006;
   params.foreground_prior = 0.3;
   params.foreground_prior_weight = 2.0;
   params.max_weight = 50.0;
   TsdfMap map(params);
   integrateSphere(map);
-  ASSERT_GT(map.blockCount(), 20u);
+  ASSERT_GT(map.blockCount(), 4u);
   const fs::path path = dir_ / "sphere.tsdf";
   std::string error;
   ASSERT_TRUE(saveTsdf(map, path.string(), &error)) << error;
@@ -94,14 +98,12 @@ TEST_F(TsdfIoTest, ALoadedMapHoldsEverySavedVoxel) {
   EXPECT_EQ(q.block_size, params.block_size);
   EXPECT_EQ(q.max_weight, params.max_weight);
   EXPECT_EQ(loaded->blockCount(), map.blockCount());
-  EXPECT_NE(loaded->revision(), map.revision());
   std::size_t compared = 0, negative_blocks = 0, fg_low = 0, fg_high = 0;
   map.forEachBlock([&](const Eigen::Vector3i& b, const std::vector<TsdfVoxel>& voxels, bool has_negative) {
     negative_blocks += has_negative;
     for (std::size_t i = 0; i < voxels.size(); ++i) {
-      const Eigen::Vector3i v = b * params.block_size + Eigen::Vector3i(static_cast<int>(i % 8),
-                                                                         static_cast<int>(i / 8 % 8),
-                                                                         static_cast<int>(i / 64));
+      const int B = params.block_size, k = static_cast<int>(i);
+      const Eigen::Vector3i v = b * B + Eigen::Vector3i(k % B, k / B % B, k / (B * B));
       const TsdfVoxel* w = loaded->voxel(v);
       ASSERT_NE(w, nullptr);
       const TsdfVoxel& u = voxels[i];
@@ -152,9 +154,66 @@ TEST_F(TsdfIoTest, DamagedFilesAreRefusedWithAReason) {
   EXPECT_NE(reason("semexp_tsdf 2" + bytes.substr(13)).find("format version 2"), std::string::npos);
   EXPECT_NE(reason(bytes.substr(0, bytes.size() - 1)).find("truncated at block"), std::string::npos);
   EXPECT_NE(reason(bytes + "x").find("bytes after the last block"), std::string::npos);
+  std::string huge_blocks = bytes;  // 1024^3 voxels per block would be 10 GB: refused before allocating
+  huge_blocks.replace(huge_blocks.find("block_size 8"), 12, "block_size 1024");
+  EXPECT_NE(reason(huge_blocks).find("out of range"), std::string::npos);
+  const std::size_t body = bytes.find("\n", bytes.find("blocks ")) + 1, block_bytes = 13 + 512 * 10;
+  ASSERT_GE(bytes.size(), body + 2 * block_bytes);
+  std::string repeated = bytes;  // the first block given twice
+  repeated.replace(body + block_bytes, block_bytes, bytes.substr(body, block_bytes));
+  EXPECT_NE(reason(repeated).find("block 1 of"), std::string::npos);
+  EXPECT_NE(reason(repeated).find("out of index order or repeated"), std::string::npos);
+  std::string fg255 = bytes;  // foreground byte 255 (254 is probability 1)
+  fg255[body + 13 + 6] = static_cast<char>(255);
+  EXPECT_NE(reason(fg255).find("voxel out of range"), std::string::npos);
   std::string no_resolution = bytes;
   no_resolution.replace(no_resolution.find("resolution_m"), 12, "resolution_x");
   EXPECT_NE(reason(no_resolution).find("header unreadable"), std::string::npos);
+}
+
+// The documented layout, byte for byte: block (1, -2, 3) flagged negative, its first voxel sdf_q -2, weight_q
+// 0x0512, min_distance_mm 0x5678, foreground_q 200, rgb 1 2 3; every other voxel as constructed (sdf_q 32767,
+// weight 0, no distance, foreground 127, black). A voxel turned negative on load sets the flag of its block.
+TEST_F(TsdfIoTest, TheFileHoldsTheDocumentedBytes) {
+  TsdfParams params = objectTsdfParams();
+  params.block_size = 2;
+  TsdfMap map(params);
+  TsdfMap::SavedBlock block;
+  block.index = Eigen::Vector3i(1, -2, 3);
+  block.voxels.resize(8);
+  block.has_negative = true;
+  TsdfVoxel& v = block.voxels[0];
+  v.sdf_q = -2;
+  v.weight_q = 0x0512;  // 81.125 observations, under max_weight
+  v.min_distance_mm = 0x5678;
+  v.foreground_q = 200;
+  v.rgb[0] = 1;
+  v.rgb[1] = 2;
+  v.rgb[2] = 3;
+  map.loadBlocks({block});
+  const fs::path path = dir_ / "one.tsdf";
+  ASSERT_TRUE(saveTsdf(map, path.string()));
+  const std::string bytes = readAll(path);
+  const std::string header =
+      "semexp_tsdf 1\nresolution_m 0.02\ntruncation_m 0.080000000000000002\nbehind_surface_m 0.040000000000000001\n"
+      "behind_surface_quadratic_per_m 0\nfull_weight_depth_m 0\nforeground_prior 0.5\nforeground_prior_weight 0\n"
+      "block_size 2\nmax_weight 100\nblocks 1\n";
+  ASSERT_EQ(bytes.substr(0, header.size()), header);
+  const std::uint8_t expected_block[] = {1, 0, 0, 0, 0xfe, 0xff, 0xff, 0xff, 3, 0, 0, 0, 1,
+                                         0xfe, 0xff, 0x12, 0x05, 0x78, 0x56, 200, 1, 2, 3};
+  const std::uint8_t untouched_voxel[] = {0xff, 0x7f, 0, 0, 0xff, 0xff, 127, 0, 0, 0};
+  ASSERT_EQ(bytes.size(), header.size() + 13 + 8 * 10);
+  for (std::size_t k = 0; k < sizeof(expected_block); ++k)
+    EXPECT_EQ(static_cast<std::uint8_t>(bytes[header.size() + k]), expected_block[k]) << "byte " << k;
+  for (std::size_t k = 0; k < 10; ++k)
+    EXPECT_EQ(static_cast<std::uint8_t>(bytes[header.size() + 23 + k]), untouched_voxel[k]) << "voxel 1 byte " << k;
+  // The flag cleared in the file: the negative voxel sets it again.
+  std::string cleared = bytes;
+  cleared[header.size() + 12] = 0;
+  writeAll(dir_ / "cleared.tsdf", cleared);
+  const auto loaded = loadTsdf((dir_ / "cleared.tsdf").string());
+  ASSERT_TRUE(loaded);
+  loaded->forEachBlock([](const Eigen::Vector3i&, const std::vector<TsdfVoxel>&, bool n) { EXPECT_TRUE(n); });
 }
 
 TEST_F(TsdfIoTest, SavedTsdfsRemeshToTheSavedMeshes) {
@@ -187,9 +246,15 @@ TEST_F(TsdfIoTest, SavedTsdfsRemeshToTheSavedMeshes) {
     EXPECT_NE(readAll(dir_ / "objects" / "objects.json").find("\"tsdf\": \"" + tsdf + "\""), std::string::npos);
   }
   ASSERT_EQ(meshes.size(), 2u);
-  // The same gate gives the saved meshes (the same triangles) and the same index.
-  ASSERT_EQ(remeshSavedObjects((dir_ / "objects").string(), (dir_ / "again").string(), c.meshGate(),
-                               c.mesh_fragment_gap_m, &error), 2) << error;
+  // The index records the gate; the same gate gives the saved meshes (the same triangles) and the same index.
+  ObjectMapConfig recorded;
+  ASSERT_TRUE(readSavedMeshSettings((dir_ / "objects").string(), recorded, &error)) << error;
+  EXPECT_EQ(recorded.mesh_max_sdf_std_m, 0.005);
+  EXPECT_EQ(recorded.mesh_min_foreground, 0.5);
+  EXPECT_EQ(recorded.mesh_fragment_gap_m, c.mesh_fragment_gap_m);
+  EXPECT_EQ(recorded.depth_noise.s_per_m, c.depth_noise.s_per_m);
+  ASSERT_EQ(remeshSavedObjects((dir_ / "objects").string(), (dir_ / "again").string(), recorded.meshGate(),
+                               recorded.mesh_fragment_gap_m, &error), 2) << error;
   for (const std::string& name : meshes) {
     Mesh saved, again;
     ASSERT_TRUE(readPly((dir_ / "objects" / name).string(), saved));
@@ -210,6 +275,10 @@ TEST_F(TsdfIoTest, SavedTsdfsRemeshToTheSavedMeshes) {
     EXPECT_GT(kept.triangles.size(), 0u) << name;
     EXPECT_LT(kept.triangles.size(), saved.triangles.size()) << name;
   }
+  // The flight's own meshes are never overwritten.
+  EXPECT_EQ(remeshSavedObjects((dir_ / "objects").string(), (dir_ / "objects" / ".").string(), strict, 0.3, &error),
+            -1);
+  EXPECT_NE(error.find("output directory is the input"), std::string::npos) << error;
   // A directory saved without TSDFs cannot be remeshed, and says why.
   c.save_tsdf = false;
   ObjectMap plain(c, ClassTable());

@@ -52,15 +52,20 @@ def test_remesh_objects_applies_the_foreground_bound(tmp_path):
     src = tmp_path / "objects"
     src.mkdir()
     write_plane_tsdf(str(src / "object_4_chair.tsdf"))
+    # The gate the saved mesh was extracted under, as ObjectMap::save records it: a bound of 0.56.
+    gate = {"mesh_min_weight": 0, "mesh_max_sdf_std_m": 0, "mesh_min_foreground": 0.56, "mesh_fragment_gap_m": 0.3,
+            "depth_noise": {"sigma_min_m": 0.005, "s_per_m": 0.002, "sigma_max_m": 0.2}}
     index = {"objects": [{"id": 4, "class_name": "chair", "mesh": "object_4_chair.ply",
-                          "tsdf": "object_4_chair.tsdf"}], "d_obj_m": 1.0}
+                          "tsdf": "object_4_chair.tsdf"}], "d_obj_m": 1.0, "mesh_gate": gate}
     (src / "objects.json").write_text(json.dumps(index))
-    for bound, faces in (("0.5", 98), ("0.56", 56), ("0.7", 42)):
-        out = tmp_path / ("fg" + bound)
-        r = subprocess.run([tool(), str(src), str(out), "--mesh_min_foreground", bound], stdout=subprocess.PIPE,
+    for bound, faces in ((None, 56), ("0.5", 98), ("0.7", 42)):  # no flag: the saved gate
+        out = tmp_path / ("fg%s" % bound)
+        flags = ["--mesh_min_foreground", bound] if bound else []
+        r = subprocess.run([tool(), str(src), str(out)] + flags, stdout=subprocess.PIPE,
                            stderr=subprocess.STDOUT, universal_newlines=True, timeout=60)
         assert r.returncode == 0, r.stdout
         assert "1 meshes written" in r.stdout
+        assert "starting from the saved gate" in r.stdout and "mesh_min_foreground 0.56" in r.stdout
         assert ply_faces(str(out / "object_4_chair.ply")) == faces, bound
         assert json.loads((out / "objects.json").read_text()) == index
     # Invalid configuration names the parameter; unknown flags and a directory without TSDFs say why.

@@ -100,7 +100,8 @@ struct ObjectMapConfig {
   /// Matching, the new-object test, the extent of a piece to be merged and the
   /// planner's object rays see the tracked surface, every voxel a detection
   /// lifted above the prior (TsdfParams::trackedForeground()); the mesh, the
-  /// observed share and the extent of the object a piece merges into keep 0.5.
+  /// observed share and the extent of the object a piece merges into keep 0.5
+  /// (the mesh: mesh_min_foreground, 0.5 by default).
   /// foreground_prior_weight * (0.5 - foreground_prior) must stay under 0.5:
   /// one full-evidence observation then still lifts a new voxel above 0.5
   /// (a detection seen whole gives its object a mesh surface at once).
@@ -151,11 +152,14 @@ struct ObjectMapConfig {
   /// only just over 0.5 in one or two detections stays out: a wall strip
   /// behind a chair, seen from afar, held foreground 0.5-0.6 where the
   /// chair's own surface held a median of 0.83 (docs/BENCHMARKS.md).
-  /// Probability, [0.5, 1); the TSDF, matching and the observed share keep 0.5.
+  /// Probability, [0.5, 1). The TSDF, the tracked surface (matching, the
+  /// planner's object rays) and the observed share are unaffected.
   double mesh_min_foreground = 0.5;
   /// ObjectMap::save also writes each object's TSDF (object_<id>_<class>.tsdf,
   /// tsdf_io.hpp) beside its mesh, so that meshes can be extracted again
   /// offline under another gate (remesh_objects) without flying again.
+  /// Every save does (run_mission.py's periodic snapshots too): a few MB
+  /// per object.
   bool save_tsdf = false;
 
   /// The voxels saved and published meshes are extracted over.

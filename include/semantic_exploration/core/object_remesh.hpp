@@ -7,15 +7,25 @@
 #include <string>
 
 #include "semantic_exploration/core/mesh_gate.hpp"
+#include "semantic_exploration/core/object_map_config.hpp"
 
 namespace semexp {
+
+/// Sets the mesh settings of `c` (mesh_min_weight, mesh_max_sdf_std_m,
+/// mesh_min_foreground, mesh_fragment_gap_m, depth_noise) to those a saved
+/// object map records in dir/objects.json ("mesh_gate"), the ones its meshes
+/// were extracted under. False (and `c` unchanged, *error set) if the index
+/// cannot be read or records no gate.
+bool readSavedMeshSettings(const std::string& dir, ObjectMapConfig& c, std::string* error = nullptr);
 
 /// For every object_<id>_<class>.tsdf in in_dir, writes
 /// object_<id>_<class>.ply to out_dir (created if needed): objectMesh under
 /// `gate` and fragment_gap_m (m). Copies objects.json when out_dir differs,
-/// so that out_dir reads as a saved object map. Returns the meshes written,
-/// or -1 with *error set (in_dir holds no TSDF or no objects.json, a TSDF
-/// does not load, a file cannot be written).
+/// so that out_dir reads as a saved object map (its index still names the
+/// TSDFs, which stay in in_dir). Returns the meshes written, or -1 with
+/// *error set (out_dir is in_dir: the flight's own meshes are kept; in_dir
+/// holds no TSDF or no objects.json; gate.min_foreground outside [0.5, 1);
+/// a TSDF does not load; a file cannot be written).
 int remeshSavedObjects(const std::string& in_dir, const std::string& out_dir, const MeshGate& gate,
                        double fragment_gap_m, std::string* error = nullptr);
 

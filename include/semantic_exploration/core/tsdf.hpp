@@ -182,8 +182,9 @@ struct TsdfParams {
   /// new object is kept and as the extent of a piece that may be merged into
   /// another object. It is foreground_prior when that lies under 0.5 with
   /// some weight (any detection lifts a voxel above the prior), else 0.5.
-  /// The mesh, the observed share and the extent of the object a piece is
-  /// merged into keep the paper's 0.5. A prior that keeps bled surface out
+  /// The mesh (over 0.5 or a higher MeshGate::min_foreground), the observed
+  /// share and the extent of the object a piece is merged into keep the
+  /// paper's 0.5. A prior that keeps bled surface out
   /// of the mesh then neither shrinks the render later detections are matched
   /// to nor drops a first detection whose pixels all lie near its mask's border.
   /// It is stickier than 0.5: a voxel one full detection lifted to 0.53 leaves

@@ -9,7 +9,10 @@
 /// endian: the block index as 3 int32, a has_negative byte, and block_size^3
 /// voxels of 10 bytes each (int16 sdf_q, uint16 weight_q, uint16
 /// min_distance_mm, uint8 foreground_q, 3 x uint8 rgb), x fastest. A loaded
-/// map holds exactly the saved voxels.
+/// map holds exactly the saved voxels. has_negative is Block::has_negative:
+/// set once a voxel of the block was given a negative SDF, and kept (ray
+/// casts step over blocks without it); a loader sets it too wherever a voxel
+/// is negative, so a writer that clears it cannot hide a surface.
 
 #include <memory>
 #include <string>

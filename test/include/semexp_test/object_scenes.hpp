@@ -69,6 +69,23 @@ inline semexp::FrameIntegration runFrame(semexp::ObjectMap& map, const semexp::P
   return map.integrateFrame(cam, T_WC, depth_m, cv::Mat(), cleaned, detections, &rendered);
 }
 
+/// The tiny camera at the origin looking along +x at a wall whose face lies distance_m (default 1 m) ahead.
+struct WallAhead {
+  semexp::PinholeCamera cam = tinyCamera();
+  Eigen::Isometry3d T_WC = lookAlong(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX());
+  cv::Mat depth;
+  explicit WallAhead(double distance_m = 1.0) {
+    const Box wall(Eigen::Vector3d(distance_m, -3.0, -3.0), Eigen::Vector3d(distance_m + 0.5, 3.0, 3.0));
+    cv::Mat labels;
+    renderShapes(cam, T_WC, {&wall}, depth, labels);
+  }
+  /// Integrates the view with every pixel's mask value `mask` (255 inside, 0 outside, 129-254 at a border).
+  template <class Map>
+  void into(Map& map, std::uint8_t mask, bool detected) const {
+    map.integrate(cam, T_WC, depth, cv::Mat(), cv::Mat(depth.size(), CV_8U, cv::Scalar(mask)), detected);
+  }
+};
+
 /// Root mean square of shape.sdf over the vertices, m (inf if none).
 inline double rmse(const std::vector<Eigen::Vector3f>& vertices_W, const Shape& shape) {
   if (vertices_W.empty()) return std::numeric_limits<double>::infinity();
