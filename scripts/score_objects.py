@@ -26,21 +26,24 @@ def main(argv=None):
     sys.path.insert(0, HERE)
     import run_mission as mission
     mission._import_package()
-    from semantic_exploration.eval.final import evaluate
+    from semantic_exploration.eval import metrics
+    from semantic_exploration.eval.final import object_figures
+    from semantic_exploration.eval.truth import GroundTruthIndex
 
-    gt = {"gt_dir": os.path.abspath(args.gt_dir)}
     rc = 0
-    for d in args.objects:
-        if not os.path.exists(os.path.join(d, "objects.json")):
-            print("[score_objects] %s holds no objects.json" % d, file=sys.stderr)
-            rc = 1
-            continue
-        # No background map and no snapshot series here: only the objects are scored.
-        res = evaluate(d, gt, args.classes, {"object_map": {"success": True, "dir": os.path.abspath(d)}})
-        if "error" in res:
-            print("[score_objects] %s: %s" % (d, res["error"]), file=sys.stderr)
-            rc = 1
-        print(json.dumps({"objects_dir": os.path.abspath(d), "evaluation": res}), flush=True)
+    # One ground-truth index (surface samples, observability) for every directory.
+    index = GroundTruthIndex(metrics.load_ground_truth(os.path.abspath(args.gt_dir)), args.classes)
+    try:
+        index.start_observability()
+        for d in args.objects:
+            if not os.path.exists(os.path.join(d, "objects.json")):
+                print("[score_objects] %s holds no objects.json" % d, file=sys.stderr)
+                rc = 1
+                continue
+            print(json.dumps({"objects_dir": os.path.abspath(d), "evaluation": object_figures(index, d)}),
+                  flush=True)
+    finally:
+        index.close()
     return rc
 
 

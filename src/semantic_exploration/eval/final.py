@@ -19,18 +19,7 @@ def evaluate(out, gt, classes, saved):
         index.background.tree
         rec_dir = saved.get("object_map", {}).get("dir") or os.path.join(out, "objects")
         if saved.get("object_map", {}).get("success") and os.path.exists(os.path.join(rec_dir, "objects.json")):
-            ev = index.evaluate_objects(metrics.load_reconstruction(rec_dir))
-            res["found"] = len(ev.found_gt_ids)
-            res["ground_truth"] = ev.n_ground_truth
-            # Map objects on no ground-truth object, and ground-truth objects more than one map object lies on.
-            res["spurious"] = ev.spurious_map_ids
-            res["without_surface"] = ev.without_surface_map_ids  # empty meshes: neither matched nor spurious
-            res["duplicates"] = [{"gt_id": g, "map_ids": ids} for g, ids in ev.duplicates.items()]
-            res["objects"] = [{"map_id": m.map_id, "class": m.map_class, "gt_id": m.gt_id,
-                               "on_surface_fraction": m.on_surface_fraction,
-                               "rmse_m": m.score.rmse_m if m.score else None,
-                               "completeness": m.score.completeness if m.score else None,
-                               "observable_fraction": ev.observable_fraction.get(m.gt_id)} for m in ev.matches]
+            res.update(object_figures(index, rec_dir))
         occ = [f for f in saved.get("background_map", {}).get("files", []) if f.endswith("occupied.ply")]
         b = index.evaluate_background(metrics.read_ply_vertices(occ[0])) if occ else None
         if b is not None:
@@ -47,6 +36,23 @@ def evaluate(out, gt, classes, saved):
         if index is not None:  # nothing saved (a node died at start-up) used no mask: collect the process
             index.close()
     return res
+
+
+def object_figures(index, rec_dir):
+    """The figures on a saved object map (rec_dir, with objects.json) against the ground truth `index`
+    (a GroundTruthIndex with its observability started): found, the spurious and the duplicated, and per map
+    object its match, RMSE and completeness."""
+    from semantic_exploration.eval import metrics
+    ev = index.evaluate_objects(metrics.load_reconstruction(rec_dir))
+    # Map objects on no ground-truth object, and ground-truth objects more than one map object lies on.
+    return {"found": len(ev.found_gt_ids), "ground_truth": ev.n_ground_truth, "spurious": ev.spurious_map_ids,
+            "without_surface": ev.without_surface_map_ids,  # empty meshes: neither matched nor spurious
+            "duplicates": [{"gt_id": g, "map_ids": ids} for g, ids in ev.duplicates.items()],
+            "objects": [{"map_id": m.map_id, "class": m.map_class, "gt_id": m.gt_id,
+                         "on_surface_fraction": m.on_surface_fraction,
+                         "rmse_m": m.score.rmse_m if m.score else None,
+                         "completeness": m.score.completeness if m.score else None,
+                         "observable_fraction": ev.observable_fraction.get(m.gt_id)} for m in ev.matches]}
 
 
 def map_object_rows(n_objects, ev):
