@@ -15,6 +15,8 @@ import xmlrpc.client
 import pytest
 import yaml
 
+from installed import installed_tool  # noqa: E402
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 CONFIG = os.path.join(ROOT, "config")
 # The nodes' YAML files (sim.yaml and its override detector_long_range.yaml are the simulator's, read by
@@ -59,11 +61,7 @@ def lookup(tree, key):
 
 
 def list_params_tool():
-    tools = [os.path.join(p, "lib", "semantic_exploration", "list_params")
-             for p in os.environ.get("CMAKE_PREFIX_PATH", "").split(":") if p]
-    tool = next((t for t in tools if os.access(t, os.X_OK)), None)
-    assert tool, "list_params is not built or the install space not sourced (searched %s)" % tools
-    return tool
+    return installed_tool("list_params")
 
 
 def run_loaders(tree):

@@ -15,15 +15,13 @@ import pytest
 
 from semantic_exploration import map_blocks
 
+from installed import installed_tool  # noqa: E402
+
 ROS_SOURCED = shutil.which("roslaunch") is not None and "CMAKE_PREFIX_PATH" in os.environ
 
 
 def dump_tool():
-    tools = [os.path.join(p, "lib", "semantic_exploration", "map_blocks_dump")
-             for p in os.environ.get("CMAKE_PREFIX_PATH", "").split(":") if p]
-    tool = next((t for t in tools if os.access(t, os.X_OK)), None)
-    assert tool, "map_blocks_dump is not built or the install space not sourced (searched %s)" % tools
-    return tool
+    return installed_tool("map_blocks_dump")
 
 
 @pytest.fixture(scope="module")

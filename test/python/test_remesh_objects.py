@@ -10,17 +10,15 @@ import sys
 
 import pytest
 
+from installed import installed_tool  # noqa: E402
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 ROS_SOURCED = bool(os.environ.get("CMAKE_PREFIX_PATH"))
 
 
 def tool():
-    tools = [os.path.join(p, "lib", "semantic_exploration", "remesh_objects")
-             for p in os.environ.get("CMAKE_PREFIX_PATH", "").split(":") if p]
-    found = next((t for t in tools if os.access(t, os.X_OK)), None)
-    assert found, "remesh_objects is not built (searched %s)" % tools
-    return found
+    return installed_tool("remesh_objects")
 
 
 def write_plane_tsdf(path):

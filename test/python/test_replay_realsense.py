@@ -23,6 +23,8 @@ import time
 
 import pytest
 
+from installed import installed_tool  # noqa: E402
+
 if __name__ == "__main__":  # a child process: no pytest to load conftest
     import conftest  # noqa: F401
 
@@ -194,10 +196,7 @@ def test_realsense_bag_replays_unedited(tmp_path):
     work = str(tmp_path)
     bag, ref, n_gap = make_bag(work)
     assert n_gap == 9
-    tools = [os.path.join(p, "lib", "semantic_exploration", "integrate_frames")
-             for p in os.environ.get("CMAKE_PREFIX_PATH", "").split(":") if p]
-    tool = next((t for t in tools if os.access(t, os.X_OK)), None)
-    assert tool, "integrate_frames is not built (searched %s)" % tools
+    tool = installed_tool("integrate_frames")
     out = subprocess.run([tool, ref, os.path.join(work, "reference.ply")], stdout=subprocess.PIPE,
                          stderr=subprocess.STDOUT, universal_newlines=True, timeout=120)
     assert out.returncode == 0, out.stdout
