@@ -32,7 +32,11 @@ def main(argv=None):
 
     rc = 0
     # One ground-truth index (surface samples, observability) for every directory.
-    index = GroundTruthIndex(metrics.load_ground_truth(os.path.abspath(args.gt_dir)), args.classes)
+    try:
+        index = GroundTruthIndex(metrics.load_ground_truth(os.path.abspath(args.gt_dir)), args.classes)
+    except Exception as e:  # a ground truth that cannot be read scores nothing: say why, once
+        print("[score_objects] ground truth %s: %s: %s" % (args.gt_dir, type(e).__name__, e), file=sys.stderr)
+        return 1
     try:
         index.start_observability()
         for d in args.objects:
@@ -40,8 +44,13 @@ def main(argv=None):
                 print("[score_objects] %s holds no objects.json" % d, file=sys.stderr)
                 rc = 1
                 continue
-            print(json.dumps({"objects_dir": os.path.abspath(d), "evaluation": object_figures(index, d)}),
-                  flush=True)
+            try:
+                res = {"objects_dir": os.path.abspath(d), "evaluation": object_figures(index, d)}
+            except Exception as e:  # one unreadable map must not lose the others' figures
+                res = {"objects_dir": os.path.abspath(d), "error": "%s: %s" % (type(e).__name__, e)}
+                print("[score_objects] %s: %s" % (d, res["error"]), file=sys.stderr)
+                rc = 1
+            print(json.dumps(res), flush=True)
     finally:
         index.close()
     return rc

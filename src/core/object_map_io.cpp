@@ -1,6 +1,7 @@
 #include "semantic_exploration/core/atomic_file.hpp"
 #include "semantic_exploration/core/object_map.hpp"
 #include "semantic_exploration/core/object_mesh.hpp"
+#include "semantic_exploration/core/object_remesh.hpp"
 #include "semantic_exploration/core/tsdf_io.hpp"
 
 #include <algorithm>
@@ -87,16 +88,10 @@ std::vector<std::string> ObjectMap::save(const std::string& directory, double d_
             ", \"centroid\": " + vec(s.centroid_W) + ", \"mesh\": \"" + jsonEscape(name) + "\"" + tsdf_entry + "}";
     first = false;
   }
-  // The gate the meshes were extracted under, for the record and for remesh_objects (readSavedMeshSettings).
-  const ObjectMapConfig& c = config_;
-  char tail[512];
-  std::snprintf(tail, sizeof(tail),
-                "\n], \"d_obj_m\": %.3f,\n\"mesh_gate\": {\"mesh_min_weight\": %.17g, \"mesh_max_sdf_std_m\": %.17g, "
-                "\"mesh_min_foreground\": %.17g, \"mesh_fragment_gap_m\": %.17g, \"depth_noise\": "
-                "{\"sigma_min_m\": %.17g, \"s_per_m\": %.17g, \"sigma_max_m\": %.17g}}}\n",
-                d_obj_m, c.mesh_min_weight, c.mesh_max_sdf_std_m, c.mesh_min_foreground, c.mesh_fragment_gap_m,
-                c.depth_noise.sigma_min_m, c.depth_noise.s_per_m, c.depth_noise.sigma_max_m);
-  json += tail;
+  // The gate the meshes were extracted under, last, for the record and for remesh_objects.
+  char tail[64];  // %.6g: any d_obj_m fits
+  std::snprintf(tail, sizeof(tail), "\n], \"d_obj_m\": %.6g,\n", d_obj_m);
+  json += std::string(tail) + "\"mesh_gate\": " + meshGateJson(config_) + "}\n";
   const std::string index = (dir / "objects.json").string();
   try {
     writeFileAtomically(index, [&json](std::ostream& f) { f << json; });

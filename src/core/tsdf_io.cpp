@@ -116,12 +116,13 @@ std::unique_ptr<TsdfMap> loadTsdf(const std::string& path, std::string* error) {
   if (f.get() != '\n') return bad("header unreadable");
   // The header is checked before anything is allocated from it (block_size^3 voxels per block).
   const auto nonNegative = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  if (!(nonNegative(p.resolution_m) && p.resolution_m > 0 && nonNegative(p.truncation_m) && p.truncation_m > 0 &&
+  // Voxels of at least 0.1 mm (the inverse resolution is a float); the prior's weight within the cap.
+  if (!(nonNegative(p.resolution_m) && p.resolution_m >= 1e-4 && nonNegative(p.truncation_m) && p.truncation_m > 0 &&
         nonNegative(p.behind_surface_m) && nonNegative(p.behind_surface_quadratic_per_m) &&
         nonNegative(p.full_weight_depth_m) && nonNegative(p.foreground_prior) && p.foreground_prior <= 1 &&
         nonNegative(p.foreground_prior_weight) && p.block_size >= 2 && p.block_size <= 64 &&
         (p.block_size & (p.block_size - 1)) == 0 && std::isfinite(p.max_weight) && p.max_weight >= 1 &&
-        p.max_weight <= TsdfVoxel::kMaxWeight))
+        p.max_weight <= TsdfVoxel::kMaxWeight && p.foreground_prior_weight <= p.max_weight))
     return bad("a parameter in the header is out of range");
   const auto max_weight_q = static_cast<std::uint16_t>(std::ceil(p.max_weight * 16.0));
   try {

@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::string error;
-  const int n = semexp::remeshSavedObjects(argv[1], argv[2], c.meshGate(), c.mesh_fragment_gap_m, &error);
+  const int n = semexp::remeshSavedObjects(argv[1], argv[2], c, &error);
   if (n < 0) {
     std::cerr << "remesh_objects: " << error << "\n";
     return 1;

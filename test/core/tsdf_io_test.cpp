@@ -253,8 +253,7 @@ TEST_F(TsdfIoTest, SavedTsdfsRemeshToTheSavedMeshes) {
   EXPECT_EQ(recorded.mesh_min_foreground, 0.5);
   EXPECT_EQ(recorded.mesh_fragment_gap_m, c.mesh_fragment_gap_m);
   EXPECT_EQ(recorded.depth_noise.s_per_m, c.depth_noise.s_per_m);
-  ASSERT_EQ(remeshSavedObjects((dir_ / "objects").string(), (dir_ / "again").string(), recorded.meshGate(),
-                               recorded.mesh_fragment_gap_m, &error), 2) << error;
+  ASSERT_EQ(remeshSavedObjects((dir_ / "objects").string(), (dir_ / "again").string(), recorded, &error), 2) << error;
   for (const std::string& name : meshes) {
     Mesh saved, again;
     ASSERT_TRUE(readPly((dir_ / "objects" / name).string(), saved));
@@ -263,11 +262,10 @@ TEST_F(TsdfIoTest, SavedTsdfsRemeshToTheSavedMeshes) {
     EXPECT_TRUE(triangleSet(again) == triangleSet(saved)) << name;
   }
   EXPECT_EQ(readAll(dir_ / "again" / "objects.json"), readAll(dir_ / "objects" / "objects.json"));
-  // A higher foreground bound keeps a part of each mesh.
-  MeshGate strict = c.meshGate();
-  strict.min_foreground = 0.7f;
-  ASSERT_EQ(remeshSavedObjects((dir_ / "objects").string(), (dir_ / "strict").string(), strict,
-                               c.mesh_fragment_gap_m, &error), 2) << error;
+  // A higher foreground bound keeps a part of each mesh, and the index records it.
+  ObjectMapConfig strict = recorded;
+  strict.mesh_min_foreground = 0.7;
+  ASSERT_EQ(remeshSavedObjects((dir_ / "objects").string(), (dir_ / "strict").string(), strict, &error), 2) << error;
   for (const std::string& name : meshes) {
     Mesh saved, kept;
     ASSERT_TRUE(readPly((dir_ / "objects" / name).string(), saved));
@@ -275,16 +273,28 @@ TEST_F(TsdfIoTest, SavedTsdfsRemeshToTheSavedMeshes) {
     EXPECT_GT(kept.triangles.size(), 0u) << name;
     EXPECT_LT(kept.triangles.size(), saved.triangles.size()) << name;
   }
-  // The flight's own meshes are never overwritten.
-  EXPECT_EQ(remeshSavedObjects((dir_ / "objects").string(), (dir_ / "objects" / ".").string(), strict, 0.3, &error),
-            -1);
+  ObjectMapConfig strict_read;
+  ASSERT_TRUE(readSavedMeshSettings((dir_ / "strict").string(), strict_read, &error)) << error;
+  EXPECT_EQ(strict_read.mesh_min_foreground, 0.7);
+  EXPECT_EQ(strict_read.mesh_max_sdf_std_m, 0.005);
+  // Refused, with nothing written or deleted: the input as output, a directory holding another map's mesh,
+  // an invalid gate.
+  EXPECT_EQ(remeshSavedObjects((dir_ / "objects").string(), (dir_ / "objects" / ".").string(), strict, &error), -1);
   EXPECT_NE(error.find("output directory is the input"), std::string::npos) << error;
+  writeAll(dir_ / "strict" / "object_99_chair.ply", "ply\n");
+  EXPECT_EQ(remeshSavedObjects((dir_ / "objects").string(), (dir_ / "strict").string(), recorded, &error), -1);
+  EXPECT_NE(error.find("object_99_chair.ply, a mesh of another map"), std::string::npos) << error;
+  EXPECT_TRUE(fs::exists(dir_ / "strict" / "object_99_chair.ply"));
+  strict.mesh_min_foreground = 0.4;
+  EXPECT_EQ(remeshSavedObjects((dir_ / "objects").string(), (dir_ / "low").string(), strict, &error), -1);
+  EXPECT_NE(error.find("object_map/mesh_min_foreground"), std::string::npos) << error;
+  EXPECT_FALSE(fs::exists(dir_ / "low"));
   // A directory saved without TSDFs cannot be remeshed, and says why.
   c.save_tsdf = false;
   ObjectMap plain(c, ClassTable());
   fly(plain, 2);
   ASSERT_FALSE(plain.save((dir_ / "plain").string(), 1.0, &error).empty());
-  EXPECT_EQ(remeshSavedObjects((dir_ / "plain").string(), (dir_ / "out").string(), c.meshGate(), 0.3, &error), -1);
+  EXPECT_EQ(remeshSavedObjects((dir_ / "plain").string(), (dir_ / "out").string(), c, &error), -1);
   EXPECT_NE(error.find("save_tsdf true"), std::string::npos) << error;
 }
 

@@ -24,7 +24,7 @@ def tool():
 def write_plane_tsdf(path):
     """One 8^3 block of 2 cm voxels (8 cm truncation) holding a horizontal plane between voxel layers z 3 and 4,
     foreground 140/254 for x < 4 and 203/254 for x >= 4, weight 1: the map of
-    TsdfUpdate.TheMeshKeepsCubesOverTheForegroundBound. 49 cubes cross it, 2 triangles each; their mean
+    TsdfMesh.TheMeshKeepsCubesOverTheForegroundBound. 49 cubes cross it, 2 triangles each; their mean
     foreground is 0.551 (x 0-2), 0.675 (x 3) and 0.799 (x 4-6)."""
     header = ("semexp_tsdf 1\nresolution_m 0.02\ntruncation_m 0.08\nbehind_surface_m 0.04\n"
               "behind_surface_quadratic_per_m 0\nfull_weight_depth_m 0\nforeground_prior 0.5\n"
@@ -65,7 +65,9 @@ def test_remesh_objects_applies_the_foreground_bound(tmp_path):
         assert "1 meshes written" in r.stdout
         assert "starting from the saved gate" in r.stdout and "mesh_min_foreground 0.56" in r.stdout
         assert ply_faces(str(out / "object_4_chair.ply")) == faces, bound
-        assert json.loads((out / "objects.json").read_text()) == index
+        written = json.loads((out / "objects.json").read_text())
+        assert written["objects"] == index["objects"]
+        assert written["mesh_gate"] == dict(gate, mesh_min_foreground=float(bound or 0.56))  # the gate used
     # Invalid configuration names the parameter; unknown flags and a directory without TSDFs say why.
     r = subprocess.run([tool(), str(src), str(tmp_path / "x"), "--mesh_min_foreground", "0.4"],
                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True, timeout=60)
@@ -84,11 +86,17 @@ def test_score_objects_scores_a_saved_map_as_the_report_does(tmp_path, gt):  # n
     from test_eval_found import bled_mask_mesh, chair_mesh, write_objects
     d = str(tmp_path / "objects")
     write_objects(d, {3: chair_mesh(gt), 5: bled_mask_mesh(), 8: chair_mesh(gt)})
-    r = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "score_objects.py"), "--gt-dir", gt["dir"], d,
-                        str(tmp_path / "none")], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    broken = tmp_path / "broken"  # an index naming a mesh that is not there
+    broken.mkdir()
+    (broken / "objects.json").write_text(json.dumps(
+        {"objects": [{"id": 1, "class_name": "chair", "mesh": "object_1_chair.ply"}]}))
+    r = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "score_objects.py"), "--gt-dir", gt["dir"],
+                        str(broken), str(tmp_path / "none"), d], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                        universal_newlines=True, timeout=300)
     assert r.returncode == 1 and "holds no objects.json" in r.stderr, r.stderr  # the second directory
-    ev = json.loads(r.stdout.splitlines()[0])["evaluation"]
+    lines = [json.loads(line) for line in r.stdout.splitlines()]
+    assert len(lines) == 2 and "error" in lines[0] and "evaluation" not in lines[0]  # the first: said, not lost
+    ev = lines[1]["evaluation"]  # the third, scored after both
     chair = next(o["id"] for o in gt["objects"] if o["class"] == "chair")
     assert ev["found"] == 1 and ev["spurious"] == [5]
     assert ev["duplicates"] == [{"gt_id": chair, "map_ids": [3, 8]}]
