@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <tuple>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 #include <vector>
 
 #include "semantic_exploration/core/atomic_file.hpp"
@@ -35,6 +35,9 @@ std::int32_t get32(const std::uint8_t* p) {
   return static_cast<std::int32_t>(v);
 }
 
+// The order blocks are written in and must be read in: by z, then y, then x.
+std::tuple<int, int, int> blockOrder(const Eigen::Vector3i& b) { return {b.z(), b.y(), b.x()}; }
+
 bool fail(std::string* error, const std::string& why) {
   if (error) *error = why;
   return false;
@@ -56,15 +59,20 @@ bool saveTsdf(const TsdfMap& map, const std::string& path, std::string* error) {
   try {
     writeFileAtomically(path, [&](std::ostream& f) {
       f << header.str();
-      // Blocks in index order (z, y, x), not the hash map's: one map always gives the same bytes.
-      std::vector<std::tuple<int, int, int, const std::vector<TsdfVoxel>*, bool>> blocks;
+      // Blocks in index order, not the hash map's: one map always gives the same bytes.
+      struct Entry {
+        Eigen::Vector3i b;
+        const std::vector<TsdfVoxel>* voxels;
+        bool has_negative;
+      };
+      std::vector<Entry> blocks;
       map.forEachBlock([&](const Eigen::Vector3i& b, const std::vector<TsdfVoxel>& voxels, bool has_negative) {
-        blocks.emplace_back(b.z(), b.y(), b.x(), &voxels, has_negative);
+        blocks.push_back({b, &voxels, has_negative});
       });
-      std::sort(blocks.begin(), blocks.end());
+      std::sort(blocks.begin(), blocks.end(),
+                [](const Entry& x, const Entry& y) { return blockOrder(x.b) < blockOrder(y.b); });
       std::vector<std::uint8_t> buf(13 + n * kVoxelBytes);
-      for (const auto& [bz, by, bx, block, has_negative] : blocks) {
-        const Eigen::Vector3i b(bx, by, bz);
+      for (const auto& [b, block, has_negative] : blocks) {
         const std::vector<TsdfVoxel>& voxels = *block;
         for (int k = 0; k < 3; ++k) put32(&buf[4 * k], b[k]);
         buf[12] = has_negative ? 1 : 0;
@@ -131,19 +139,16 @@ std::unique_ptr<TsdfMap> loadTsdf(const std::string& path, std::string* error) {
     std::vector<TsdfMap::SavedBlock> saved;  // not reserved from the header: a corrupt count must not allocate
     std::vector<std::uint8_t> buf(13 + n * kVoxelBytes);
     for (std::size_t i = 0; i < blocks; ++i) {
-      const std::string at = "block " + std::to_string(i) + " of " + std::to_string(blocks);
+      const auto at = [&] { return "block " + std::to_string(i) + " of " + std::to_string(blocks); };  // errors only
       if (!f.read(reinterpret_cast<char*>(buf.data()), static_cast<std::streamsize>(buf.size())))
-        return bad("truncated at " + at);
+        return bad("truncated at " + at());
       TsdfMap::SavedBlock b;
       b.index = Eigen::Vector3i(get32(&buf[0]), get32(&buf[4]), get32(&buf[8]));
       if ((b.index.cast<std::int64_t>().cwiseAbs() * p.block_size).maxCoeff() >= TsdfParams::kMaxVoxelIndex)
-        return bad(at + " lies outside the map's index range");
+        return bad(at() + " lies outside the map's index range");
       // Index order (the writer's) also rules out a block given twice.
-      if (i > 0) {
-        const Eigen::Vector3i& q = saved.back().index;
-        if (std::make_tuple(b.index.z(), b.index.y(), b.index.x()) <= std::make_tuple(q.z(), q.y(), q.x()))
-          return bad(at + " is out of index order or repeated");
-      }
+      if (i > 0 && blockOrder(b.index) <= blockOrder(saved.back().index))
+        return bad(at() + " is out of index order or repeated");
       // The flag is sticky (a voxel once given a negative SDF may have turned positive since): kept as saved,
       // and set wherever a voxel is negative now, so that ray casts never step over a surface.
       b.has_negative = buf[12] != 0;
@@ -157,7 +162,7 @@ std::unique_ptr<TsdfMap> loadTsdf(const std::string& path, std::string* error) {
         std::memcpy(v.rgb, q + 7, 3);
         q += kVoxelBytes;
         if (v.sdf_q < -32767 || v.foreground_q > 254 || v.weight_q > max_weight_q)
-          return bad(at + " holds a voxel out of range (sdf, foreground or weight)");
+          return bad(at() + " holds a voxel out of range (sdf, foreground or weight)");
         b.has_negative = b.has_negative || v.sdf_q < 0;
       }
       saved.push_back(std::move(b));
