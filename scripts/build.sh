@@ -2,6 +2,9 @@
 # Builds the package with colcon into .colcon/{build,install} (Release by
 # default; BUILD_TYPE=Debug for a debug build). Serialised with a lock so
 # that concurrent callers do not build over each other.
+# The core gtest programs are not built here (SEMEXP_BUILD_CORE_TESTS=ON to
+# build them): make test builds and runs them with the sanitizers
+# (scripts/run_sanitize.sh).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 WS="${SEMEXP_WS:-$ROOT/.colcon}"
@@ -19,4 +22,5 @@ MAKEFLAGS="-j$JOBS" colcon --log-base "$WS/log" build \
   --paths "$ROOT" --build-base "$WS/build" --install-base "$WS/install" \
   --event-handlers console_direct+ \
   --cmake-args -DCMAKE_BUILD_TYPE="$BUILD_TYPE" -DPYTHON_EXECUTABLE=/usr/bin/python3 \
-               -DSEMEXP_WERROR="${SEMEXP_WERROR:-ON}" -DCATKIN_ENABLE_TESTING=OFF
+               -DSEMEXP_WERROR="${SEMEXP_WERROR:-ON}" -DCATKIN_ENABLE_TESTING=OFF \
+               -DSEMEXP_BUILD_CORE_TESTS="${SEMEXP_BUILD_CORE_TESTS:-OFF}"

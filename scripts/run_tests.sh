@@ -37,11 +37,14 @@ export ROS_HOME="$RESULTS/ros_home"   # rostest logs and results stay out of ~/.
 export SEMEXP_VENV="${SEMEXP_VENV:-$ROOT/.venv}"
 BIN="$ROOT/.colcon/install/semantic_exploration/lib/semantic_exploration"
 
-# 1b (started first). The core gtest programs again, built with AddressSanitizer
-# and UndefinedBehaviorSanitizer in a build directory of their own (make
-# test-sanitize), in the background at the lowest priority: its compile takes
-# only the CPU the tests below leave idle (a lockstep mission runs its nodes one
-# after the other, so much of a core is idle), instead of 200-300 s of its own.
+# 1b (started first). The core gtest programs (test/core), built with
+# AddressSanitizer and UndefinedBehaviorSanitizer in a build directory of their
+# own (make test-sanitize), in the background at the lowest priority: its
+# compile takes only the CPU the tests below leave idle (a lockstep mission runs
+# its nodes one after the other, so much of a core is idle), instead of
+# 200-300 s of its own. They run there only: scripts/build.sh does not build
+# them in Release as well (about 200 s of compile CPU for a second run of the
+# same test cases).
 echo "[test] gtest under -fsanitize=address,undefined (scripts/run_sanitize.sh), in the background"
 SANITIZE_START=$(date +%s)
 nice -n 19 bash "$ROOT/scripts/run_sanitize.sh" "$RESULTS/gtest/sanitize" > "$RESULTS/gtest/sanitize.log" 2>&1 &
@@ -53,8 +56,10 @@ kill_tree() {  # a process and all its descendants (make, compilers, test progra
 }
 trap 'kill_tree "$SANITIZE_PID"' EXIT  # not left running if this script is stopped
 
-# 1. gtest programs (core and ROS unit/accuracy tests).
-for t in "$BIN"/test_*; do
+# 1. The ROS gtest programs (test/ros: parameter loading, conversions). Only
+# these: a test_core_* program in the install space is left from a build with
+# SEMEXP_BUILD_CORE_TESTS=ON, and those test cases run under 1b.
+for t in "$BIN"/test_ros_*; do
   [ -x "$t" ] || continue
   case "$(basename "$t")" in *.*) continue ;; esac  # rostest scripts live here too
   name=$(basename "$t")

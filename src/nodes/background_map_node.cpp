@@ -1,8 +1,4 @@
 // background_map: see README (nodes table) and include/semantic_exploration/ros/background_map_node.hpp.
-#include "semantic_exploration/ros/background_map_node.hpp"
-#include "semantic_exploration/ros/node_common.hpp"
+#include "semantic_exploration/ros/node_main.hpp"
 
-int main(int argc, char** argv) {
-  ros::init(argc, argv, "background_map");
-  return semexp_ros::runNode<semexp_ros::BackgroundMapNode>("background_map");
-}
+int main(int argc, char** argv) { return semexp_ros::runNodeMain(semexp_ros::NodeKind::kBackgroundMap, argc, argv); }

@@ -1,8 +1,4 @@
 // instance_matching: see README (nodes table) and include/semantic_exploration/ros/instance_matching_node.hpp.
-#include "semantic_exploration/ros/instance_matching_node.hpp"
-#include "semantic_exploration/ros/node_common.hpp"
+#include "semantic_exploration/ros/node_main.hpp"
 
-int main(int argc, char** argv) {
-  ros::init(argc, argv, "instance_matching");
-  return semexp_ros::runNode<semexp_ros::InstanceMatchingNode>("instance_matching");
-}
+int main(int argc, char** argv) { return semexp_ros::runNodeMain(semexp_ros::NodeKind::kInstanceMatching, argc, argv); }

@@ -1,8 +1,4 @@
 // planner: see README (nodes table) and include/semantic_exploration/ros/planner_node.hpp.
-#include "semantic_exploration/ros/planner_node.hpp"
-#include "semantic_exploration/ros/node_common.hpp"
+#include "semantic_exploration/ros/node_main.hpp"
 
-int main(int argc, char** argv) {
-  ros::init(argc, argv, "planner");
-  return semexp_ros::runNode<semexp_ros::PlannerNode>("planner");
-}
+int main(int argc, char** argv) { return semexp_ros::runNodeMain(semexp_ros::NodeKind::kPlanner, argc, argv); }

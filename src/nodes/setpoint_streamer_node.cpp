@@ -1,8 +1,4 @@
 // setpoint_streamer: see README (nodes table) and include/semantic_exploration/ros/setpoint_streamer_node.hpp.
-#include "semantic_exploration/ros/setpoint_streamer_node.hpp"
-#include "semantic_exploration/ros/node_common.hpp"
+#include "semantic_exploration/ros/node_main.hpp"
 
-int main(int argc, char** argv) {
-  ros::init(argc, argv, "setpoint_streamer");
-  return semexp_ros::runNode<semexp_ros::SetpointStreamerNode>("setpoint_streamer");
-}
+int main(int argc, char** argv) { return semexp_ros::runNodeMain(semexp_ros::NodeKind::kSetpointStreamer, argc, argv); }
