@@ -5,7 +5,7 @@
 #   make test-sanitize  the core gtests built with -fsanitize=address,undefined (part of make test)
 #   make bench   every benchmark; JSON lines under results/bench/
 #   make experiments  N runs x {classic, semantic} x scenes -> plots and report (long; deterministic runs)
-#   make build   build only (BUILD_TYPE=Debug for a debug build)
+#   make build   build only, without the core gtest programs (BUILD_TYPE=Debug for a debug build)
 BUILD_TYPE ?= Release
 export BUILD_TYPE
 

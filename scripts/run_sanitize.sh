@@ -19,6 +19,7 @@ export PATH="/usr/bin:$PATH"
 launcher=()
 if command -v ccache > /dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
 if ! { cmake -S "$ROOT/test/sanitize" -B "$BUILD" -DCMAKE_BUILD_TYPE=None "${launcher[@]}" \
+         -DSEMEXP_WERROR="${SEMEXP_WERROR:-ON}" \
        && cmake --build "$BUILD" -j "$JOBS"; } > "$OUT/build.log" 2>&1; then
   tail -n 40 "$OUT/build.log"
   echo "sanitize: build failed (log: $OUT/build.log)"
@@ -52,10 +53,13 @@ run_one() {  # name: runs one program, appends "name rc" to exit_codes
 LONGEST="test_core_tsdf_accuracy test_core_object_map test_core_planning_lazy test_core_object_map_imperfect"
 LONGEST+=" test_core_planning_closed_loop"
 programs=()
-for name in $LONGEST; do [ -x "$BUILD/$name" ] && programs+=("$name"); done
-for t in "$BUILD"/test_core_*; do
-  name=$(basename "$t")
-  [ -x "$t" ] && [[ " $LONGEST " != *" $name "* ]] && programs+=("$name")
+for name in $LONGEST; do [ -f "$ROOT/test/core/${name#test_core_}_test.cpp" ] && programs+=("$name"); done
+# One program per test/core/*_test.cpp (not a glob of the build directory,
+# which keeps the programs of removed or renamed tests). A program the build
+# did not produce counts as failed.
+for src in "$ROOT"/test/core/*_test.cpp; do
+  name=test_core_$(basename "$src" _test.cpp)
+  [[ " $LONGEST " != *" $name "* ]] && programs+=("$name")
 done
 for name in "${programs[@]}"; do
   while [ "$(jobs -rp | wc -l)" -ge "$JOBS" ]; do wait -n; done

@@ -40,8 +40,8 @@ int runNodeMain(NodeKind kind, int argc, char** argv) {
     case NodeKind::kSetpointStreamer: return runNode<SetpointStreamerNode>(name);
     case NodeKind::kDisplayCut: return runNode<DisplayCutNode>(name);
   }
-  ROS_FATAL("%s: no such node", name);
-  return 2;
+  ROS_FATAL("%s: no such node kind (%d)", name, static_cast<int>(kind));  // an enumerator missing above
+  return 1;
 }
 
 }  // namespace semexp_ros
