@@ -49,21 +49,20 @@ endfunction()
 # target, so a missing #include can go unnoticed here: configure once with
 # -DCMAKE_DISABLE_PRECOMPILE_HEADERS=ON to check that every source compiles
 # on its own.
-function(semexp_core_pch target)
+function(semexp_pch target)  # target_precompile_headers(target PRIVATE <headers>) where it applies
   if(CMAKE_VERSION VERSION_LESS 3.16 OR CMAKE_CXX_COMPILER_LAUNCHER)
     return()
   endif()
-  target_precompile_headers(${target} PRIVATE
-    <Eigen/Core> <Eigen/Geometry> <opencv2/core.hpp>
+  target_precompile_headers(${target} PRIVATE ${ARGN})
+endfunction()
+
+function(semexp_core_pch target)
+  semexp_pch(${target} <Eigen/Core> <Eigen/Geometry> <opencv2/core.hpp>
     <algorithm> <cmath> <cstdint> <memory> <stdexcept> <string> <unordered_map> <vector>)
 endfunction()
 
 function(semexp_ros_pch target)
-  if(CMAKE_VERSION VERSION_LESS 3.16 OR CMAKE_CXX_COMPILER_LAUNCHER)
-    return()
-  endif()
-  target_precompile_headers(${target} PRIVATE
-    <ros/ros.h> <sensor_msgs/CameraInfo.h> <sensor_msgs/Image.h> <sensor_msgs/PointCloud2.h>
+  semexp_pch(${target} <ros/ros.h> <sensor_msgs/CameraInfo.h> <sensor_msgs/Image.h> <sensor_msgs/PointCloud2.h>
     <visualization_msgs/MarkerArray.h> <tf2_ros/buffer.h> <Eigen/Core> <Eigen/Geometry> <opencv2/core.hpp>
     <algorithm> <cmath> <map> <memory> <string> <vector>)
 endfunction()
