@@ -13,6 +13,17 @@ elapsed() { echo "$(( $(date +%s) - START ))"; }
 STAGES=""  # "name seconds" per finished stage, for the closing summary
 stage_done() { STAGES="$STAGES $1 $(( $(date +%s) - STAGE_START )) s,"; STAGE_START=$(date +%s); }
 STAGE_START=$START
+# CPU seconds (user + system) of the calling shell's finished children, from
+# bash's `times`. Each stage that runs beside others measures itself in a
+# subshell of its own; the closing summary gives them with the wall times,
+# because the suite's time on 2 cores is set by its CPU work, not by waiting.
+children_cpu_s() {  # CPU_S := that, in s (not inside $(...): a subshell has no finished children of its own)
+  local f
+  f=$(mktemp)
+  times > "$f"
+  CPU_S=$(awk 'NR == 2 { t = 0; for (i = 1; i <= 2; ++i) { split($i, a, "m"); t += a[1] * 60 + a[2] } printf "%.0f\n", t }' "$f")
+  rm -f "$f"
+}
 fail_early() {
   echo "[test] $1 (after $(elapsed) s)"
   echo "0 passed, 1 failed"
@@ -23,9 +34,13 @@ echo "[test] results in $RESULTS"
 bash "$ROOT/scripts/setup.sh" || fail_early "setup failed"
 echo "[test] setup done after $(elapsed) s"
 stage_done setup
+children_cpu_s
+CPU_SETUP=$CPU_S
 bash "$ROOT/scripts/build.sh" > "$RESULTS/build.log" 2>&1 || { tail -n 60 "$RESULTS/build.log"; fail_early "build failed (log: $RESULTS/build.log)"; }
 echo "[test] build done after $(elapsed) s"
 stage_done build
+children_cpu_s
+CPU_BUILD=$(( CPU_S - CPU_SETUP ))
 
 export PATH="/usr/bin:$PATH"
 unset PYTHONPATH
@@ -47,7 +62,8 @@ BIN="$ROOT/.colcon/install/semantic_exploration/lib/semantic_exploration"
 # same test cases).
 echo "[test] gtest under -fsanitize=address,undefined (scripts/run_sanitize.sh), in the background"
 SANITIZE_START=$(date +%s)
-nice -n 19 bash "$ROOT/scripts/run_sanitize.sh" "$RESULTS/gtest/sanitize" > "$RESULTS/gtest/sanitize.log" 2>&1 &
+( nice -n 19 bash "$ROOT/scripts/run_sanitize.sh" "$RESULTS/gtest/sanitize" > "$RESULTS/gtest/sanitize.log" 2>&1
+  rc=$?; children_cpu_s; echo "$CPU_S" > "$RESULTS/gtest/sanitize_cpu_s"; exit $rc ) &
 SANITIZE_PID=$!
 kill_tree() {  # a process and all its descendants (make, compilers, test programs under timeout)
   local c
@@ -97,6 +113,8 @@ run_rostests() {
     echo "$name $rc" >> "$RESULTS/rostest/exit_codes"
   done
   echo "$(( $(date +%s) - t0 ))" > "$RESULTS/rostest/stage_seconds"
+  children_cpu_s
+  echo "$CPU_S" > "$RESULTS/rostest/cpu_s"
 }
 echo "[test] rostests in the background (log: $RESULTS/rostest/stream.log)"
 run_rostests > "$RESULTS/rostest/stream.log" 2>&1 &
@@ -109,7 +127,8 @@ trap 'kill_tree "$SANITIZE_PID"; kill_tree "$ROSTEST_PID"' EXIT
 # tests with wall-time limits on node start-up failed.
 echo "[test] pytest test/python"
 (cd "$ROOT" && timeout 1800 "$SEMEXP_VENV/bin/python" -m pytest -q -p no:cacheprovider test/python \
-  --junitxml="$RESULTS/pytest/pytest.xml") > "$RESULTS/pytest/pytest.log" 2>&1
+  --junitxml="$RESULTS/pytest/pytest.xml"; rc=$?; children_cpu_s; echo "$CPU_S" > "$RESULTS/pytest/cpu_s"; exit $rc) \
+  > "$RESULTS/pytest/pytest.log" 2>&1
 rc=$?
 tail -n 30 "$RESULTS/pytest/pytest.log"
 echo "pytest $rc" >> "$RESULTS/pytest/exit_codes"
@@ -136,4 +155,9 @@ stage_done "sanitize-wait"
 SANITIZE_S=$(sed -n 's/^\[sanitize\] total time \([0-9]*\) s$/\1/p' "$RESULTS/gtest/sanitize.log")
 STAGES="$STAGES sanitize ${SANITIZE_S:-?} s in the background (from $(( SANITIZE_START - START )) s on),"
 echo "[test] total time $(elapsed) s (setup, build and tests); per stage:${STAGES%,}"
+cpu_of() { cat "$1" 2> /dev/null || echo '?'; }
+children_cpu_s
+echo "[test] CPU time (user + system, s): $CPU_S in all; setup $CPU_SETUP, build $CPU_BUILD," \
+  "sanitize $(cpu_of "$RESULTS/gtest/sanitize_cpu_s"), pytest $(cpu_of "$RESULTS/pytest/cpu_s")," \
+  "rostest $(cpu_of "$RESULTS/rostest/cpu_s")"
 /usr/bin/python3 "$ROOT/scripts/summarize_tests.py" "$RESULTS"

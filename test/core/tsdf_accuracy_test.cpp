@@ -258,4 +258,59 @@ TEST(TsdfAccuracy, AnSdfErrorGateHoldsTheMeshErrorOfANoisierSensor) {
   EXPECT_LT(gated[1].rmse_m, 1.5 * gated[0].rmse_m);
 }
 
+// The test scenes' chair tests a ray against its bounds before its six parts (shapes.hpp): the renders are
+// the same ray for ray as testing every part, from outside, from inside the bounds (above the seat), and for
+// rays along the bounds' faces and parallel to an axis.
+TEST(TestScenes, AChairHitsTheSameRaysWithItsBoundsTestAsWithoutIt) {
+  const BoxUnion c = chair(0.3, -0.2);
+  const PinholeCamera cam;
+  std::vector<Eigen::Isometry3d> poses;
+  for (const double r : {0.5, 1.0, 2.5})
+    for (const auto& T : ring(Eigen::Vector3d(0.3, -0.2, 0.45), r, 0.4, 8)) poses.push_back(T);
+  Eigen::Isometry3d above = Eigen::Isometry3d::Identity();  // inside the bounds, over the seat, looking down
+  above.translation() = Eigen::Vector3d(0.3, -0.2, 0.7);
+  above.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;
+  poses.push_back(above);
+  std::size_t hits = 0, rays = 0;
+  for (const auto& T_WC : poses)
+    for (int v = 0; v < cam.height; ++v)
+      for (int u = 0; u < cam.width; ++u) {
+        const Eigen::Vector3d d = T_WC.linear() * pixelRay_C(cam, u, v);
+        double s_union = -1.0, s_parts = -1.0;
+        const bool hit = c.intersect(T_WC.translation(), d, s_union);
+        ASSERT_EQ(hit, nearestHit(c.parts(), T_WC.translation(), d, s_parts) >= 0) << u << " " << v;
+        if (hit) {
+          ASSERT_EQ(s_union, s_parts);
+        }
+        hits += hit;
+        ++rays;
+      }
+  // Rays along the faces of the bounds and parallel to the axes, from outside and from inside.
+  const Box bounds(Eigen::Vector3d(0.3 - 0.22, -0.2 - 0.22, 0.0), Eigen::Vector3d(0.3 + 0.22, -0.2 + 0.22, 0.95));
+  for (int axis = 0; axis < 3; ++axis)
+    for (const double sign : {-1.0, 1.0})
+      for (const double a : {-0.3, -0.22, -0.1, 0.0, 0.2, 0.22, 0.3})
+        for (const double b : {0.0, 0.02, 0.45, 0.95, 1.2}) {
+          Eigen::Vector3d o = bounds.centre();
+          o[axis] -= sign * 2.0;
+          o[(axis + 1) % 3] = (axis + 1) % 3 == 2 ? b : bounds.centre()[(axis + 1) % 3] + a;
+          o[(axis + 2) % 3] = (axis + 2) % 3 == 2 ? b : bounds.centre()[(axis + 2) % 3] + a;
+          Eigen::Vector3d d = Eigen::Vector3d::Zero();
+          d[axis] = sign;
+          for (const double start : {0.0, 1.9, 2.1}) {  // outside, at and inside the bounds along the ray
+            const Eigen::Vector3d os = o + start * d;
+            double s_union = -1.0, s_parts = -1.0;
+            const bool hit = c.intersect(os, d, s_union);
+            ASSERT_EQ(hit, nearestHit(c.parts(), os, d, s_parts) >= 0) << axis << " " << a << " " << b;
+            if (hit) {
+              ASSERT_EQ(s_union, s_parts);
+            }
+            hits += hit;
+            ++rays;
+          }
+        }
+  EXPECT_GT(hits, rays / 20);  // the chair fills part of the views: the comparison covers hits and misses
+  EXPECT_LT(hits, rays / 2);
+}
+
 }  // namespace

@@ -43,12 +43,12 @@ inline semexp::ObjectMapConfig objectMapConfigWithPrior() {
 inline BoxUnion chair(double x, double y) {
   BoxUnion c;
   const double h = 0.22;  // half width and depth of the seat
-  c.parts.emplace_back(Eigen::Vector3d(x - h, y - h, 0.42), Eigen::Vector3d(x + h, y + h, 0.47));
-  c.parts.emplace_back(Eigen::Vector3d(x + h - 0.04, y - h, 0.47), Eigen::Vector3d(x + h, y + h, 0.95));
+  c.add(Box(Eigen::Vector3d(x - h, y - h, 0.42), Eigen::Vector3d(x + h, y + h, 0.47)));
+  c.add(Box(Eigen::Vector3d(x + h - 0.04, y - h, 0.47), Eigen::Vector3d(x + h, y + h, 0.95)));
   for (const double sx : {-1.0, 1.0})
     for (const double sy : {-1.0, 1.0}) {
       const Eigen::Vector3d corner(x + sx * (h - 0.02), y + sy * (h - 0.02), 0.0);
-      c.parts.push_back(Box::around(corner + Eigen::Vector3d(0, 0, 0.21), Eigen::Vector3d(0.02, 0.02, 0.21)));
+      c.add(Box::around(corner + Eigen::Vector3d(0, 0, 0.21), Eigen::Vector3d(0.02, 0.02, 0.21)));
     }
   return c;
 }
