@@ -34,7 +34,7 @@ export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
 # Every test case runs here; make test runs the core programs nowhere else.
 # SEMEXP_SANITIZE_EXCLUDE leaves cases out (a gtest filter: A.b:C.*), for a
 # quick local run. The slowest case, TsdfAccuracy.AMinimumWeightKeepsNoisy-
-# ZeroCrossingsOutOfTheMesh (360 noisy frames), takes about 60 s instrumented.
+# ZeroCrossingsOutOfTheMesh (360 noisy frames), takes 45-60 s instrumented.
 EXCLUDE="${SEMEXP_SANITIZE_EXCLUDE:-}"
 filter=()
 if [ -n "$EXCLUDE" ]; then filter=(--gtest_filter="-$EXCLUDE"); fi

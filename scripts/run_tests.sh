@@ -14,16 +14,20 @@ STAGES=""  # "name seconds" per finished stage, for the closing summary
 stage_done() { STAGES="$STAGES $1 $(( $(date +%s) - STAGE_START )) s,"; STAGE_START=$(date +%s); }
 STAGE_START=$START
 # CPU seconds (user + system) of the calling shell's finished children, from
-# bash's `times`. Each stage that runs beside others measures itself in a
-# subshell of its own; the closing summary gives them with the wall times,
-# because the suite's time on 2 cores is set by its CPU work, not by waiting.
+# bash's `times`: each process counts once its parent has waited for it
+# (processes left to init, such as a node a killed launcher leaves behind,
+# do not count), so the figures are lower bounds. The stages that run
+# beside others measure themselves in a subshell of their own; the closing
+# summary gives them with the wall times, because on 2 cores the suite's
+# time is set by its CPU work, not by waiting.
 children_cpu_s() {  # CPU_S := that, in s (not inside $(...): a subshell has no finished children of its own)
   local f
   f=$(mktemp)
   times > "$f"
-  CPU_S=$(awk 'NR == 2 { t = 0; for (i = 1; i <= 2; ++i) { split($i, a, "m"); t += a[1] * 60 + a[2] } printf "%.0f\n", t }' "$f")
+  CPU_S=$(tr , . < "$f" | awk 'NR == 2 { t = 0; for (i = 1; i <= 2; ++i) { split($i, a, "m"); t += a[1] * 60 + a[2] } printf "%.0f\n", t }')
   rm -f "$f"
 }
+record_cpu_s() { children_cpu_s; echo "$CPU_S" > "$1"; }  # the stage's CPU s into file $1
 fail_early() {
   echo "[test] $1 (after $(elapsed) s)"
   echo "0 passed, 1 failed"
@@ -63,7 +67,7 @@ BIN="$ROOT/.colcon/install/semantic_exploration/lib/semantic_exploration"
 echo "[test] gtest under -fsanitize=address,undefined (scripts/run_sanitize.sh), in the background"
 SANITIZE_START=$(date +%s)
 ( nice -n 19 bash "$ROOT/scripts/run_sanitize.sh" "$RESULTS/gtest/sanitize" > "$RESULTS/gtest/sanitize.log" 2>&1
-  rc=$?; children_cpu_s; echo "$CPU_S" > "$RESULTS/gtest/sanitize_cpu_s"; exit $rc ) &
+  rc=$?; record_cpu_s "$RESULTS/gtest/sanitize_cpu_s"; exit $rc ) &
 SANITIZE_PID=$!
 kill_tree() {  # a process and all its descendants (make, compilers, test programs under timeout)
   local c
@@ -113,8 +117,7 @@ run_rostests() {
     echo "$name $rc" >> "$RESULTS/rostest/exit_codes"
   done
   echo "$(( $(date +%s) - t0 ))" > "$RESULTS/rostest/stage_seconds"
-  children_cpu_s
-  echo "$CPU_S" > "$RESULTS/rostest/cpu_s"
+  record_cpu_s "$RESULTS/rostest/cpu_s"
 }
 echo "[test] rostests in the background (log: $RESULTS/rostest/stream.log)"
 run_rostests > "$RESULTS/rostest/stream.log" 2>&1 &
@@ -127,7 +130,7 @@ trap 'kill_tree "$SANITIZE_PID"; kill_tree "$ROSTEST_PID"' EXIT
 # tests with wall-time limits on node start-up failed.
 echo "[test] pytest test/python"
 (cd "$ROOT" && timeout 1800 "$SEMEXP_VENV/bin/python" -m pytest -q -p no:cacheprovider test/python \
-  --junitxml="$RESULTS/pytest/pytest.xml"; rc=$?; children_cpu_s; echo "$CPU_S" > "$RESULTS/pytest/cpu_s"; exit $rc) \
+  --junitxml="$RESULTS/pytest/pytest.xml"; rc=$?; record_cpu_s "$RESULTS/pytest/cpu_s"; exit $rc) \
   > "$RESULTS/pytest/pytest.log" 2>&1
 rc=$?
 tail -n 30 "$RESULTS/pytest/pytest.log"
@@ -157,7 +160,7 @@ STAGES="$STAGES sanitize ${SANITIZE_S:-?} s in the background (from $(( SANITIZE
 echo "[test] total time $(elapsed) s (setup, build and tests); per stage:${STAGES%,}"
 cpu_of() { cat "$1" 2> /dev/null || echo '?'; }
 children_cpu_s
-echo "[test] CPU time (user + system, s): $CPU_S in all; setup $CPU_SETUP, build $CPU_BUILD," \
+echo "[test] CPU time (user + system, s, of the processes waited for): $CPU_S in all; setup $CPU_SETUP, build $CPU_BUILD," \
   "sanitize $(cpu_of "$RESULTS/gtest/sanitize_cpu_s"), pytest $(cpu_of "$RESULTS/pytest/cpu_s")," \
   "rostest $(cpu_of "$RESULTS/rostest/cpu_s")"
 /usr/bin/python3 "$ROOT/scripts/summarize_tests.py" "$RESULTS"

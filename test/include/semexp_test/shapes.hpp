@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -110,8 +111,10 @@ int nearestHit(const Shapes& shapes, const Eigen::Vector3d& o, const Eigen::Vect
 /// on the surface (what mesh accuracy measures).
 class BoxUnion : public Shape {
  public:
-  /// Adds a part; the union's bounds grow to hold it.
+  /// Adds a part (lo <= hi on every axis: the bounds test below relies on
+  /// it); the union's bounds grow to hold it.
   void add(const Box& part) {
+    assert((part.lo.array() <= part.hi.array()).all());
     if (parts_.empty()) {
       bounds_ = part;
     } else {
@@ -121,6 +124,8 @@ class BoxUnion : public Shape {
     parts_.push_back(part);
   }
   const std::vector<Box>& parts() const { return parts_; }
+  /// The smallest box holding every part (meaningless while there is none).
+  const Box& bounds() const { return bounds_; }
 
   double sdf(const Eigen::Vector3d& p) const override {
     double d = std::numeric_limits<double>::infinity();
@@ -134,7 +139,11 @@ class BoxUnion : public Shape {
   /// and IEEE arithmetic is monotonic.
   bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double& s) const override {
     double t0, t1;
-    return !parts_.empty() && bounds_.slabs(o, d, t0, t1) && t0 <= t1 && nearestHit(parts_, o, d, s) >= 0;
+    if (parts_.empty() || !bounds_.slabs(o, d, t0, t1) || t0 > t1) {
+      s = std::numeric_limits<double>::infinity();  // as nearestHit leaves it on a miss
+      return false;
+    }
+    return nearestHit(parts_, o, d, s) >= 0;
   }
 
  private:
