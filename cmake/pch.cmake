@@ -1,6 +1,16 @@
 # The project's precompiled headers (none with CMake before 3.16 or a compiler
 # launcher, see below).
 #
+# Decided once, here: no precompiled headers before CMake 3.16 (no
+# target_precompile_headers) or with a compiler launcher such as ccache, which
+# caches no file built against a precompiled header unless told to be sloppy
+# about it, and makes repeat builds fast anyway.
+if(CMAKE_VERSION VERSION_LESS 3.16 OR CMAKE_CXX_COMPILER_LAUNCHER)
+  set(SEMEXP_PCH OFF)
+else()
+  set(SEMEXP_PCH ON)
+endif()
+#
 # One precompiled header for the gtest programs: the external headers nearly
 # all of them include (gtest, Eigen, OpenCV, the standard library), parsed
 # once per build instead of once per test file (docs/BENCHMARKS.md, "Test
@@ -11,13 +21,9 @@
 #   semexp_test_pch(target): a test program reuses it. GCC takes it only where
 #     the program's flags match; a test that adds definitions of its own
 #     (test_core_detector) is fine as long as none appears in these headers.
-# Nothing changes with CMake before 3.16 (no precompiled headers) or with a
-# compiler launcher such as ccache, which caches no file built against a
-# precompiled header unless told to be sloppy about it, and makes repeat
-# builds fast anyway.
 function(semexp_test_pch_owner)
   cmake_parse_arguments(ARG "" "" "LIBS" ${ARGN})
-  if(CMAKE_VERSION VERSION_LESS 3.16 OR CMAKE_CXX_COMPILER_LAUNCHER)
+  if(NOT SEMEXP_PCH)
     return()
   endif()
   set(src "${CMAKE_CURRENT_BINARY_DIR}/semexp_test_pch.cpp")
@@ -50,7 +56,7 @@ endfunction()
 # -DCMAKE_DISABLE_PRECOMPILE_HEADERS=ON to check that every source compiles
 # on its own.
 function(semexp_pch target)  # target_precompile_headers(target PRIVATE <headers>) where it applies
-  if(CMAKE_VERSION VERSION_LESS 3.16 OR CMAKE_CXX_COMPILER_LAUNCHER)
+  if(NOT SEMEXP_PCH)
     return()
   endif()
   target_precompile_headers(${target} PRIVATE ${ARGN})
