@@ -33,6 +33,7 @@ import os
 import subprocess
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 #: runs per method and scene of each protocol (None: --runs)
 PROTOCOL_RUNS = {"default": None, "paper": 5}
@@ -64,7 +65,13 @@ def parse_args(argv=None):
                     help="size of the generated houses (scene files keep their own)")
     ap.add_argument("--classes", nargs="+", default=["chair"])
     ap.add_argument("--sim-limit-s", type=float, default=200.0)
-    ap.add_argument("--wall-limit-s", type=float, default=900.0)
+    ap.add_argument("--wall-limit-s", type=float, default=None,
+                    help="per mission: a guard against a stuck run (default run_mission.py's: 3 x --sim-limit-s, "
+                    "at least 1800 s)")
+    ap.add_argument("--jobs", type=int, default=1,
+                    help="missions flown at once (each logs to runs/<run>.log when > 1); a deterministic run's time "
+                    "series does not depend on it (README \"Deterministic runs\" names what is left to chance), "
+                    "its wall time does")
     ap.add_argument("--out", default=os.path.join("results", "experiments"))
     ap.add_argument("--ompl-termination", choices=["iterations", "time"], default="iterations",
                     help="iterations (default): deterministic runs (run_mission.py --deterministic); "
@@ -79,6 +86,10 @@ def parse_args(argv=None):
     args.runs = fixed if fixed is not None else (args.runs if args.runs is not None else 3)
     if args.runs < 1:
         ap.error("--runs must be at least 1")
+    if args.jobs < 1:
+        ap.error("--jobs must be at least 1")
+    if not args.sim_limit_s > 0:
+        ap.error("--sim-limit-s must be > 0 s")
     return args
 
 
@@ -96,8 +107,9 @@ def plan_runs(args, out: str, here: str):
                     ["--seed", str(scene["seed"]), "--size"] + [str(v) for v in args.size])
                 cmd = [sys.executable, os.path.join(here, "run_mission.py"), "--mode", mode] + where + [
                     "--classes"] + args.classes + [
-                    "--out", run_dir, "--sim-limit-s", str(args.sim_limit_s),
-                    "--wall-limit-s", str(args.wall_limit_s), "--extra-overrides", overrides]
+                    "--out", run_dir, "--sim-limit-s", str(args.sim_limit_s), "--extra-overrides", overrides]
+                if args.wall_limit_s is not None:
+                    cmd += ["--wall-limit-s", str(args.wall_limit_s)]
                 if args.ompl_termination == "iterations":
                     cmd.append("--deterministic")
                 if sim_overrides:
@@ -118,7 +130,8 @@ def describe_setup(args, sim_overrides: str, describe_yaml) -> list:
             "planner: %s" % ("deterministic (OMPL stops after planner/ompl_iterations; run_mission.py "
                              "--deterministic)" if args.ompl_termination == "iterations"
                              else "OMPL wall-time budget (planner/time_budget_s): runs are not repeatable"),
-            "simulator overrides: %s" % (describe_yaml(sim_overrides) if sim_overrides else "none")]
+            "simulator overrides: %s" % (describe_yaml(sim_overrides) if sim_overrides else "none"),
+            "missions flown at once: %d" % args.jobs]
 
 
 def main(argv=None, call=subprocess.call):
@@ -133,13 +146,24 @@ def main(argv=None, call=subprocess.call):
     by_mode = {m: [] for m in args.modes}
     plan = plan_runs(args, out, here)
     t0 = time.time()
-    for k, r in enumerate(plan, 1):
+
+    def fly(k, r):
         print("[experiments] run %d/%d: %s, run %d, %s (%.0f s so far)" % (
             k, len(plan), r["scene"], r["run"], r["mode"], time.time() - t0), flush=True)
         os.makedirs(os.path.dirname(r["overrides"]), exist_ok=True)
         with open(r["overrides"], "w") as f:
             f.write("planner:\n  seed: %d\n" % r["planner_seed"])
-        rc = call(r["cmd"])
+        if args.jobs == 1:
+            return call(r["cmd"])
+        with open(r["dir"] + ".log", "w") as log:  # two missions' progress lines would interleave
+            rc = call(r["cmd"], stdout=log, stderr=subprocess.STDOUT)
+        print("[experiments] %s done (exit %d, %.0f s so far; log %s.log)" % (
+            os.path.basename(r["dir"]), rc, time.time() - t0, r["dir"]), flush=True)
+        return rc
+
+    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        codes = list(pool.map(lambda kr: fly(*kr), enumerate(plan, 1)))
+    for r, rc in zip(plan, codes):  # in plan order, whatever order they finished in
         if rc != 0 or not os.path.exists(os.path.join(r["dir"], "timeseries.csv")):
             print("[experiments] run %s failed (exit %d); left out of the curves" % (r["dir"], rc))
             continue

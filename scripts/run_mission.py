@@ -101,6 +101,23 @@ def write_overrides(path, gt, classes, margin_m=0.5):
         f.write("classes:\n  of_interest: [%s]\n" % ", ".join(classes))
 
 
+#: run_mission.py's own settings for the C++ nodes, under --extra-overrides. It stops the run at
+#: --sim-limit-s itself, so the planner's own limit (config/semantic.yaml: 600 s) must not end a
+#: longer run first; --extra-overrides may set one again.
+MISSION_OVERRIDES = {"planner": {"time_limit_s": 0.0}}
+
+
+def combine_overrides(path, extra_path=""):
+    """path (the scene's bounds and classes) with MISSION_OVERRIDES and then --extra-overrides
+    merged over it section by section: text appended after it would replace a whole section
+    (two `planner:` mappings in one file keep only the last)."""
+    _import_package()
+    from semantic_exploration.eval.overrides import load, write_merged
+    layers = [MISSION_OVERRIDES] + ([load(extra_path)] if extra_path else [])
+    return write_merged(path, layers, "written by run_mission.py: the scene's bounds and classes, its planner "
+                        "settings, then --extra-overrides")
+
+
 def Monitor():
     """The run's log (semantic_exploration.eval.runlog.RunLog), subscribed live."""
     _import_package()
@@ -343,9 +360,7 @@ def main(argv=None):
     ply, gt = prepare_scene(args, out)
     overrides = os.path.join(out, "overrides.yaml")
     write_overrides(overrides, gt, args.classes)
-    if args.extra_overrides:
-        with open(args.extra_overrides) as f, open(overrides, "a") as o:
-            o.write(f.read())
+    combine_overrides(overrides, args.extra_overrides)
     if args.deterministic:
         _import_package()
         from semantic_exploration.eval.lockstep import deterministic_setup

@@ -130,15 +130,17 @@ COLUMNS = ["sim_s", "explored_volume_m3", "ground_truth_found", "background_rmse
            "path_length_m"]
 
 
-def write_series(d, rows, n_gt=4, reason="explored"):
-    """A run directory from hand-written rows (one dict per row; absent columns empty)."""
+def write_series(d, rows, n_gt=4, reason="explored", end_s=None):
+    """A run directory from hand-written rows (one dict per row; absent columns empty); end_s:
+    the summary's sim time at the end (absent: the last row's)."""
     os.makedirs(d)
     with open(os.path.join(d, "timeseries.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=COLUMNS)
         w.writeheader()
         w.writerows(rows)
     with open(os.path.join(d, "summary.json"), "w") as f:
-        json.dump({"ground_truth_objects": n_gt, "termination_reason": reason, "collisions": 0}, f)
+        json.dump(dict({"ground_truth_objects": n_gt, "termination_reason": reason, "collisions": 0},
+                       **({} if end_s is None else {"sim_time_s": end_s})), f)
     return experiments.read_run(d)
 
 
@@ -172,15 +174,15 @@ def test_aggregated_curves_of_every_panel(tmp_path):
 
 
 def test_eight_panels_and_the_reconstruction_claims(tmp_path):
-    def run(name, rmse_bg, rmse_obj, observed, reason):
+    def run(name, rmse_bg, rmse_obj, observed, reason, end_s=None):
         return write_series(str(tmp_path / name), [
             {"sim_s": 0, "explored_volume_m3": 0, "ground_truth_found": 0, "path_length_m": 0},
             {"sim_s": 10, "explored_volume_m3": 10, "ground_truth_found": 4, "background_rmse_m": rmse_bg,
              "object_rmse_m": rmse_obj, "background_completeness": 0.5, "object_completeness": 0.6,
              "background_observed_share": 0.3, "object_observed_share": observed, "path_length_m": 1}],
-            reason=reason)
-    sem = [run("s0", 0.030, 0.010, 0.8, "explored"), run("s1", 0.032, 0.012, 0.9, "time_limit")]
-    cls = [run("c0", 0.028, 0.011, 0.5, "explored"), run("c1", 0.030, 0.011, 0.6, "explored")]
+            reason=reason, end_s=end_s)
+    sem = [run("s0", 0.030, 0.010, 0.8, "explored", 250.0), run("s1", 0.032, 0.012, 0.9, "time_limit", 600.0)]
+    cls = [run("c0", 0.028, 0.011, 0.5, "explored", 300.0), run("c1", 0.030, 0.011, 0.6, "explored")]
     res = experiments.write_outputs(str(tmp_path / "out"), {"semantic": sem, "classic": cls}, grid_step_s=10)
     for key in experiments.CURVES:
         assert os.path.getsize(str(tmp_path / "out" / ("%s.png" % key))) > 0
@@ -192,8 +194,14 @@ def test_eight_panels_and_the_reconstruction_claims(tmp_path):
     assert c[5]["holds"] is True and c[5]["measured"] == "semantic 85%, classic 55%"
     rows = {r["mode"]: r for r in res["rows"]}
     assert rows["semantic"]["explored_share"] == 0.5 and rows["classic"]["explored_share"] == 1.0
+    # Ends: semantic 250 s (explored) and 600 s (limit); classic 300 s and, without sim_time_s, its last row's 10 s.
+    assert rows["semantic"]["end_sim_s_median"] == 425.0 and rows["semantic"]["explored_end_sim_s_median"] == 250.0
+    assert rows["classic"]["end_sim_s_median"] == 155.0 and rows["classic"]["explored_end_sim_s_median"] == 155.0
     report = open(str(tmp_path / "out" / "report.md")).read()
-    assert "| explored, time_limit | 50% |" in report
+    assert "| explored, time_limit | 50% | 425 s | 250 s |" in report
+    res = experiments.write_outputs(str(tmp_path / "limit"), {"semantic": sem[1:]}, grid_step_s=10)
+    assert res["rows"][0]["explored_end_sim_s_median"] is None
+    assert "| time_limit | 0% | 600 s | none ended explored |" in open(str(tmp_path / "limit" / "report.md")).read()
 
 
 def test_background_observed_panel_reads_what_the_mission_writes(tmp_path):

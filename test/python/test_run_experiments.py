@@ -37,6 +37,13 @@ def test_default_protocol_and_options():
     assert args.runs == 3 and [s["seed"] for s in args.scenes] == [0, 1, 2] and args.ompl_termination == "iterations"
     assert run_experiments.parse_args(["--runs", "2"]).runs == 2
     assert run_experiments.parse_args(["--protocol", "paper", "--runs", "5"]).runs == 5
+    # The wall-time guard is run_mission.py's own (3 x the sim limit) unless given.
+    cmd = run_experiments.plan_runs(args, "/o", "/x")[0]["cmd"]
+    assert "--wall-limit-s" not in cmd and cmd[cmd.index("--sim-limit-s") + 1] == "200.0"
+    given = run_experiments.parse_args(["--wall-limit-s", "5000", "--sim-limit-s", "2700"])
+    cmd = run_experiments.plan_runs(given, "/o", "/x")[0]["cmd"]
+    assert cmd[cmd.index("--wall-limit-s") + 1] == "5000.0" and cmd[cmd.index("--sim-limit-s") + 1] == "2700.0"
+    assert args.jobs == 1
     timed = run_experiments.parse_args(["--ompl-termination", "time", "--scenes", "1"])
     assert all("--deterministic" not in r["cmd"] for r in run_experiments.plan_runs(timed, "/o", "/x"))
 
@@ -48,6 +55,10 @@ def test_bad_scenes_and_conflicting_runs_are_refused(capsys):
     with pytest.raises(SystemExit):
         run_experiments.parse_args(["--protocol", "paper", "--runs", "3"])
     assert "--protocol paper runs 5 runs per method per scene" in capsys.readouterr().err
+    for bad, why in ((["--jobs", "0"], "--jobs must be at least 1"), (["--sim-limit-s", "0"], "--sim-limit-s must be > 0")):
+        with pytest.raises(SystemExit):
+            run_experiments.parse_args(bad)
+        assert why in capsys.readouterr().err
 
 
 def test_campaign_runs_every_mission_and_names_the_protocol(tmp_path):
@@ -74,3 +85,42 @@ def test_campaign_runs_every_mission_and_names_the_protocol(tmp_path):
     assert "- scenes: generated seed 0, example_semantic.ply (generated houses 8 x 6 x 3 m)" in report
     assert "- protocol paper: 5 runs per method and scene (planner seeds 1-5)" in report
     assert "| semantic | 10 | 100% |" in report and "| classic | 10 | 50% |" in report
+
+
+def test_missions_flown_at_once_are_aggregated_in_plan_order_with_a_log_each(tmp_path):
+    # Two at a time: each mission's output goes to runs/<run>.log; a failed one is left out by name.
+    import subprocess
+    import threading
+    lock, running, most = threading.Lock(), [0], [0]
+    gate = threading.Barrier(2, timeout=10)  # the first two missions must be in flight together
+
+    def fake_mission(cmd, stdout=None, stderr=None):
+        d = cmd[cmd.index("--out") + 1]
+        with lock:
+            running[0] += 1
+            most[0] = max(most[0], running[0])
+        if "scene0_run0" in d:
+            gate.wait()
+        assert stderr == subprocess.STDOUT and stdout.name == d + ".log"
+        stdout.write("mission %s\n" % os.path.basename(d))
+        with lock:
+            running[0] -= 1
+        if d.endswith("run1_classic"):
+            return 3
+        os.makedirs(d)
+        with open(os.path.join(d, "timeseries.csv"), "w") as f:
+            f.write("sim_s,explored_volume_m3,ground_truth_found\n0,0,0\n10,5,2\n")
+        with open(os.path.join(d, "summary.json"), "w") as f:
+            json.dump({"ground_truth_objects": 2, "termination_reason": "explored", "sim_time_s": 10.0}, f)
+        return 0
+
+    pytest.importorskip("matplotlib")
+    out = str(tmp_path / "campaign")
+    assert run_experiments.main(["--scenes", "0", "--runs", "2", "--jobs", "2", "--out", out], call=fake_mission) == 0
+    assert most[0] == 2
+    with open(os.path.join(out, "runs", "scene0_run1_semantic.log")) as f:
+        assert f.read() == "mission scene0_run1_semantic\n"
+    report = open(os.path.join(out, "report.md")).read()
+    assert "- missions flown at once: 2" in report
+    assert "| classic | 1 | 100% |" in report and "| semantic | 2 | 100% |" in report
+    assert "- classic runs: runs/scene0_run0_classic" in report

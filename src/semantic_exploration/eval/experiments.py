@@ -194,6 +194,9 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
         t100 = [time_to_reach(r["t"], r["series"]["found_percent"], 100.0) for r in runs]
         reasons = sorted(set(r["summary"].get("termination_reason", "?") for r in runs))
         explored = sum(r["summary"].get("termination_reason") == "explored" for r in runs)
+        # sim time at the end: of every run, and of those that ended explored (the paper's end)
+        ends = [float(r["summary"].get("sim_time_s", r["t"][-1] if len(r["t"]) else np.nan)) for r in runs]
+        explored_ends = [e for e, r in zip(ends, runs) if r["summary"].get("termination_reason") == "explored"]
         evs = [r["summary"].get("evaluation") or {} for r in runs]
         scored = [e for e in evs if "spurious" in e]  # runs whose final maps were matched to the ground truth
         rows.append({"mode": mode, "runs": len(runs), "found_percent_median": float(np.median(final_found)),
@@ -201,6 +204,8 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
                      "spurious": sum(len(e["spurious"]) for e in scored) if scored else None,
                      "duplicated": sum(len(e.get("duplicates", [])) for e in scored) if scored else None,
                      "explored_share": explored / len(runs),
+                     "end_sim_s_median": float(np.median(ends)),
+                     "explored_end_sim_s_median": float(np.median(explored_ends)) if explored_ends else None,
                      "explored_m3_median": float(np.median(final_vol)),
                      "time_to_all_found_s_median": float(np.median(t100)),
                      "collisions": int(sum(r["summary"].get("collisions", 0) for r in runs)),
@@ -214,14 +219,17 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
              "one final map object lies on (both summed over the runs).", "",
              "| mode | runs | objects found (final, median) | spurious | duplicated | "
              "explored volume (final, median) | time to find all (median) | collisions | termination | "
-             "ended explored |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "ended explored | sim time at the end (median) | sim time at the end of the runs that ended "
+             "explored (median) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append("| %s | %d | %.0f%% | %s | %s | %.1f m3 | %s | %d | %s | %.0f%% |" % (
+        lines.append("| %s | %d | %.0f%% | %s | %s | %.1f m3 | %s | %d | %s | %.0f%% | %.0f s | %s |" % (
             r["mode"], r["runs"], r["found_percent_median"], "-" if r["spurious"] is None else r["spurious"],
             "-" if r["duplicated"] is None else r["duplicated"], r["explored_m3_median"],
             "%.0f s" % r["time_to_all_found_s_median"] if np.isfinite(r["time_to_all_found_s_median"]) else "never",
-            r["collisions"], r["termination"], 100 * r["explored_share"]))
+            r["collisions"], r["termination"], 100 * r["explored_share"], r["end_sim_s_median"],
+            "none ended explored" if r["explored_end_sim_s_median"] is None
+            else "%.0f s" % r["explored_end_sim_s_median"]))
     claims = paper_claims(agg, grid, rows)
     if claims:
         lines += ["", "## The paper's claims, measured here", "", "| claim | holds | measured |", "|---|---|---|"]

@@ -159,29 +159,18 @@ def deterministic_setup(args, out: str, overrides: str, config_dir: str) -> None
     on top in out/sim_overrides.yaml, which args.sim_overrides then names."""
     import yaml
 
-    def merge(into, top):  # top's settings win, section by section
-        for k, v in top.items():
-            if isinstance(v, dict) and isinstance(into.get(k), dict):
-                merge(into[k], v)
-            else:
-                into[k] = v
-        return into
-    with open(overrides) as f, open(os.path.join(config_dir, "deterministic.yaml")) as d:
-        nodes = merge(yaml.safe_load(f) or {}, yaml.safe_load(d) or {})
-    with open(overrides, "w") as f:
-        f.write("# written by run_mission.py: the scene's bounds and classes, --extra-overrides, "
-                "config/deterministic.yaml\n")
-        yaml.safe_dump(nodes, f)
+    from .overrides import load, merge, write_merged
+    write_merged(overrides, [load(os.path.join(config_dir, "deterministic.yaml"))],
+                 "written by run_mission.py: the scene's bounds and classes, its planner settings, "
+                 "--extra-overrides, config/deterministic.yaml")
     merged = {}
     for path in ([args.sim_overrides] if args.sim_overrides else []) + [os.path.join(config_dir,
                                                                                          "deterministic_sim.yaml")]:
-        with open(path) as f:
-            merged.update(yaml.safe_load(f) or {})
+        merge(merged, load(path))
     args.user_sim_overrides = args.sim_overrides
     args.sim_overrides = os.path.join(out, "sim_overrides.yaml")
     with open(args.sim_overrides, "w") as f:
         yaml.safe_dump(merged, f)
-
 
 def timing_of(deterministic, get_param):
     """How the run's planner was timed, for the report (get_param(name, default) reads a ROS parameter)."""
