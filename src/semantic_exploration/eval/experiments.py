@@ -61,6 +61,29 @@ def read_run(run_dir: str) -> Dict:
     return {"dir": run_dir, "t": t[order], "series": {k: v[order] for k, v in series.items()}, "summary": summary}
 
 
+def _final(run: Dict, key: str) -> str:
+    """A curve's last value for the run table ('-' where the run lacks it)."""
+    v = run["series"][key]
+    return "-" if len(v) == 0 or not np.isfinite(v[-1]) else "%.0f" % v[-1]
+
+
+def run_table(by_mode: Dict[str, List[Dict]], out_dir: str) -> List[str]:
+    """report.md's table of the runs one by one: how and when each ended, and its final figures."""
+    lines = ["## Runs", "",
+             "| run | mode | ended | sim time at the end | objects found | explored volume | background seen "
+             "from <= d_bg | objects' surface seen from <= d_obj | collisions |", "|---|---|---|---|---|---|---|---|---|"]
+    for mode, runs in by_mode.items():
+        for r in runs:
+            s = r["summary"]
+            end = s.get("sim_time_s", r["t"][-1] if len(r["t"]) else None)
+            lines.append("| %s | %s | %s | %s | %s%% | %s m3 | %s%% | %s%% | %s |" % (
+                os.path.relpath(r["dir"], out_dir), mode, s.get("termination_reason", "?"),
+                "-" if end is None else "%.1f s" % float(end), _final(r, "found_percent"),
+                _final(r, "explored_volume_m3"), _final(r, "background_observed_percent"),
+                _final(r, "object_observed_percent"), s.get("collisions", "-")))
+    return lines
+
+
 def implausible(run: Dict, sim_limit_s: float, slack_s: float = 60.0) -> str:
     """Why a run cannot be aggregated ('' if it can): no samples, or sim time
     far beyond the limit the mission was given (a mission that read wall
@@ -239,6 +262,7 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
               "", "Data: [curves.csv](curves.csv)", ""]
     for mode, runs in by_mode.items():
         lines.append("- %s runs: %s" % (mode, ", ".join(os.path.relpath(r["dir"], out_dir) for r in runs)))
+    lines += [""] + run_table(by_mode, out_dir)
     with open(os.path.join(out_dir, "report.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
     return {"rows": rows, "plots": plots, "claims": claims}
