@@ -205,6 +205,7 @@ def write_report(out, args, gt, mon, saved, sim_s, wall_s, reason, detector=None
         "iterations": mon.status.iteration if mon.status else 0,
         "explored_volume_m3": stats.explored_volume_m3 if stats else 0.0,
         "frontier_count": stats.frontier_count if stats else None,
+        "end_conditions": mon.open_conditions(),  # what still held the run open when it ended
         "map_objects": len(objects), "ground_truth_objects": len(gt_objs),
         "path_length_m": mon.path_length_m, "collisions": mon.collisions,
         "dropped_input": mon.drop_summary(),

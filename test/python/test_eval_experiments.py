@@ -130,9 +130,10 @@ COLUMNS = ["sim_s", "explored_volume_m3", "ground_truth_found", "background_rmse
            "path_length_m"]
 
 
-def write_series(d, rows, n_gt=4, reason="explored", end_s=None):
+def write_series(d, rows, n_gt=4, reason="explored", end_s=None, end_conditions=None):
     """A run directory from hand-written rows (one dict per row; absent columns empty); end_s:
-    the summary's sim time at the end (absent: the last row's)."""
+    the summary's sim time at the end (absent: the last row's); end_conditions as run_mission.py
+    writes them (absent: a run from before they were written)."""
     os.makedirs(d)
     with open(os.path.join(d, "timeseries.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=COLUMNS)
@@ -140,7 +141,8 @@ def write_series(d, rows, n_gt=4, reason="explored", end_s=None):
         w.writerows(rows)
     with open(os.path.join(d, "summary.json"), "w") as f:
         json.dump(dict({"ground_truth_objects": n_gt, "termination_reason": reason, "collisions": 0},
-                       **({} if end_s is None else {"sim_time_s": end_s})), f)
+                       **({} if end_s is None else {"sim_time_s": end_s}),
+                       **({} if end_conditions is None else {"end_conditions": end_conditions})), f)
     return experiments.read_run(d)
 
 
@@ -174,14 +176,16 @@ def test_aggregated_curves_of_every_panel(tmp_path):
 
 
 def test_eight_panels_and_the_reconstruction_claims(tmp_path):
-    def run(name, rmse_bg, rmse_obj, observed, reason, end_s=None):
+    def run(name, rmse_bg, rmse_obj, observed, reason, end_s=None, open_=None):
         return write_series(str(tmp_path / name), [
             {"sim_s": 0, "explored_volume_m3": 0, "ground_truth_found": 0, "path_length_m": 0},
             {"sim_s": 10, "explored_volume_m3": 10, "ground_truth_found": 4, "background_rmse_m": rmse_bg,
              "object_rmse_m": rmse_obj, "background_completeness": 0.5, "object_completeness": 0.6,
              "background_observed_share": 0.3, "object_observed_share": observed, "path_length_m": 1}],
-            reason=reason, end_s=end_s)
-    sem = [run("s0", 0.030, 0.010, 0.8, "explored", 250.0), run("s1", 0.032, 0.012, 0.9, "time_limit", 600.0)]
+            reason=reason, end_s=end_s, end_conditions=open_)
+    sem = [run("s0", 0.030, 0.010, 0.8, "explored", 250.0, {"not_done": [], "active_frontiers": 0}),
+           run("s1", 0.032, 0.012, 0.9, "time_limit", 600.0,
+               {"not_done": ["frontiers", "objects"], "active_frontiers": 162})]
     cls = [run("c0", 0.028, 0.011, 0.5, "explored", 300.0), run("c1", 0.030, 0.011, 0.6, "explored")]
     res = experiments.write_outputs(str(tmp_path / "out"), {"semantic": sem, "classic": cls}, grid_step_s=10)
     for key in experiments.CURVES:
@@ -200,8 +204,9 @@ def test_eight_panels_and_the_reconstruction_claims(tmp_path):
     report = open(str(tmp_path / "out" / "report.md")).read()
     assert "| explored, time_limit | 50% | 425 s | 250 s |" in report
     # One row per run: 4 of 4 objects found, 10 m3, 30% of the background and 80% of the objects seen close.
-    assert "| ../s0 | semantic | explored | 250.0 s | 100% | 10 m3 | 30% | 80% | 0 |" in report
-    assert "| ../c1 | classic | explored | 10.0 s | 100% | 10 m3 | 30% | 60% | 0 |" in report
+    assert "| ../s0 | semantic | explored | 250.0 s | nothing (0) | 100% | 10 m3 | 30% | 80% | 0 |" in report
+    assert "| ../s1 | semantic | time_limit | 600.0 s | frontiers, objects (162) | 100% |" in report
+    assert "| ../c1 | classic | explored | 10.0 s | - | 100% | 10 m3 | 30% | 60% | 0 |" in report
     res = experiments.write_outputs(str(tmp_path / "limit"), {"semantic": sem[1:]}, grid_step_s=10)
     assert res["rows"][0]["explored_end_sim_s_median"] is None
     assert "| time_limit | 0% | 600 s | none ended explored |" in open(str(tmp_path / "limit" / "report.md")).read()

@@ -70,15 +70,19 @@ def _final(run: Dict, key: str) -> str:
 def run_table(by_mode: Dict[str, List[Dict]], out_dir: str) -> List[str]:
     """report.md's table of the runs one by one: how and when each ended, and its final figures."""
     lines = ["## Runs", "",
-             "| run | mode | ended | sim time at the end | objects found | explored volume | background seen "
-             "from <= d_bg | objects' surface seen from <= d_obj | collisions |", "|---|---|---|---|---|---|---|---|---|"]
+             "| run | mode | ended | sim time at the end | still open at the end (active frontier voxels) | "
+             "objects found | explored volume | background seen from <= d_bg | objects' surface seen from <= d_obj "
+             "| collisions |", "|---|---|---|---|---|---|---|---|---|---|"]
     for mode, runs in by_mode.items():
         for r in runs:
             s = r["summary"]
             end = s.get("sim_time_s", r["t"][-1] if len(r["t"]) else None)
-            lines.append("| %s | %s | %s | %s | %s%% | %s m3 | %s%% | %s%% | %s |" % (
+            cond = s.get("end_conditions") or {}
+            still = "-" if not cond else "%s (%d)" % (", ".join(cond.get("not_done", [])) or "nothing",
+                                                      cond.get("active_frontiers", 0))
+            lines.append("| %s | %s | %s | %s | %s | %s%% | %s m3 | %s%% | %s%% | %s |" % (
                 os.path.relpath(r["dir"], out_dir), mode, s.get("termination_reason", "?"),
-                "-" if end is None else "%.1f s" % float(end), _final(r, "found_percent"),
+                "-" if end is None else "%.1f s" % float(end), still, _final(r, "found_percent"),
                 _final(r, "explored_volume_m3"), _final(r, "background_observed_percent"),
                 _final(r, "object_observed_percent"), s.get("collisions", "-")))
     return lines

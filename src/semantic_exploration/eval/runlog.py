@@ -167,6 +167,8 @@ class RunLog:
                 "iteration": self.status.iteration if self.status else 0,
                 "explored_volume_m3": round(st.explored_volume_m3, 3) if st else 0.0,
                 "frontier_count": st.frontier_count if st else 0,
+                # the planner's: frontier voxels neither observed nor retired (explored asks for none)
+                "active_frontiers": getattr(self.status, "active_frontiers", ""),
                 "objects_in_map": len(self.objects.objects) if self.objects else 0,
                 "ground_truth_found": len(self.found_ids) if self.found_ids is not None else "",
                 "found_at_s": round(self.found_at_s, 2) if self.found_at_s is not None else "",
@@ -178,6 +180,19 @@ class RunLog:
                 "integration_time_ms": round(st.integration_time_ms, 3) if st else 0.0,
                 "dropped_frames": self.drops.get("background_map", {}).get("frame_gap", 0),
                 "dropped_no_tf": self.drops.get("background_map", {}).get("no_tf", 0)}
+
+    def open_conditions(self) -> Dict:
+        """The planner's last word on the paper's three conditions: which still held the run
+        open ({} before its first status, or from a bag of a status without these fields). A mode
+        that does not pursue a condition reports it done."""
+        st = self.status
+        if st is None or not hasattr(st, "frontiers_done"):
+            return {}
+        held = [name for name, done in (("frontiers", st.frontiers_done), ("background", st.background_done),
+                                        ("objects", st.objects_done)) if not done]
+        return {"active_frontiers": int(st.active_frontiers), "background_observed_share":
+                round(float(st.background_observed_share), 4), "not_done": held,
+                "retired_objects": len(st.retired_object_ids), "last_condition": st.last_condition}
 
     def finished(self):
         return self.status is not None and self.status.state == 3  # ExplorationStatus.STATE_FINISHED
