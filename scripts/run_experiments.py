@@ -69,9 +69,9 @@ def parse_args(argv=None):
                     help="per mission: a guard against a stuck run (default run_mission.py's: 3 x --sim-limit-s, "
                     "at least 1800 s)")
     ap.add_argument("--jobs", type=int, default=1,
-                    help="missions flown at once (each logs to runs/<run>.log when > 1); a deterministic run's time "
-                    "series does not depend on it (README \"Deterministic runs\" names what is left to chance), "
-                    "its wall time does")
+                    help="missions flown at once (each logs to runs/<run>.log when > 1); deterministic runs are meant "
+                    "to repeat whatever runs beside them, but a loaded machine can part them (README "
+                    "\"Deterministic runs\")")
     ap.add_argument("--out", default=os.path.join("results", "experiments"))
     ap.add_argument("--ompl-termination", choices=["iterations", "time"], default="iterations",
                     help="iterations (default): deterministic runs (run_mission.py --deterministic); "
@@ -90,6 +90,8 @@ def parse_args(argv=None):
         ap.error("--jobs must be at least 1")
     if not args.sim_limit_s > 0:
         ap.error("--sim-limit-s must be > 0 s")
+    if args.wall_limit_s is not None and not args.wall_limit_s > 0:
+        ap.error("--wall-limit-s must be > 0 s")
     return args
 
 
@@ -146,26 +148,34 @@ def main(argv=None, call=subprocess.call):
     by_mode = {m: [] for m in args.modes}
     plan = plan_runs(args, out, here)
     t0 = time.time()
-
-    def fly(k, r):
-        print("[experiments] run %d/%d: %s, run %d, %s (%.0f s so far)" % (
-            k, len(plan), r["scene"], r["run"], r["mode"], time.time() - t0), flush=True)
+    for r in plan:  # every seed file before any mission reads one (missions of one run index share it)
         os.makedirs(os.path.dirname(r["overrides"]), exist_ok=True)
         with open(r["overrides"], "w") as f:
             f.write("planner:\n  seed: %d\n" % r["planner_seed"])
-        if args.jobs == 1:
-            return call(r["cmd"])
-        with open(r["dir"] + ".log", "w") as log:  # two missions' progress lines would interleave
-            rc = call(r["cmd"], stdout=log, stderr=subprocess.STDOUT)
-        print("[experiments] %s done (exit %d, %.0f s so far; log %s.log)" % (
-            os.path.basename(r["dir"]), rc, time.time() - t0, r["dir"]), flush=True)
-        return rc
 
-    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        codes = list(pool.map(lambda kr: fly(*kr), enumerate(plan, 1)))
-    for r, rc in zip(plan, codes):  # in plan order, whatever order they finished in
+    def fly(k, r):
+        """One mission; True if it left a time series to aggregate (a failure is reported at once)."""
+        print("[experiments] run %d/%d: %s, run %d, %s (%.0f s so far)" % (
+            k, len(plan), r["scene"], r["run"], r["mode"], time.time() - t0), flush=True)
+        if args.jobs == 1:
+            rc = call(r["cmd"])
+        else:
+            with open(r["dir"] + ".log", "w") as log:  # two missions' progress lines would interleave
+                rc = call(r["cmd"], stdout=log, stderr=subprocess.STDOUT)
+            print("[experiments] %s done (exit %d, %.0f s so far; log %s.log)" % (
+                os.path.basename(r["dir"]), rc, time.time() - t0, r["dir"]), flush=True)
         if rc != 0 or not os.path.exists(os.path.join(r["dir"], "timeseries.csv")):
-            print("[experiments] run %s failed (exit %d); left out of the curves" % (r["dir"], rc))
+            print("[experiments] run %s failed (exit %d); left out of the curves" % (r["dir"], rc), flush=True)
+            return False
+        return True
+
+    if args.jobs == 1:  # in this thread: Ctrl-C reaches subprocess.call, which stops the mission
+        done = [fly(k, r) for k, r in enumerate(plan, 1)]
+    else:
+        with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+            done = list(pool.map(lambda kr: fly(*kr), enumerate(plan, 1)))
+    for r, ok in zip(plan, done):  # in plan order, whatever order they finished in
+        if not ok:
             continue
         run_data = experiments.read_run(r["dir"])
         why = experiments.implausible(run_data, args.sim_limit_s)

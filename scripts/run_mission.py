@@ -101,21 +101,11 @@ def write_overrides(path, gt, classes, margin_m=0.5):
         f.write("classes:\n  of_interest: [%s]\n" % ", ".join(classes))
 
 
-#: run_mission.py's own settings for the C++ nodes, under --extra-overrides. It stops the run at
-#: --sim-limit-s itself, so the planner's own limit (config/semantic.yaml: 600 s) must not end a
-#: longer run first; --extra-overrides may set one again.
-MISSION_OVERRIDES = {"planner": {"time_limit_s": 0.0}}
-
-
 def combine_overrides(path, extra_path=""):
-    """path (the scene's bounds and classes) with MISSION_OVERRIDES and then --extra-overrides
-    merged over it section by section: text appended after it would replace a whole section
-    (two `planner:` mappings in one file keep only the last)."""
+    """path with run_mission.py's own settings and --extra-overrides merged over it (eval/overrides.py)."""
     _import_package()
-    from semantic_exploration.eval.overrides import load, write_merged
-    layers = [MISSION_OVERRIDES] + ([load(extra_path)] if extra_path else [])
-    return write_merged(path, layers, "written by run_mission.py: the scene's bounds and classes, its planner "
-                        "settings, then --extra-overrides")
+    from semantic_exploration.eval.overrides import combine_mission
+    return combine_mission(path, extra_path)
 
 
 def Monitor():
@@ -346,8 +336,16 @@ def parse_args(argv=None):
     ap.add_argument("--sim-overrides", default="", help="YAML for the simulator loaded after config/sim.yaml "
                     "(e.g. faults: tf_gap_s, detector_scale, frame_drop_fraction)")
     args = ap.parse_args(argv)
+    if not args.sim_limit_s > 0:
+        ap.error("--sim-limit-s must be > 0 s")
     if args.wall_limit_s is None:
         args.wall_limit_s = max(1800.0, 3.0 * args.sim_limit_s)
+    if not args.wall_limit_s > 0:
+        ap.error("--wall-limit-s must be > 0 s")
+    _import_package()
+    from semantic_exploration.eval.overrides import unreadable
+    if args.extra_overrides and unreadable(args.extra_overrides):
+        ap.error("--extra-overrides: " + unreadable(args.extra_overrides))
     return args
 
 

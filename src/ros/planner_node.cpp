@@ -62,6 +62,8 @@ PlannerNode::PlannerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
 }
 
 void PlannerNode::publishStatus(uint8_t state, const std::string& message) {
+  // Between iterations: the iteration's fields stay at 0 (planning_time_s among them, which is how
+  // eval/runlog.py tells an iteration's status from these).
   ExplorationStatus s;
   s.header.stamp = ros::Time::now();
   s.header.frame_id = frames_.world;

@@ -172,3 +172,22 @@ TEST(Termination, RetiredObjectsBelowTheShareDoNotHoldExploredOpen) {
   EXPECT_NE(d.message.find("1 seen from <= d_obj at >= 0.90, 2 retired below it"), std::string::npos) << d.message;
   EXPECT_NE(d.message.find("lowest 0.600"), std::string::npos) << d.message;
 }
+
+// run_mission.py sets planner/time_limit_s to 0 and stops the run itself at --sim-limit-s:
+// 0 must mean no limit, not "stop at once".
+TEST(Termination, ATimeLimitStopsAtItsSimTimeAndZeroMeansNone) {
+  TerminationInputs in;
+  in.active_frontiers = 50;  // far from explored
+  in.background_share = 0.5;
+  in.elapsed_s = 599.9;
+  EXPECT_FALSE(TerminationCheck(TerminationConfig(), semantic()).check(in).finished);
+  in.elapsed_s = 600.0;
+  const TerminationDecision d = TerminationCheck(TerminationConfig(), semantic()).check(in);
+  EXPECT_TRUE(d.finished);
+  EXPECT_EQ(d.reason, "time_limit");
+  PlannerConfig none = semantic();
+  none.time_limit_s = 0.0;
+  in.elapsed_s = 1.0e6;
+  const TerminationDecision n = TerminationCheck(TerminationConfig(), none).check(in);
+  EXPECT_FALSE(n.finished) << n.reason;
+}

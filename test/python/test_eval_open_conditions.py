@@ -14,16 +14,34 @@ def status(**kw):
     return NS(**base)
 
 
-def test_nothing_before_the_first_status_then_the_conditions_not_yet_met():
+def between_iterations():
+    """A "planning" status as the planner node publishes it between iterations (publishStatus): the
+    message itself where its package is built, else the same fields at their defaults."""
+    try:
+        from semantic_exploration.msg import ExplorationStatus
+        return ExplorationStatus(state=1, iteration=10, message="planning")
+    except ImportError:
+        return status(state=1, iteration=10, active_frontiers=0, background_observed_share=0.0,
+                      frontiers_done=False, background_done=False, objects_done=False, object_ids=[],
+                      planning_time_s=0.0)
+
+
+def test_nothing_before_the_first_iteration_then_the_conditions_not_yet_met():
     log = RunLog()
     assert log.open_conditions() == {}
     assert log.row(0.0, 0.0, [])["active_frontiers"] == ""
+    log._on_status(between_iterations())
+    assert log.open_conditions() == {} and log.row(0.5, 0.5, [])["active_frontiers"] == ""
     log._on_status(status(active_frontiers=162, background_observed_share=0.98201, frontiers_done=False,
                           objects_done=False, retired_object_ids=[4, 7]))
-    assert log.open_conditions() == {"active_frontiers": 162, "background_observed_share": 0.982,
-                                     "not_done": ["frontiers", "objects"], "retired_objects": 2,
-                                     "last_condition": ""}
+    expected = {"active_frontiers": 162, "background_observed_share": 0.982, "not_done": ["frontiers", "objects"],
+                "last_condition": ""}
+    assert log.open_conditions() == expected
     assert log.row(1.0, 1.0, [])["active_frontiers"] == 162
+    # The planner's statuses between iterations leave the conditions (and the iteration's time) at 0:
+    # they must not read as "no frontier left, nothing done".
+    log._on_status(between_iterations())
+    assert log.open_conditions() == expected and log.row(2.0, 2.0, [])["active_frontiers"] == 162
 
 
 def test_an_explored_end_leaves_nothing_open_and_names_the_last_condition():

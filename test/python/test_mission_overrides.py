@@ -38,10 +38,28 @@ def test_extra_overrides_add_to_a_section_and_win_key_by_key(tmp_path):
     assert _written(tmp_path, "planner:\n  time_limit_s: 1500.0\n")["planner"] == {"time_limit_s": 1500.0}
 
 
-def test_an_empty_extra_file_changes_nothing_and_a_list_is_refused_by_name(tmp_path):
+def test_an_empty_file_or_section_changes_nothing_and_rosparam_angles_are_read(tmp_path):
     assert _written(tmp_path, "")["planner"] == {"time_limit_s": 0.0}
-    with pytest.raises(ValueError, match="extra.yaml: an override file must hold a YAML mapping, not list"):
-        _written(tmp_path, "- planner\n")
+    # A section whose lines are all commented out is YAML null: it must not drop the time limit.
+    assert _written(tmp_path, "planner:\n  # seed: 3\n")["planner"] == {"time_limit_s": 0.0}
+    doc = _written(tmp_path, "mav:\n  yaw_rad: !degrees 90\n  pitch_rad: !radians 0.5\n")
+    assert doc["mav"] == {"yaw_rad": pytest.approx(1.5707963), "pitch_rad": 0.5}
+
+
+def test_a_bad_extra_file_is_refused_at_start_naming_the_option(tmp_path, capsys):
+    bad = tmp_path / "list.yaml"
+    bad.write_text("- planner\n")
+    assert overrides.unreadable(str(bad)) == "%s: an override file must hold a YAML mapping, not list" % bad
+    assert overrides.unreadable(str(tmp_path / "none.yaml")).startswith("[Errno 2] No such file or directory")
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("planner: [1,\n")
+    assert "while parsing" in overrides.unreadable(str(broken))
+    for argv, why in ((["--extra-overrides", str(bad)], "--extra-overrides: %s: an override file" % bad),
+                      (["--wall-limit-s", "0"], "--wall-limit-s must be > 0 s"),
+                      (["--sim-limit-s", "-1"], "--sim-limit-s must be > 0 s")):
+        with pytest.raises(SystemExit):
+            run_mission.parse_args(argv)
+        assert why in capsys.readouterr().err
 
 
 def test_merge_recurses_into_sections_both_have_and_replaces_the_rest():

@@ -55,7 +55,9 @@ def test_bad_scenes_and_conflicting_runs_are_refused(capsys):
     with pytest.raises(SystemExit):
         run_experiments.parse_args(["--protocol", "paper", "--runs", "3"])
     assert "--protocol paper runs 5 runs per method per scene" in capsys.readouterr().err
-    for bad, why in ((["--jobs", "0"], "--jobs must be at least 1"), (["--sim-limit-s", "0"], "--sim-limit-s must be > 0")):
+    for bad, why in ((["--jobs", "0"], "--jobs must be at least 1"),
+                     (["--sim-limit-s", "0"], "--sim-limit-s must be > 0"),
+                     (["--wall-limit-s", "-5"], "--wall-limit-s must be > 0")):
         with pytest.raises(SystemExit):
             run_experiments.parse_args(bad)
         assert why in capsys.readouterr().err
@@ -88,23 +90,26 @@ def test_campaign_runs_every_mission_and_names_the_protocol(tmp_path):
 
 
 def test_missions_flown_at_once_are_aggregated_in_plan_order_with_a_log_each(tmp_path):
-    # Two at a time: each mission's output goes to runs/<run>.log; a failed one is left out by name.
+    # Two at a time, the first mission finishing last: each mission's output goes to runs/<run>.log,
+    # every seed file exists before any mission starts, a failed mission is left out, and the report
+    # lists the runs in plan order.
     import subprocess
     import threading
-    lock, running, most = threading.Lock(), [0], [0]
-    gate = threading.Barrier(2, timeout=10)  # the first two missions must be in flight together
+    out = str(tmp_path / "campaign")
+    finished = []
+    second_done = threading.Event()
 
     def fake_mission(cmd, stdout=None, stderr=None):
         d = cmd[cmd.index("--out") + 1]
-        with lock:
-            running[0] += 1
-            most[0] = max(most[0], running[0])
-        if "scene0_run0" in d:
-            gate.wait()
+        seeds = sorted(f for f in os.listdir(os.path.join(out, "runs")) if f.startswith("planner_seed"))
+        assert seeds == ["planner_seed0.yaml", "planner_seed1.yaml"]
+        if d.endswith("scene0_run0_classic"):
+            assert second_done.wait(10)  # in flight beside the second mission, and done after it
         assert stderr == subprocess.STDOUT and stdout.name == d + ".log"
         stdout.write("mission %s\n" % os.path.basename(d))
-        with lock:
-            running[0] -= 1
+        finished.append(os.path.basename(d))
+        if d.endswith("scene0_run0_semantic"):
+            second_done.set()
         if d.endswith("run1_classic"):
             return 3
         os.makedirs(d)
@@ -115,12 +120,14 @@ def test_missions_flown_at_once_are_aggregated_in_plan_order_with_a_log_each(tmp
         return 0
 
     pytest.importorskip("matplotlib")
-    out = str(tmp_path / "campaign")
     assert run_experiments.main(["--scenes", "0", "--runs", "2", "--jobs", "2", "--out", out], call=fake_mission) == 0
-    assert most[0] == 2
+    assert finished[:2] == ["scene0_run0_semantic", "scene0_run0_classic"]
     with open(os.path.join(out, "runs", "scene0_run1_semantic.log")) as f:
         assert f.read() == "mission scene0_run1_semantic\n"
     report = open(os.path.join(out, "report.md")).read()
     assert "- missions flown at once: 2" in report
     assert "| classic | 1 | 100% |" in report and "| semantic | 2 | 100% |" in report
-    assert "- classic runs: runs/scene0_run0_classic" in report
+    assert "- classic runs: runs/scene0_run0_classic\n" in report
+    assert "- semantic runs: runs/scene0_run0_semantic, runs/scene0_run1_semantic\n" in report
+    runs = [line.split(" | ")[0] for line in report.splitlines() if line.startswith("| runs/")]
+    assert runs == ["| runs/scene0_run0_classic", "| runs/scene0_run0_semantic", "| runs/scene0_run1_semantic"]

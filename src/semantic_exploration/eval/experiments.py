@@ -61,10 +61,10 @@ def read_run(run_dir: str) -> Dict:
     return {"dir": run_dir, "t": t[order], "series": {k: v[order] for k, v in series.items()}, "summary": summary}
 
 
-def _final(run: Dict, key: str) -> str:
-    """A curve's last value for the run table ('-' where the run lacks it)."""
+def _final(run: Dict, key: str, unit: str) -> str:
+    """A curve's last value with its unit, for the run table ('-' where the run lacks it)."""
     v = run["series"][key]
-    return "-" if len(v) == 0 or not np.isfinite(v[-1]) else "%.0f" % v[-1]
+    return "-" if len(v) == 0 or not np.isfinite(v[-1]) else "%.0f%s" % (v[-1], unit)
 
 
 def run_table(by_mode: Dict[str, List[Dict]], out_dir: str) -> List[str]:
@@ -80,11 +80,11 @@ def run_table(by_mode: Dict[str, List[Dict]], out_dir: str) -> List[str]:
             cond = s.get("end_conditions") or {}
             still = "-" if not cond else "%s (%d)" % (", ".join(cond.get("not_done", [])) or "nothing",
                                                       cond.get("active_frontiers", 0))
-            lines.append("| %s | %s | %s | %s | %s | %s%% | %s m3 | %s%% | %s%% | %s |" % (
+            lines.append("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
                 os.path.relpath(r["dir"], out_dir), mode, s.get("termination_reason", "?"),
-                "-" if end is None else "%.1f s" % float(end), still, _final(r, "found_percent"),
-                _final(r, "explored_volume_m3"), _final(r, "background_observed_percent"),
-                _final(r, "object_observed_percent"), s.get("collisions", "-")))
+                "-" if end is None else "%.1f s" % float(end), still, _final(r, "found_percent", "%"),
+                _final(r, "explored_volume_m3", " m3"), _final(r, "background_observed_percent", "%"),
+                _final(r, "object_observed_percent", "%"), s.get("collisions", "-")))
     return lines
 
 

@@ -172,6 +172,7 @@ def deterministic_setup(args, out: str, overrides: str, config_dir: str) -> None
     with open(args.sim_overrides, "w") as f:
         yaml.safe_dump(merged, f)
 
+
 def timing_of(deterministic, get_param):
     """How the run's planner was timed, for the report (get_param(name, default) reads a ROS parameter)."""
     if get_param("/planner/planner/ompl_termination", "time") == "iterations":

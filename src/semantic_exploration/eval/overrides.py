@@ -6,15 +6,33 @@ classes, its own settings, --extra-overrides, config/deterministic.yaml) are
 merged here instead, each later layer's settings winning key by key.
 """
 import copy
+import math
 from typing import Dict, Iterable
 
 import yaml
 
+#: run_mission.py's own settings for the C++ nodes, under --extra-overrides. It stops the run at
+#: --sim-limit-s itself, so the planner's own limit (config/semantic.yaml: 600 s) must not end a
+#: longer run first; --extra-overrides may set one again.
+MISSION_OVERRIDES = {"planner": {"time_limit_s": 0.0}}
+
+
+class _Loader(yaml.SafeLoader):
+    """safe_load plus rosparam's angle tags, turned into the radians rosparam would set."""
+
+
+_Loader.add_constructor("!degrees", lambda loader, node: math.radians(float(loader.construct_scalar(node))))
+_Loader.add_constructor("!radians", lambda loader, node: float(loader.construct_scalar(node)))
+
 
 def merge(into: Dict, top: Dict) -> Dict:
     """`top`'s settings over `into`'s, recursing into sections both have; returns `into`.
-    What it takes from `top` is copied: a later merge into `into` leaves `top` as it was."""
+    What it takes from `top` is copied: a later merge into `into` leaves `top` as it was.
+    A key left empty in `top` (YAML null, e.g. a section whose lines are all commented out)
+    sets nothing: rosparam has no null value to set."""
     for k, v in top.items():
+        if v is None:
+            continue
         if isinstance(v, dict) and isinstance(into.get(k), dict):
             merge(into[k], v)
         else:
@@ -25,12 +43,21 @@ def merge(into: Dict, top: Dict) -> Dict:
 def load(path: str) -> Dict:
     """A YAML override file as a mapping ({} when empty); anything else is refused by name."""
     with open(path) as f:
-        doc = yaml.safe_load(f)
+        doc = yaml.load(f, Loader=_Loader)
     if doc is None:
         return {}
     if not isinstance(doc, dict):
         raise ValueError("%s: an override file must hold a YAML mapping, not %s" % (path, type(doc).__name__))
     return doc
+
+
+def unreadable(path: str) -> str:
+    """Why `path` cannot serve as an override file ('' if it can), for a start-up error."""
+    try:
+        load(path)
+    except (OSError, ValueError, yaml.YAMLError) as e:
+        return str(e)
+    return ""
 
 
 def write_merged(path: str, layers: Iterable[Dict], header: str) -> Dict:
@@ -42,3 +69,12 @@ def write_merged(path: str, layers: Iterable[Dict], header: str) -> Dict:
         f.write("# %s\n" % header)
         yaml.safe_dump(doc, f)
     return doc
+
+
+def combine_mission(path: str, extra_path: str = "") -> Dict:
+    """run_mission.py: `path` (the scene's bounds and classes) with MISSION_OVERRIDES and then
+    --extra-overrides merged over it section by section (text appended after it would replace a
+    whole section)."""
+    layers = [MISSION_OVERRIDES] + ([load(extra_path)] if extra_path else [])
+    return write_merged(path, layers, "written by run_mission.py: the scene's bounds and classes, its planner "
+                        "settings, then --extra-overrides")

@@ -51,6 +51,7 @@ class RunLog:
 
     def __init__(self):
         self.status = None
+        self.result = None  # the last status that closed an iteration (see _on_status)
         self.retired_objects = []  # objects the planner retired by evidence (ExplorationStatus.retired_object_ids)
         self.stats = None
         self.objects = None
@@ -96,6 +97,11 @@ class RunLog:
 
     def _on_status(self, msg):
         self.status = msg
+        # An iteration's status is the one with its conditions filled in; the planner's statuses
+        # between iterations (waiting, planning, a rejected path) leave them, and the
+        # iteration's time, at 0, and it measures every iteration's time (> 0).
+        if getattr(msg, "planning_time_s", 0.0) > 0.0:
+            self.result = msg
         # Statuses between iterations ("planning") carry no object lists; keep the last iteration's.
         if msg.object_ids:
             self.retired_objects = sorted(getattr(msg, "retired_object_ids", None) or [])
@@ -168,7 +174,7 @@ class RunLog:
                 "explored_volume_m3": round(st.explored_volume_m3, 3) if st else 0.0,
                 "frontier_count": st.frontier_count if st else 0,
                 # the planner's: frontier voxels neither observed nor retired (explored asks for none)
-                "active_frontiers": getattr(self.status, "active_frontiers", ""),
+                "active_frontiers": getattr(self.result, "active_frontiers", ""),
                 "objects_in_map": len(self.objects.objects) if self.objects else 0,
                 "ground_truth_found": len(self.found_ids) if self.found_ids is not None else "",
                 "found_at_s": round(self.found_at_s, 2) if self.found_at_s is not None else "",
@@ -183,16 +189,16 @@ class RunLog:
 
     def open_conditions(self) -> Dict:
         """The planner's last word on the paper's three conditions: which still held the run
-        open ({} before its first status, or from a bag of a status without these fields). A mode
-        that does not pursue a condition reports it done."""
-        st = self.status
+        open, from the last iteration's status ({} before the first, or from a bag of statuses
+        without these fields). A mode that does not pursue a condition reports it done."""
+        st = self.result
         if st is None or not hasattr(st, "frontiers_done"):
             return {}
         held = [name for name, done in (("frontiers", st.frontiers_done), ("background", st.background_done),
                                         ("objects", st.objects_done)) if not done]
         return {"active_frontiers": int(st.active_frontiers), "background_observed_share":
                 round(float(st.background_observed_share), 4), "not_done": held,
-                "retired_objects": len(st.retired_object_ids), "last_condition": st.last_condition}
+                "last_condition": getattr(st, "last_condition", "")}
 
     def finished(self):
         return self.status is not None and self.status.state == 3  # ExplorationStatus.STATE_FINISHED
