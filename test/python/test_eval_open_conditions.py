@@ -54,5 +54,6 @@ def test_an_explored_end_leaves_nothing_open_and_names_the_last_condition():
 def test_a_status_without_the_fields_reports_nothing():
     # A bag recorded before ExplorationStatus carried the conditions: the report leaves them out.
     log = RunLog()
-    log._on_status(NS(state=2, iteration=3, object_ids=[], retired_object_ids=[], planning_time_s=0.0))
+    log._on_status(NS(state=2, iteration=3, object_ids=[], retired_object_ids=[], planning_time_s=0.2))
+    assert log.result is not None
     assert log.open_conditions() == {} and log.row(1.0, 1.0, [])["active_frontiers"] == ""

@@ -2,8 +2,9 @@
 the mission's own planner settings and --extra-overrides, merged section by
 section (eval/overrides.py), so that a `planner:` section in --extra-overrides
 adds to the mission's instead of replacing it."""
+import math
+
 import pytest
-import yaml
 
 import run_mission  # noqa: E402
 from semantic_exploration.eval import overrides  # noqa: E402
@@ -19,7 +20,7 @@ def _written(tmp_path, extra_text=None):
         extra = tmp_path / "extra.yaml"
         extra.write_text(extra_text)
     run_mission.combine_overrides(str(path), str(extra))
-    return yaml.safe_load(path.read_text())
+    return overrides.load(str(path))  # the angle tags as written, which plain safe_load refuses
 
 
 def test_the_mission_owns_the_time_limit(tmp_path):
@@ -38,12 +39,24 @@ def test_extra_overrides_add_to_a_section_and_win_key_by_key(tmp_path):
     assert _written(tmp_path, "planner:\n  time_limit_s: 1500.0\n")["planner"] == {"time_limit_s": 1500.0}
 
 
-def test_an_empty_file_or_section_changes_nothing_and_rosparam_angles_are_read(tmp_path):
+def test_an_empty_file_or_section_changes_nothing(tmp_path):
     assert _written(tmp_path, "")["planner"] == {"time_limit_s": 0.0}
     # A section whose lines are all commented out is YAML null: it must not drop the time limit.
     assert _written(tmp_path, "planner:\n  # seed: 3\n")["planner"] == {"time_limit_s": 0.0}
-    doc = _written(tmp_path, "mav:\n  yaw_rad: !degrees 90\n  pitch_rad: !radians 0.5\n")
-    assert doc["mav"] == {"yaw_rad": pytest.approx(1.5707963), "pitch_rad": 0.5}
+
+
+
+def test_rosparam_angle_tags_reach_rosparam_as_written(tmp_path):
+    # rosparam evaluates !radians expressions in pi and strips rad()/deg(); the merged file keeps the
+    # tags for it instead of guessing.
+    doc = _written(tmp_path, "mav:\n  yaw_rad: !degrees 90\n  pitch_rad: !radians pi/2\n  roll_rad: !radians rad(1)\n")
+    assert {k: (v.tag, str(v)) for k, v in doc["mav"].items()} == {
+        "yaw_rad": ("!degrees", "90"), "pitch_rad": ("!radians", "pi/2"), "roll_rad": ("!radians", "rad(1)")}
+    rosparam = pytest.importorskip("rosparam")
+    loaded = rosparam.load_file(str(tmp_path / "overrides.yaml"))[0][0]
+    assert loaded["mav"] == {"yaw_rad": pytest.approx(math.pi / 2), "pitch_rad": pytest.approx(math.pi / 2),
+                             "roll_rad": pytest.approx(1.0)}
+    assert loaded["planner"] == {"time_limit_s": 0.0}
 
 
 def test_a_bad_extra_file_is_refused_at_start_naming_the_option(tmp_path, capsys):

@@ -6,7 +6,6 @@ classes, its own settings, --extra-overrides, config/deterministic.yaml) are
 merged here instead, each later layer's settings winning key by key.
 """
 import copy
-import math
 from typing import Dict, Iterable
 
 import yaml
@@ -17,12 +16,31 @@ import yaml
 MISSION_OVERRIDES = {"planner": {"time_limit_s": 0.0}}
 
 
+class _Tagged(str):
+    """A value under one of rosparam's angle tags (`!degrees 90`, `!radians pi/2`), kept as written:
+    rosparam evaluates it when it loads the merged file."""
+    tag = ""
+
+
 class _Loader(yaml.SafeLoader):
-    """safe_load plus rosparam's angle tags, turned into the radians rosparam would set."""
+    """safe_load that keeps rosparam's angle tags."""
 
 
-_Loader.add_constructor("!degrees", lambda loader, node: math.radians(float(loader.construct_scalar(node))))
-_Loader.add_constructor("!radians", lambda loader, node: float(loader.construct_scalar(node)))
+class _Dumper(yaml.SafeDumper):
+    """safe_dump that writes the angle tags back."""
+
+
+def _keep(tag):
+    def construct(loader, node):
+        value = _Tagged(loader.construct_scalar(node))
+        value.tag = tag
+        return value
+    return construct
+
+
+for _tag in ("!degrees", "!radians"):
+    _Loader.add_constructor(_tag, _keep(_tag))
+_Dumper.add_representer(_Tagged, lambda dumper, value: dumper.represent_scalar(value.tag, str(value)))
 
 
 def merge(into: Dict, top: Dict) -> Dict:
@@ -67,7 +85,7 @@ def write_merged(path: str, layers: Iterable[Dict], header: str) -> Dict:
         merge(doc, layer)
     with open(path, "w") as f:
         f.write("# %s\n" % header)
-        yaml.safe_dump(doc, f)
+        yaml.dump(doc, f, Dumper=_Dumper)
     return doc
 
 

@@ -97,9 +97,9 @@ class RunLog:
 
     def _on_status(self, msg):
         self.status = msg
-        # An iteration's status is the one with its conditions filled in; the planner's statuses
-        # between iterations (waiting, planning, a rejected path) leave them, and the
-        # iteration's time, at 0, and it measures every iteration's time (> 0).
+        # An iteration's status is the one with its conditions filled in and its time measured
+        # (> 0). The planner's statuses between iterations (waiting, planning, a rejected path)
+        # leave both at 0, and so does an iteration whose planning threw (its conditions unknown).
         if getattr(msg, "planning_time_s", 0.0) > 0.0:
             self.result = msg
         # Statuses between iterations ("planning") carry no object lists; keep the last iteration's.
