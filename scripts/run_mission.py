@@ -344,8 +344,9 @@ def parse_args(argv=None):
         ap.error("--wall-limit-s must be > 0 s")
     _import_package()
     from semantic_exploration.eval.overrides import unreadable
-    if args.extra_overrides and unreadable(args.extra_overrides):
-        ap.error("--extra-overrides: " + unreadable(args.extra_overrides))
+    why = unreadable(args.extra_overrides) if args.extra_overrides else ""
+    if why:
+        ap.error("--extra-overrides: " + why)
     return args
 
 

@@ -117,3 +117,22 @@ def test_report_names_the_planner_timing(params, expected):
     assert text == ("OMPL stops after 1000 iterations per candidate; deterministic (lockstep planner and mission)"
                     if expected else "OMPL wall-time budget of 0.1 s per candidate; paths depend on the machine's "
                     "speed, two runs differ")
+
+
+def test_deterministic_setup_keeps_rosparam_angle_tags_of_the_simulator_overrides(tmp_path):
+    # The simulator's overrides are merged with config/deterministic_sim.yaml; a tagged angle must
+    # reach rosparam as written instead of failing the dump.
+    overrides = tmp_path / "overrides.yaml"
+    overrides.write_text("planner:\n  seed: 4\n")
+    user = tmp_path / "user_sim.yaml"
+    user.write_text("mav:\n  start_yaw_rad: !degrees 90\n")
+    cfg = tmp_path / "config"
+    cfg.mkdir()
+    (cfg / "deterministic.yaml").write_text("planner:\n  ompl_termination: iterations\n")
+    (cfg / "deterministic_sim.yaml").write_text("lockstep_planner: true\n")
+    args = NS(sim_overrides=str(user))
+    lockstep.deterministic_setup(args, str(tmp_path), str(overrides), str(cfg))
+    assert "start_yaw_rad: !degrees '90'" in open(args.sim_overrides).read()
+    rosparam = pytest.importorskip("rosparam")
+    loaded = rosparam.load_file(args.sim_overrides)[0][0]
+    assert loaded["mav"]["start_yaw_rad"] == pytest.approx(1.5707963) and loaded["lockstep_planner"] is True

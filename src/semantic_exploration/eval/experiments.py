@@ -61,6 +61,11 @@ def read_run(run_dir: str) -> Dict:
     return {"dir": run_dir, "t": t[order], "series": {k: v[order] for k, v in series.items()}, "summary": summary}
 
 
+def end_s(run: Dict) -> float:
+    """A run's sim time at the end: its summary's, else its last row's (nan without rows)."""
+    return float(run["summary"].get("sim_time_s", run["t"][-1] if len(run["t"]) else np.nan))
+
+
 def _final(run: Dict, key: str, unit: str) -> str:
     """A curve's last value with its unit, for the run table ('-' where the run lacks it)."""
     v = run["series"][key]
@@ -76,13 +81,13 @@ def run_table(by_mode: Dict[str, List[Dict]], out_dir: str) -> List[str]:
     for mode, runs in by_mode.items():
         for r in runs:
             s = r["summary"]
-            end = s.get("sim_time_s", r["t"][-1] if len(r["t"]) else None)
+            end = end_s(r)
             cond = s.get("end_conditions") or {}
             still = "-" if not cond else "%s (%d)" % (", ".join(cond.get("not_done", [])) or "nothing",
                                                       cond.get("active_frontiers", 0))
             lines.append("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
                 os.path.relpath(r["dir"], out_dir), mode, s.get("termination_reason", "?"),
-                "-" if end is None else "%.1f s" % float(end), still, _final(r, "found_percent", "%"),
+                "-" if not np.isfinite(end) else "%.1f s" % end, still, _final(r, "found_percent", "%"),
                 _final(r, "explored_volume_m3", " m3"), _final(r, "background_observed_percent", "%"),
                 _final(r, "object_observed_percent", "%"), s.get("collisions", "-")))
     return lines
@@ -222,7 +227,7 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
         reasons = sorted(set(r["summary"].get("termination_reason", "?") for r in runs))
         explored = sum(r["summary"].get("termination_reason") == "explored" for r in runs)
         # sim time at the end: of every run, and of those that ended explored (the paper's end)
-        ends = [float(r["summary"].get("sim_time_s", r["t"][-1] if len(r["t"]) else np.nan)) for r in runs]
+        ends = [end_s(r) for r in runs]
         explored_ends = [e for e, r in zip(ends, runs) if r["summary"].get("termination_reason") == "explored"]
         evs = [r["summary"].get("evaluation") or {} for r in runs]
         scored = [e for e in evs if "spurious" in e]  # runs whose final maps were matched to the ground truth

@@ -157,9 +157,7 @@ def deterministic_setup(args, out: str, overrides: str, config_dir: str) -> None
     """--deterministic: config/deterministic.yaml after the C++ nodes' overrides, and the
     simulator's overrides (args.sim_overrides, if any) with config/deterministic_sim.yaml
     on top in out/sim_overrides.yaml, which args.sim_overrides then names."""
-    import yaml
-
-    from .overrides import load, merge, write_merged
+    from .overrides import load, merge, write, write_merged
     write_merged(overrides, [load(os.path.join(config_dir, "deterministic.yaml"))],
                  "written by run_mission.py: the scene's bounds and classes, its planner settings, "
                  "--extra-overrides, config/deterministic.yaml")
@@ -169,8 +167,7 @@ def deterministic_setup(args, out: str, overrides: str, config_dir: str) -> None
         merge(merged, load(path))
     args.user_sim_overrides = args.sim_overrides
     args.sim_overrides = os.path.join(out, "sim_overrides.yaml")
-    with open(args.sim_overrides, "w") as f:
-        yaml.safe_dump(merged, f)
+    write(args.sim_overrides, merged)
 
 
 def timing_of(deterministic, get_param):

@@ -78,14 +78,20 @@ def unreadable(path: str) -> str:
     return ""
 
 
+def write(path: str, doc: Dict, header: str = "") -> None:
+    """`doc` as an override file (a `# header` line first if given), angle tags as they were read."""
+    with open(path, "w") as f:
+        if header:
+            f.write("# %s\n" % header)
+        yaml.dump(doc, f, Dumper=_Dumper)
+
+
 def write_merged(path: str, layers: Iterable[Dict], header: str) -> Dict:
     """`path`'s own settings with `layers` merged over them in order, written back to `path`."""
     doc = load(path)
     for layer in layers:
         merge(doc, layer)
-    with open(path, "w") as f:
-        f.write("# %s\n" % header)
-        yaml.dump(doc, f, Dumper=_Dumper)
+    write(path, doc, header)
     return doc
 
 
