@@ -91,17 +91,25 @@ def test_loop_writes_rows_takes_snapshots_and_stops_at_a_frame():
     assert barrier.acked == frames[:3]  # the stop frame is held: the maps are saved at it
 
 
-def test_deterministic_setup_merges_the_overrides(tmp_path):
+def deterministic(tmp_path, nodes_text, user_sim_text):
+    """deterministic_setup on these overrides and a config/ of two one-line files; (nodes file, args)."""
     overrides = tmp_path / "overrides.yaml"
-    overrides.write_text("bounds:\n  min_m: [0, 0, 0]\nplanner:\n  seed: 4\n")
+    overrides.write_text(nodes_text)
     user = tmp_path / "user_sim.yaml"
-    user.write_text("detector:\n  min_mask_pixels: 50\n")
+    user.write_text(user_sim_text)
     cfg = tmp_path / "config"
     cfg.mkdir()
     (cfg / "deterministic.yaml").write_text("planner:\n  ompl_termination: iterations\n")
     (cfg / "deterministic_sim.yaml").write_text("lockstep_planner: true\n")
     args = NS(sim_overrides=str(user))
     lockstep.deterministic_setup(args, str(tmp_path), str(overrides), str(cfg))
+    return overrides, args
+
+
+def test_deterministic_setup_merges_the_overrides(tmp_path):
+    overrides, args = deterministic(tmp_path, "bounds:\n  min_m: [0, 0, 0]\nplanner:\n  seed: 4\n",
+                                    "detector:\n  min_mask_pixels: 50\n")
+    user = tmp_path / "user_sim.yaml"
     assert yaml.safe_load(overrides.read_text()) == {"bounds": {"min_m": [0, 0, 0]},
                                                      "planner": {"seed": 4, "ompl_termination": "iterations"}}
     assert args.user_sim_overrides == str(user)
@@ -122,16 +130,7 @@ def test_report_names_the_planner_timing(params, expected):
 def test_deterministic_setup_keeps_rosparam_angle_tags_of_the_simulator_overrides(tmp_path):
     # The simulator's overrides are merged with config/deterministic_sim.yaml; a tagged angle must
     # reach rosparam as written instead of failing the dump.
-    overrides = tmp_path / "overrides.yaml"
-    overrides.write_text("planner:\n  seed: 4\n")
-    user = tmp_path / "user_sim.yaml"
-    user.write_text("mav:\n  start_yaw_rad: !degrees 90\n")
-    cfg = tmp_path / "config"
-    cfg.mkdir()
-    (cfg / "deterministic.yaml").write_text("planner:\n  ompl_termination: iterations\n")
-    (cfg / "deterministic_sim.yaml").write_text("lockstep_planner: true\n")
-    args = NS(sim_overrides=str(user))
-    lockstep.deterministic_setup(args, str(tmp_path), str(overrides), str(cfg))
+    _, args = deterministic(tmp_path, "planner:\n  seed: 4\n", "mav:\n  start_yaw_rad: !degrees 90\n")
     assert "start_yaw_rad: !degrees '90'" in open(args.sim_overrides).read()
     rosparam = pytest.importorskip("rosparam")
     loaded = rosparam.load_file(args.sim_overrides)[0][0]
