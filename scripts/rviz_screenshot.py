@@ -121,6 +121,12 @@ class RvizExited(RuntimeError):
     """rviz ended by itself (it occasionally crashes while starting on Xvfb)."""
 
 
+# rviz 1.14 on Xvfb and llvmpipe sometimes dies while loading its displays
+# ("free(): invalid next size", SIGSEGV or SIGABRT), before any screenshot.
+# One CI run saw two such crashes in a row, so a shot gets this many starts.
+RVIZ_START_ATTEMPTS = 4
+
+
 class HeadlessRviz:
     """Xvfb plus rviz on it, for screenshots. env holds ROS_MASTER_URI etc.;
     logs go to log_dir. Use as a context manager; stop() ends both."""
@@ -364,15 +370,16 @@ def screenshot_scene(env, png, bounds_min, bounds_max, log_dir, timeout_s=90.0, 
                 cfg = write_view_config(find_config(), os.path.join(work, "view%d.rviz" % i), bounds_min,
                                         bounds_max, topic, topics)
                 wait = topic or (topics or {}).get(OCCUPIED_TOPIC, OCCUPIED_TOPIC)
-                for attempt in (1, 2):
+                for attempt in range(1, RVIZ_START_ATTEMPTS + 1):
                     try:
                         res[path] = take(rviz, path, cfg, watch, timeout_s, wait,
                                          min_object_pixels if path == png else 0)
                         break
                     except RvizExited as e:
-                        if attempt == 2:
+                        if attempt == RVIZ_START_ATTEMPTS:
                             raise
-                        print("[rviz] %s; starting it again" % e, file=sys.stderr, flush=True)
+                        print("[rviz] %s; starting it again (attempt %d of %d)" % (e, attempt + 1, RVIZ_START_ATTEMPTS),
+                              file=sys.stderr, flush=True)
     finally:
         watch.close()
         shutil.rmtree(work, ignore_errors=True)

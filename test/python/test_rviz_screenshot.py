@@ -86,6 +86,47 @@ def test_measure_on_synthetic_screens(tmp_path):
     assert not shows_map(rs.map_pixels(black))
 
 
+def test_a_crashed_rviz_is_started_again(tmp_path, monkeypatch):
+    """screenshot_scene starts rviz again when it dies (RvizExited) and gives
+    up after RVIZ_START_ATTEMPTS starts; nothing here runs rviz or ROS."""
+    class Stub:
+        def __init__(self, *_):
+            pass
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *_):
+            pass
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(rs, "MapWatch", Stub)
+    monkeypatch.setattr(rs, "HeadlessRviz", Stub)
+    monkeypatch.setattr(rs, "write_view_config", lambda src, dst, *a: dst)
+    monkeypatch.setattr(rs, "find_config", lambda: "exploration.rviz")
+    starts = []
+
+    def take_crashing(crashes):
+        def take(rviz, path, *_):
+            starts.append(path)
+            if len(starts) <= crashes:
+                raise rs.RvizExited("rviz exited with code -11")
+            return {"map_pixels": 1}
+        return take
+
+    png = str(tmp_path / "rviz.png")
+    monkeypatch.setattr(rs, "take", take_crashing(rs.RVIZ_START_ATTEMPTS - 1))
+    assert rs.screenshot_scene({}, png, [0, 0, 0], [1, 1, 1], str(tmp_path / "logs")) == {png: {"map_pixels": 1}}
+    assert len(starts) == rs.RVIZ_START_ATTEMPTS
+    starts.clear()
+    monkeypatch.setattr(rs, "take", take_crashing(rs.RVIZ_START_ATTEMPTS))
+    with pytest.raises(rs.RvizExited):
+        rs.screenshot_scene({}, png, [0, 0, 0], [1, 1, 1], str(tmp_path / "logs"))
+    assert len(starts) == rs.RVIZ_START_ATTEMPTS
+
+
 ROS_SOURCED = shutil.which("roslaunch") is not None and (
     "ROS_PACKAGE_PATH" in os.environ or "CMAKE_PREFIX_PATH" in os.environ)
 
