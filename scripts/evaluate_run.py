@@ -41,6 +41,7 @@ def main(argv=None):
     import run_mission as mission
     mission._import_package()
     from semantic_exploration.eval.bag import read_bag
+    from semantic_exploration.eval.report import write_report
 
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
@@ -81,7 +82,7 @@ def main(argv=None):
         reason = "end of bag (planner not finished)" if log.status else "end of bag (no planner status)"
     run = argparse.Namespace(mode=args.mode, seed=args.seed, classes=args.classes, no_eval=args.no_eval)
     sim_s = info["end_s"] - info["start_s"] if info["end_s"] is not None else 0.0
-    summary = mission.write_report(out, run, gt, log, saved, info["end_s"], None, reason)
+    summary = write_report(out, run, gt, log, saved, info["end_s"], None, reason)
     summary["bag"] = {"path": os.path.abspath(args.bag), "duration_s": sim_s, **info}
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)

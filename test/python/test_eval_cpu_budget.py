@@ -1,5 +1,5 @@
 """The onboard CPU budget of a run's report (eval/cpu_budget.py through RunLog and
-run_mission.write_report) on a hand-built series of frame_integrated reports
+eval/report.py write_report) on a hand-built series of frame_integrated reports
 with known medians, 95th percentiles and shares of one core."""
 import argparse
 import json
@@ -8,7 +8,7 @@ from types import SimpleNamespace
 
 import pytest
 
-import run_mission
+from semantic_exploration.eval import report as run_report
 from semantic_exploration.eval.cpu_budget import CpuBudget, nearest_rank
 from semantic_exploration.eval.runlog import RunLog
 
@@ -85,7 +85,7 @@ def test_report_and_summary_carry_the_cpu_table(tmp_path):
     gt_dir.mkdir()
     gt = {"scene": "house", "objects": [], "gt_dir": str(gt_dir)}
     args = argparse.Namespace(mode="semantic", seed=0, classes=["chair"], no_eval=True, camera_rate_hz=10.0)
-    run_mission.write_report(str(tmp_path), args, gt, recorded_run(), {}, 2.0, 5.0, "explored", None)
+    run_report.write_report(str(tmp_path), args, gt, recorded_run(), {}, 2.0, 5.0, "explored", None)
     report_lines = (tmp_path / "report.md").read_text().splitlines()
     i = report_lines.index("## Onboard CPU budget")
     table = report_lines[i:i + 14]

@@ -10,8 +10,8 @@ import pytest
 
 pytest.importorskip("trimesh")
 
-import run_mission  # noqa: E402
 from semantic_exploration.eval import experiments, final, metrics  # noqa: E402
+from semantic_exploration.eval import report as run_report  # noqa: E402
 from semantic_exploration.eval.runlog import RunLog  # noqa: E402
 from semantic_exploration.eval.truth import GroundTruthIndex  # noqa: E402
 
@@ -44,7 +44,7 @@ def test_report_summary_and_experiment_report_name_them(gt, objects_dir, tmp_pat
     saved = {"object_map": {"success": True, "dir": objects_dir, "message": "saved", "files": []}}
     gt_run = {"scene": "house", "objects": [{"id": chair_id(gt), "class": "chair"}], "gt_dir": gt["dir"]}
     args = argparse.Namespace(mode="semantic", seed=0, classes=["chair"])
-    run_mission.write_report(str(out), args, gt_run, RunLog(), saved, 10.0, 5.0, "explored")
+    run_report.write_report(str(out), args, gt_run, RunLog(), saved, 10.0, 5.0, "explored")
     summary = json.loads((out / "summary.json").read_text())
     ev = summary["evaluation"]
     assert "error" not in ev, ev.get("error")

@@ -10,6 +10,7 @@ import pytest
 trimesh = pytest.importorskip("trimesh")
 pytest.importorskip("embreex")
 
+from semantic_exploration.eval import final  # noqa: E402
 from semantic_exploration.sim.scene import load_scene, save_habitat  # noqa: E402
 from semantic_exploration.sim.simulator import start_pose_of  # noqa: E402
 
@@ -54,7 +55,7 @@ def test_start_reaches_ground_truth_launch_and_evaluation(habitat_scene, tmp_pat
     mesh = trimesh.load(os.path.join(gt["gt_dir"], chair["mesh"]), force="mesh").subdivide_to_size(0.02)
     mesh.export(str(rec / "1.ply"))
     (rec / "objects.json").write_text(json.dumps({"objects": [{"id": 1, "class_name": "chair", "mesh": "1.ply"}]}))
-    res = run_mission.evaluate(out, gt, ["chair"], {"object_map": {"success": True, "dir": str(rec)}})
+    res = final.evaluate(out, gt, ["chair"], {"object_map": {"success": True, "dir": str(rec)}})
     assert "error" not in res, res.get("error")
     assert res["found"] == 1 and res["ground_truth"] == 1
     (m,) = res["objects"]
@@ -85,7 +86,7 @@ def test_a_start_next_to_a_wall_is_reported(habitat_scene, tmp_path):
     _, gt = run_mission.prepare_scene(args, out)
     (tmp_path / "objects").mkdir()
     (tmp_path / "objects" / "objects.json").write_text(json.dumps({"objects": []}))
-    res = run_mission.evaluate(out, gt, ["chair"], {"object_map": {"success": True, "dir": str(tmp_path / "objects")}})
+    res = final.evaluate(out, gt, ["chair"], {"object_map": {"success": True, "dir": str(tmp_path / "objects")}})
     assert "start [0.05, 1.0, 1.0] is not at least 0.125 m from every surface" in res["error"]
 
 
@@ -107,6 +108,6 @@ def test_an_evaluation_with_nothing_saved_leaves_no_process_behind(habitat_scene
     out = str(tmp_path / "run")
     args = run_mission.parse_args(["--scene", habitat_scene, "--out", out])
     _, gt = run_mission.prepare_scene(args, out)
-    res = run_mission.evaluate(out, gt, ["chair"], {})
+    res = final.evaluate(out, gt, ["chair"], {})
     assert "found" not in res and "background" not in res
     assert mp.active_children() == []
