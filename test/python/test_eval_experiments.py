@@ -98,7 +98,7 @@ def test_paper_claims_on_known_curves(tmp_path):
     claims = res["claims"]
     assert [c["holds"] for c in claims] == [True, True, True, None, None, None]  # no accuracy columns
     assert claims[3]["measured"] == "not measured"
-    assert claims[1]["measured"] == "semantic 20 s, classic 30 s"
+    assert claims[1]["measured"] == "semantic 20 s, classic 30 s (medians); no paired runs"
     assert "ratio 0.938" in claims[2]["measured"]  # 30 / 32
     report = open(str(tmp_path / "out" / "report.md")).read()
     assert "## The paper's claims, measured here" in report
@@ -112,7 +112,7 @@ def test_paper_claims_that_fail_say_where(tmp_path):
     c = res["claims"]
     assert [x["holds"] for x in c] == [False, False, False, None, None, None]
     assert c[0]["measured"] == "behind at 2 of 3 times (first at 10 s, by up to 25 points)"
-    assert c[1]["measured"] == "semantic never, classic 20 s"
+    assert c[1]["measured"] == "semantic never, classic 20 s (medians); no paired runs"
     assert "ratio 0.800" in c[2]["measured"]
     assert experiments.write_outputs(str(tmp_path / "one"), {"semantic": sem}, grid_step_s=10)["claims"] == []
 
@@ -195,7 +195,7 @@ def test_eight_panels_and_the_reconstruction_claims(tmp_path):
     # Background: 3.1 vs 2.9 cm; objects: 1.1 vs 1.1 cm; observed from <= d_obj: 85% vs 55%.
     assert c[3]["holds"] is True and c[3]["measured"] == "semantic 3.10 cm, classic 2.90 cm"
     assert c[4]["holds"] is True and c[4]["measured"] == "semantic 1.10 cm, classic 1.10 cm"
-    assert c[5]["holds"] is True and c[5]["measured"] == "semantic 85%, classic 55%"
+    assert c[5]["holds"] is True and c[5]["measured"] == "semantic 85%, classic 55% (medians); no paired runs"
     rows = {r["mode"]: r for r in res["rows"]}
     assert rows["semantic"]["explored_share"] == 0.5 and rows["classic"]["explored_share"] == 1.0
     # Ends: semantic 250 s (explored) and 600 s (limit); classic 300 s and, without sim_time_s, its last row's 10 s.

@@ -262,7 +262,7 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
             r["collisions"], r["termination"], 100 * r["explored_share"], r["end_sim_s_median"],
             "none ended explored" if r["explored_end_sim_s_median"] is None
             else "%.0f s" % r["explored_end_sim_s_median"]))
-    claims = paper_claims(agg, grid, rows)
+    claims = paper_claims(agg, grid, rows, runs_by_mode=by_mode)
     if claims:
         lines += ["", "## The paper's claims, measured here", "", "| claim | holds | measured |", "|---|---|---|"]
         lines += ["| %s | %s | %s |" % (c["claim"], {True: "yes", False: "no", None: "n/a"}[c["holds"]],

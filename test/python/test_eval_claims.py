@@ -1,0 +1,54 @@
+"""The paired comparison behind the paper's claims (eval/claims.py): a sign
+test with hand-computed answers, runs paired by name, and the claims' text."""
+import pytest
+
+pytest.importorskip("matplotlib")
+from semantic_exploration.eval import claims, experiments  # noqa: E402
+
+from test_eval_experiments import make_run  # noqa: E402
+
+
+def test_sign_test_by_hand():
+    # 2 of 9 better: 2 (C(9,0) + C(9,1) + C(9,2)) / 2^9 = 2 * 46 / 512
+    assert claims.sign_test_p(2, 7) == pytest.approx(92 / 512)
+    assert claims.sign_test_p(7, 2) == pytest.approx(92 / 512)
+    assert claims.sign_test_p(0, 6) == pytest.approx(2 / 64)  # six of six: 0.031
+    assert claims.sign_test_p(0, 5) == pytest.approx(2 / 32)  # five of five is not enough at 5%
+    assert claims.sign_test_p(5, 5) == 1.0  # 2 * 638 / 1024 capped
+    assert claims.sign_test_p(0, 0) == 1.0
+
+
+def test_runs_pair_by_name():
+    assert claims.pair_key("/x/runs/scene0_run1_semantic", "semantic") == "scene0_run1"
+    assert claims.pair_key("/x/runs/scene0_run1_classic/", "classic") == "scene0_run1"
+    assert claims.pair_key("/x/runs/s0", "semantic") is None
+
+
+def campaign(tmp_path, found_at):
+    """One run per mode and pair: found_at = {pair: (semantic s, classic s)} at which all 4 objects are found."""
+    by_mode = {"semantic": [], "classic": []}
+    for pair, times in found_at.items():
+        for mode, t in zip(("semantic", "classic"), times):
+            by_mode[mode].append(make_run(str(tmp_path / ("%s_%s" % (pair, mode))), [0, t, 100], [0, 5, 10],
+                                          [0, 4, 4]))
+    return by_mode
+
+
+def test_claims_count_the_pairs(tmp_path):
+    by_mode = campaign(tmp_path, {"scene0_run0": (10, 20), "scene1_run0": (30, 20), "scene2_run0": (20, 20)})
+    by_mode["semantic"].append(make_run(str(tmp_path / "scene3_run0_semantic"), [0, 5], [0, 5], [0, 4]))  # no pair
+    res = experiments.write_outputs(str(tmp_path / "out"), by_mode, grid_step_s=10)
+    sooner = res["claims"][1]
+    assert sooner["paired"] == {"pairs": 3, "better": 1, "worse": 1, "tied": 1, "p": 1.0}
+    assert sooner["measured"].endswith(
+        "in 3 paired runs semantic sooner in 1, later in 1, tied in 1 (two-sided sign test p = 1.00: could be chance: "
+        "the pairs do not tell the modes apart at 5%)")
+    assert res["claims"][5]["measured"] == "not measured"  # no observed-share column in these runs
+
+
+def test_six_pairs_one_way_are_unlikely_to_be_chance(tmp_path):
+    by_mode = campaign(tmp_path, {"scene%d_run0" % i: (20, 30 + i) for i in range(6)})
+    sooner = experiments.write_outputs(str(tmp_path / "out"), by_mode, grid_step_s=10)["claims"][1]
+    assert sooner["holds"] is True
+    assert sooner["paired"]["better"] == 6 and sooner["paired"]["p"] == pytest.approx(1 / 32)
+    assert "(two-sided sign test p = 0.03: unlikely to be chance)" in sooner["measured"]
