@@ -53,6 +53,15 @@ def scene_spec(token: str) -> dict:
     return {"seed": 0, "file": path, "name": stem}
 
 
+def _overrides():
+    """eval/overrides.py (the source tree's package first, as main() reads it)."""
+    src = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src")
+    if src not in sys.path:
+        sys.path.insert(0, src)
+    from semantic_exploration.eval import overrides
+    return overrides
+
+
 def parse_args(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scenes", type=scene_spec, nargs="+", default=[scene_spec(s) for s in ("0", "1", "2")],
@@ -79,7 +88,14 @@ def parse_args(argv=None):
     ap.add_argument("--sim-overrides", default="",
                     help="YAML for the simulator loaded after config/sim.yaml in every run, e.g. "
                     "config/detector_long_range.yaml")
+    ap.add_argument("--extra-overrides", default="",
+                    help="YAML of node parameters merged into every run (under the run's planner/seed), "
+                    "e.g. planner weights for an ablation; as run_mission.py --extra-overrides")
     args = ap.parse_args(argv)
+    if args.extra_overrides:
+        why = _overrides().unreadable(args.extra_overrides)
+        if why:
+            ap.error("--extra-overrides: %s" % why)
     fixed = PROTOCOL_RUNS[args.protocol]
     if fixed is not None and args.runs is not None and args.runs != fixed:
         ap.error("--protocol %s runs %d runs per method per scene; drop --runs %d" % (args.protocol, fixed, args.runs))
@@ -133,13 +149,15 @@ def describe_setup(args, sim_overrides: str, describe_yaml) -> list:
                              "--deterministic)" if args.ompl_termination == "iterations"
                              else "OMPL wall-time budget (planner/time_budget_s): runs are not repeatable"),
             "simulator overrides: %s" % (describe_yaml(sim_overrides) if sim_overrides else "none"),
+            "node overrides (--extra-overrides): %s" % (
+                describe_yaml(os.path.abspath(args.extra_overrides)) if args.extra_overrides else "none"),
             "missions flown at once: %d" % args.jobs]
 
 
 def main(argv=None, call=subprocess.call):
     here = os.path.dirname(os.path.abspath(__file__))
     args = parse_args(argv)
-    sys.path.insert(0, os.path.join(here, "..", "src"))
+    overrides = _overrides()
     from semantic_exploration.eval import experiments
 
     out = os.path.abspath(args.out)
@@ -148,10 +166,12 @@ def main(argv=None, call=subprocess.call):
     by_mode = {m: [] for m in args.modes}
     plan = plan_runs(args, out, here)
     t0 = time.time()
+    extra = overrides.load(args.extra_overrides) if args.extra_overrides else {}
     for r in plan:  # every seed file before any mission reads one (missions of one run index share it)
         os.makedirs(os.path.dirname(r["overrides"]), exist_ok=True)
-        with open(r["overrides"], "w") as f:
-            f.write("planner:\n  seed: %d\n" % r["planner_seed"])
+        seeded = overrides.merge(overrides.merge({}, extra), {"planner": {"seed": r["planner_seed"]}})
+        overrides.write(r["overrides"], seeded,
+                        "written by run_experiments.py: --extra-overrides, then the planner seed")
 
     def fly(k, r):
         """One mission; True if it left a time series to aggregate (a failure is reported at once)."""

@@ -5,10 +5,12 @@ import os
 import sys
 
 import pytest
+import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "..", "scripts"))
 import run_experiments  # noqa: E402
+from semantic_exploration.eval import experiments, overrides  # noqa: E402
 
 DATA = os.path.join(HERE, "..", "data")
 PLY = os.path.abspath(os.path.join(DATA, "example_semantic.ply"))
@@ -82,11 +84,41 @@ def test_campaign_runs_every_mission_and_names_the_protocol(tmp_path):
     assert run_experiments.main(["--scenes", "0", PLY, "--protocol", "paper", "--out", out], call=fake_mission) == 0
     assert len(calls) == 20
     with open(os.path.join(out, "runs", "planner_seed4.yaml")) as f:
-        assert f.read() == "planner:\n  seed: 5\n"
+        assert yaml.safe_load(f) == {"planner": {"seed": 5}}
     report = open(os.path.join(out, "report.md")).read()
     assert "- scenes: generated seed 0, example_semantic.ply (generated houses 8 x 6 x 3 m)" in report
     assert "- protocol paper: 5 runs per method and scene (planner seeds 1-5)" in report
     assert "| semantic | 10 | 100% |" in report and "| classic | 10 | 50% |" in report
+
+
+def test_extra_overrides_reach_every_run_under_its_seed(tmp_path, capsys):
+    extra = tmp_path / "no_background_gain.yaml"
+    extra.write_text("planner:\n  a_ent: 0.5\n  a_bg: 0.0\n  seed: 99\n  yaw_step: !degrees 30\n"
+                     "background_map:\n  gain_threads: 1\n")
+    seen = []
+
+    def fake_mission(cmd):
+        with open(cmd[cmd.index("--extra-overrides") + 1]) as f:
+            seen.append(f.read())
+        return 1  # no time series: the campaign has nothing to aggregate
+
+    out = str(tmp_path / "campaign")
+    args = ["--scenes", "0", "--runs", "2", "--extra-overrides", str(extra), "--out", out]
+    assert run_experiments.main(args, call=fake_mission) == 1
+    assert len(seen) == 4
+    for run in (0, 1):
+        doc = overrides.load(os.path.join(out, "runs", "planner_seed%d.yaml" % run))
+        assert doc == {"planner": {"a_ent": 0.5, "a_bg": 0.0, "seed": run + 1, "yaw_step": "30"},
+                       "background_map": {"gain_threads": 1}}
+        assert doc["planner"]["yaw_step"].tag == "!degrees"  # kept for rosparam to evaluate
+    setup = run_experiments.describe_setup(run_experiments.parse_args(args), "", experiments.describe_yaml)
+    assert ("node overrides (--extra-overrides): no_background_gain.yaml (planner/a_ent 0.5, planner/a_bg 0.0, "
+            "planner/seed 99, planner/yaw_step 30, background_map/gain_threads 1)") in setup
+    bad = tmp_path / "list.yaml"
+    bad.write_text("- 1\n")
+    with pytest.raises(SystemExit):
+        run_experiments.parse_args(["--extra-overrides", str(bad)])
+    assert "--extra-overrides: " in capsys.readouterr().err
 
 
 def test_missions_flown_at_once_are_aggregated_in_plan_order_with_a_log_each(tmp_path):

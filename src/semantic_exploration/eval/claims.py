@@ -66,7 +66,8 @@ def describe_pairs(pr: Dict, better: str, worse: str) -> str:
     """'in 9 paired runs semantic sooner in 2, later in 7, tied in 0 (sign test p = 0.18: ...)'."""
     if pr["pairs"] == 0:
         return "no paired runs"
-    verdict = "unlikely to be chance" if pr["p"] < 0.05 else "could be chance: the pairs do not tell the modes apart at 5%"
+    verdict = ("unlikely to be chance" if pr["p"] < 0.05
+               else "could be chance: the pairs do not tell the modes apart at 5%")
     return "in %d paired runs semantic %s in %d, %s in %d, tied in %d (two-sided sign test p = %.2f: %s)" % (
         pr["pairs"], better, pr["better"], worse, pr["worse"], pr["tied"], pr["p"], verdict)
 

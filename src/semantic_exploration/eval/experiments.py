@@ -148,9 +148,8 @@ def describe_detector(detector: Optional[Dict]) -> str:
 
 def describe_yaml(path: str) -> str:
     """A YAML file's settings as "section/key value" pairs for a report (its path, then the pairs)."""
-    import yaml
-    with open(path) as f:
-        tree = yaml.safe_load(f) or {}
+    from .overrides import load  # keeps rosparam's angle tags, which safe_load refuses
+    tree = load(path)
     pairs = []
 
     def walk(node, prefix):
