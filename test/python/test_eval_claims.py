@@ -52,3 +52,21 @@ def test_six_pairs_one_way_are_unlikely_to_be_chance(tmp_path):
     assert sooner["holds"] is True
     assert sooner["paired"]["better"] == 6 and sooner["paired"]["p"] == pytest.approx(1 / 32)
     assert "(two-sided sign test p = 0.03: unlikely to be chance)" in sooner["measured"]
+
+
+def test_pairs_without_the_figure_are_left_out(tmp_path):
+    import numpy as np
+    by_mode = campaign(tmp_path, {"scene0_run0": (10, 20), "scene1_run0": (30, 20)})
+    by_mode["semantic"][0]["series"]["object_observed_percent"] = np.array([0.0, 50.0, 60.0])
+    by_mode["classic"][0]["series"]["object_observed_percent"] = np.array([0.0, 10.0, 20.0])
+    # scene1's runs have no observed share (nan throughout): not a pair for that claim
+    value = lambda r: claims._last(r["series"]["object_observed_percent"])  # noqa: E731
+    assert claims.paired(by_mode, value, True) == {"pairs": 1, "better": 1, "worse": 0, "tied": 0, "p": 1.0}
+    # a run that never finds all (inf) is later than one that does, and ties with another that never does
+    d = tmp_path / "never"
+    never = {"semantic": [make_run(str(d / ("scene%d_run0_semantic" % i)), [0, 50], [0, 5], [0, 3])
+                          for i in (0, 1)],
+             "classic": [make_run(str(d / "scene0_run0_classic"), [0, 50], [0, 5], [0, 4]),
+                         make_run(str(d / "scene1_run0_classic"), [0, 50], [0, 5], [0, 2])]}
+    t100 = lambda r: experiments.time_to_reach(r["t"], r["series"]["found_percent"], 100.0)  # noqa: E731
+    assert claims.paired(never, t100, False) == {"pairs": 2, "better": 0, "worse": 1, "tied": 1, "p": 1.0}

@@ -44,15 +44,18 @@ def pair_key(run_dir: str, mode: str) -> Optional[str]:
 
 
 def paired(runs_by_mode: Dict[str, Sequence[Dict]], value: Callable[[Dict], float], higher_is_better: bool) -> Dict:
-    """Semantic against classic run by run over the pairs both modes flew:
-    {"pairs", "better", "worse", "tied", "p"} (p: sign_test_p)."""
+    """Semantic against classic run by run over the pairs both modes flew and
+    have the figure for (value nan: not measured; inf, e.g. never found all,
+    compares as a value): {"pairs", "better", "worse", "tied", "p"} (p: sign_test_p)."""
     def by_key(mode):
         return {k: r for k, r in ((pair_key(r["dir"], mode), r) for r in runs_by_mode.get(mode, [])) if k}
     sem, cls = by_key("semantic"), by_key("classic")
     better = worse = tied = 0
     for k in sorted(set(sem) & set(cls)):
         a, b = value(sem[k]), value(cls[k])
-        if a == b or (np.isnan(a) and np.isnan(b)):
+        if np.isnan(a) or np.isnan(b):
+            continue
+        if a == b:
             tied += 1
         elif (a > b) == higher_is_better:
             better += 1
