@@ -27,6 +27,10 @@ masks under 1200 px, so a whole chair is detected from about 4 m, the range
 the paper's d_bg assumes), plus --sim-overrides if given, e.g.
 config/detector_long_range.yaml (50 px: chairs from 10 m). The report names
 the detector the runs used.
+
+--pool writes one report over campaigns already flown (their runs/
+directories), e.g. two sets of houses flown on different days:
+  run_experiments.py --pool results/houses_0_2 results/houses_3_8 --out results/pooled
 """
 import argparse
 import os
@@ -91,6 +95,9 @@ def parse_args(argv=None):
     ap.add_argument("--extra-overrides", default="",
                     help="YAML of node parameters merged into every run (under the run's planner/seed), "
                     "e.g. planner weights for an ablation; as run_mission.py --extra-overrides")
+    ap.add_argument("--pool", nargs="+", default=[], metavar="CAMPAIGN",
+                    help="fly nothing: write the report over the runs of these campaign directories (their runs/) "
+                    "into --out; run names must not repeat across them")
     args = ap.parse_args(argv)
     if args.extra_overrides:
         why = _overrides().unreadable(args.extra_overrides)
@@ -154,11 +161,67 @@ def describe_setup(args, sim_overrides: str, describe_yaml) -> list:
             "missions flown at once: %d" % args.jobs]
 
 
+def campaign_setup(report_md):
+    """The setup lines of a campaign's report (its '- ' lines after the title, the detector left to the
+    pooled report, which names it from the runs); [] without a report."""
+    if not os.path.exists(report_md):
+        return []
+    lines = []
+    with open(report_md) as f:
+        for line in f.read().splitlines()[2:]:
+            if not line.startswith("- "):
+                break
+            if not line.startswith("- detector:"):
+                lines.append(line[2:])
+    return lines
+
+
+def pool_report(args, experiments):
+    """--pool: one report over the runs of campaigns already flown; 0, or 1 if none is usable.
+    Runs are paired by name (<scene>_run<k>_<mode>), so a name found in two campaigns is refused."""
+    by_mode = {m: [] for m in args.modes}
+    seen, setup = {}, []
+    for campaign in args.pool:
+        runs_dir = os.path.join(campaign, "runs")
+        if not os.path.isdir(runs_dir):
+            print("[experiments] --pool: %s has no runs/ directory" % campaign)
+            return 1
+        n = 0
+        for name in sorted(os.listdir(runs_dir)):
+            mode = next((m for m in args.modes if name.endswith("_" + m)), None)
+            d = os.path.join(runs_dir, name)
+            if mode is None or not os.path.exists(os.path.join(d, "timeseries.csv")):
+                continue
+            if name in seen:
+                print("[experiments] --pool: run %s is in both %s and %s; pairs go by run name" % (
+                    name, seen[name], campaign))
+                return 1
+            seen[name] = campaign
+            run = experiments.read_run(d)
+            why = experiments.implausible(run, args.sim_limit_s)
+            if why:
+                print("[experiments] run %s: %s; left out of the curves" % (d, why))
+                continue
+            by_mode[mode].append(run)
+            n += 1
+        setup.append("pooled: %d runs of %s%s" % (n, os.path.abspath(campaign), "".join(
+            "; " + line for line in campaign_setup(os.path.join(campaign, "report.md")))))
+    by_mode = {m: r for m, r in by_mode.items() if r}
+    if not by_mode:
+        print("[experiments] --pool: no usable run")
+        return 1
+    experiments.write_outputs(os.path.abspath(args.out), by_mode, setup=setup)
+    print("[experiments] report: %s" % os.path.join(os.path.abspath(args.out), "report.md"))
+    return 0
+
+
 def main(argv=None, call=subprocess.call):
     here = os.path.dirname(os.path.abspath(__file__))
     args = parse_args(argv)
     overrides = _overrides()
     from semantic_exploration.eval import experiments
+    if args.pool:
+        return pool_report(args, experiments)
 
     out = os.path.abspath(args.out)
     sim_overrides = os.path.abspath(args.sim_overrides) if args.sim_overrides else ""

@@ -163,3 +163,43 @@ def test_missions_flown_at_once_are_aggregated_in_plan_order_with_a_log_each(tmp
     assert "- semantic runs: runs/scene0_run0_semantic, runs/scene0_run1_semantic\n" in report
     runs = [line.split(" | ")[0] for line in report.splitlines() if line.startswith("| runs/")]
     assert runs == ["| runs/scene0_run0_classic", "| runs/scene0_run0_semantic", "| runs/scene0_run1_semantic"]
+
+
+def flown(campaign, name, found_at_s, n_gt=2):
+    """A run directory <campaign>/runs/<name> as run_mission.py leaves it: all found at found_at_s."""
+    d = os.path.join(campaign, "runs", name)
+    os.makedirs(d)
+    with open(os.path.join(d, "timeseries.csv"), "w") as f:
+        f.write("sim_s,explored_volume_m3,ground_truth_found\n0,0,0\n%d,5,%d\n200,9,%d\n" % (found_at_s, n_gt, n_gt))
+    with open(os.path.join(d, "summary.json"), "w") as f:
+        json.dump({"ground_truth_objects": n_gt, "termination_reason": "sim_time_limit", "collisions": 0}, f)
+
+
+def test_pool_reports_on_campaigns_already_flown(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    a, b = str(tmp_path / "houses_0_1"), str(tmp_path / "houses_2")
+    flown(a, "scene0_run0_semantic", 20)
+    flown(a, "scene0_run0_classic", 40)
+    flown(a, "scene1_run0_semantic", 30)
+    flown(a, "scene1_run0_classic", 50)
+    flown(b, "scene2_run0_semantic", 90)
+    flown(b, "scene2_run0_classic", 60)
+    with open(os.path.join(a, "report.md"), "w") as f:
+        f.write("# Experiment report\n\n- scenes: generated seed 0, generated seed 1\n- detector: x\n\nMedian ...\n")
+
+    def no_mission(cmd):
+        raise AssertionError("--pool flies nothing")
+
+    out = str(tmp_path / "pooled")
+    assert run_experiments.main(["--pool", a, b, "--out", out], call=no_mission) == 0
+    report = open(os.path.join(out, "report.md")).read()
+    assert "- pooled: 4 runs of %s; scenes: generated seed 0, generated seed 1\n" % a in report
+    assert "- pooled: 2 runs of %s\n" % b in report
+    # medians over the three runs per mode (30 against 50 s); the pairs cross the two campaigns
+    assert ("semantic 30 s, classic 50 s (medians); in 3 paired runs semantic sooner in 2, later in 1, tied in 0 "
+            "(two-sided sign test p = 1.00") in report
+    flown(b, "scene0_run0_classic", 10)  # the same run name in both: pairs would be ambiguous
+    assert run_experiments.main(["--pool", a, b, "--out", out], call=no_mission) == 1
+    assert "run scene0_run0_classic is in both" in capsys.readouterr().out
+    assert run_experiments.main(["--pool", str(tmp_path / "nothing"), "--out", out], call=no_mission) == 1
+    assert "has no runs/ directory" in capsys.readouterr().out
