@@ -97,7 +97,8 @@ def parse_args(argv=None):
                     "e.g. planner weights for an ablation; as run_mission.py --extra-overrides")
     ap.add_argument("--pool", nargs="+", default=[], metavar="CAMPAIGN",
                     help="fly nothing: write the report over the runs of these campaign directories (their runs/) "
-                    "into --out; run names must not repeat across them")
+                    "into --out; DIR:MODE takes one mode's runs of DIR (e.g. an ablation's semantic runs against "
+                    "another campaign's classic ones); run names must not repeat across them")
     args = ap.parse_args(argv)
     if args.extra_overrides:
         why = _overrides().unreadable(args.extra_overrides)
@@ -181,7 +182,10 @@ def pool_report(args, experiments):
     Runs are paired by name (<scene>_run<k>_<mode>), so a name found in two campaigns is refused."""
     by_mode = {m: [] for m in args.modes}
     seen, setup = {}, []
-    for campaign in args.pool:
+    for entry in args.pool:
+        campaign, only = entry, None
+        if entry.rsplit(":", 1)[-1] in args.modes:  # DIR:MODE takes that mode's runs only
+            campaign, only = entry.rsplit(":", 1)
         runs_dir = os.path.join(campaign, "runs")
         if not os.path.isdir(runs_dir):
             print("[experiments] --pool: %s has no runs/ directory" % campaign)
@@ -190,7 +194,7 @@ def pool_report(args, experiments):
         for name in sorted(os.listdir(runs_dir)):
             mode = next((m for m in args.modes if name.endswith("_" + m)), None)
             d = os.path.join(runs_dir, name)
-            if mode is None or not os.path.exists(os.path.join(d, "timeseries.csv")):
+            if mode is None or (only and mode != only) or not os.path.exists(os.path.join(d, "timeseries.csv")):
                 continue
             if name in seen:
                 print("[experiments] --pool: run %s is in both %s and %s; pairs go by run name" % (
@@ -204,7 +208,7 @@ def pool_report(args, experiments):
                 continue
             by_mode[mode].append(run)
             n += 1
-        setup.append("pooled: %d runs of %s%s" % (n, os.path.abspath(campaign), "".join(
+        setup.append("pooled: %d %sruns of %s%s" % (n, only + " " if only else "", os.path.abspath(campaign), "".join(
             "; " + line for line in campaign_setup(os.path.join(campaign, "report.md")))))
     by_mode = {m: r for m, r in by_mode.items() if r}
     if not by_mode:

@@ -44,6 +44,8 @@ def test_claims_count_the_pairs(tmp_path):
         "in 3 paired runs semantic sooner in 1, later in 1, tied in 1 (two-sided sign test p = 1.00: could be chance: "
         "the pairs do not tell the modes apart at 5%)")
     assert res["claims"][5]["measured"] == "not measured"  # no observed-share column in these runs
+    report = open(str(tmp_path / "out" / "report.md")).read()  # each run's time in the run table
+    assert "| ../scene1_run0_semantic | semantic | explored | 100.0 s | - | 100% | 30 s |" in report
 
 
 def test_six_pairs_one_way_are_unlikely_to_be_chance(tmp_path):

@@ -203,10 +203,11 @@ def test_eight_panels_and_the_reconstruction_claims(tmp_path):
     assert rows["classic"]["end_sim_s_median"] == 155.0 and rows["classic"]["explored_end_sim_s_median"] == 155.0
     report = open(str(tmp_path / "out" / "report.md")).read()
     assert "| explored, time_limit | 50% | 425 s | 250 s |" in report
-    # One row per run: 4 of 4 objects found, 10 m3, 30% of the background and 80% of the objects seen close.
-    assert "| ../s0 | semantic | explored | 250.0 s | nothing (0) | 100% | 10 m3 | 30% | 80% | 0 |" in report
-    assert "| ../s1 | semantic | time_limit | 600.0 s | frontiers, objects (162) | 100% |" in report
-    assert "| ../c1 | classic | explored | 10.0 s | - | 100% | 10 m3 | 30% | 60% | 0 |" in report
+    # One row per run: 4 of 4 objects found (all at 10 s), 10 m3, 30% of the background and 80% of the
+    # objects seen close.
+    assert "| ../s0 | semantic | explored | 250.0 s | nothing (0) | 100% | 10 s | 10 m3 | 30% | 80% | 0 |" in report
+    assert "| ../s1 | semantic | time_limit | 600.0 s | frontiers, objects (162) | 100% | 10 s |" in report
+    assert "| ../c1 | classic | explored | 10.0 s | - | 100% | 10 s | 10 m3 | 30% | 60% | 0 |" in report
     res = experiments.write_outputs(str(tmp_path / "limit"), {"semantic": sem[1:]}, grid_step_s=10)
     assert res["rows"][0]["explored_end_sim_s_median"] is None
     assert "| time_limit | 0% | 600 s | none ended explored |" in open(str(tmp_path / "limit" / "report.md")).read()

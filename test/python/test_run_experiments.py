@@ -198,6 +198,15 @@ def test_pool_reports_on_campaigns_already_flown(tmp_path, capsys):
     # medians over the three runs per mode (30 against 50 s); the pairs cross the two campaigns
     assert ("semantic 30 s, classic 50 s (medians); in 3 paired runs semantic sooner in 2, later in 1, tied in 0 "
             "(two-sided sign test p = 1.00") in report
+    # an ablation's semantic runs against the classic runs of the campaigns above
+    ablation = str(tmp_path / "ablation")
+    flown(ablation, "scene0_run0_semantic", 45)
+    flown(ablation, "scene2_run0_semantic", 55)
+    assert run_experiments.main(["--pool", ablation, a + ":classic", b + ":classic", "--out", out + "2"],
+                                call=no_mission) == 0
+    report = open(os.path.join(out + "2", "report.md")).read()
+    assert "- pooled: 2 classic runs of %s; scenes: generated seed 0, generated seed 1\n" % a in report
+    assert "in 2 paired runs semantic sooner in 1, later in 1, tied in 0" in report
     flown(b, "scene0_run0_classic", 10)  # the same run name in both: pairs would be ambiguous
     assert run_experiments.main(["--pool", a, b, "--out", out], call=no_mission) == 1
     assert "run scene0_run0_classic is in both" in capsys.readouterr().out

@@ -76,8 +76,8 @@ def run_table(by_mode: Dict[str, List[Dict]], out_dir: str) -> List[str]:
     """report.md's table of the runs one by one: how and when each ended, and its final figures."""
     lines = ["## Runs", "",
              "| run | mode | ended | sim time at the end | still open at the end (active frontier voxels) | "
-             "objects found | explored volume | background seen from <= d_bg | objects' surface seen from <= d_obj "
-             "| collisions |", "|---|---|---|---|---|---|---|---|---|---|"]
+             "objects found | all found at | explored volume | background seen from <= d_bg | "
+             "objects' surface seen from <= d_obj | collisions |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for mode, runs in by_mode.items():
         for r in runs:
             s = r["summary"]
@@ -85,9 +85,11 @@ def run_table(by_mode: Dict[str, List[Dict]], out_dir: str) -> List[str]:
             cond = s.get("end_conditions") or {}
             still = "-" if not cond else "%s (%d)" % (", ".join(cond.get("not_done", [])) or "nothing",
                                                       cond.get("active_frontiers", 0))
-            lines.append("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+            t100 = time_to_reach(r["t"], r["series"]["found_percent"], 100.0)
+            lines.append("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
                 os.path.relpath(r["dir"], out_dir), mode, s.get("termination_reason", "?"),
                 "-" if not np.isfinite(end) else "%.1f s" % end, still, _final(r, "found_percent", "%"),
+                "%.0f s" % t100 if np.isfinite(t100) else "never",
                 _final(r, "explored_volume_m3", " m3"), _final(r, "background_observed_percent", "%"),
                 _final(r, "object_observed_percent", "%"), s.get("collisions", "-")))
     return lines
