@@ -57,13 +57,13 @@ def scene_spec(token: str) -> dict:
     return {"seed": 0, "file": path, "name": stem}
 
 
-def _overrides():
-    """eval/overrides.py (the source tree's package first, as main() reads it)."""
+def _eval(name):
+    """The module semantic_exploration.eval.<name>, the source tree's package first."""
+    import importlib
     src = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src")
     if src not in sys.path:
         sys.path.insert(0, src)
-    from semantic_exploration.eval import overrides
-    return overrides
+    return importlib.import_module("semantic_exploration.eval." + name)
 
 
 def parse_args(argv=None):
@@ -77,7 +77,9 @@ def parse_args(argv=None):
     ap.add_argument("--size", type=float, nargs=3, default=[8.0, 6.0, 3.0], metavar=("X", "Y", "H"),
                     help="size of the generated houses (scene files keep their own)")
     ap.add_argument("--classes", nargs="+", default=["chair"])
-    ap.add_argument("--sim-limit-s", type=float, default=200.0)
+    ap.add_argument("--sim-limit-s", type=float, default=None,
+                    help="sim time per mission, s (default 200); with --pool, runs that ran far past it are left "
+                    "out (default: none)")
     ap.add_argument("--wall-limit-s", type=float, default=None,
                     help="per mission: a guard against a stuck run (default run_mission.py's: 3 x --sim-limit-s, "
                     "at least 1800 s)")
@@ -93,17 +95,22 @@ def parse_args(argv=None):
                     help="YAML for the simulator loaded after config/sim.yaml in every run, e.g. "
                     "config/detector_long_range.yaml")
     ap.add_argument("--extra-overrides", default="",
-                    help="YAML of node parameters merged into every run (under the run's planner/seed), "
-                    "e.g. planner weights for an ablation; as run_mission.py --extra-overrides")
+                    help="YAML of node parameters merged into every run, as run_mission.py --extra-overrides, "
+                    "e.g. planner weights for an ablation (with --modes semantic: classic's weights are its "
+                    "definition); planner/seed is each run's own")
     ap.add_argument("--pool", nargs="+", default=[], metavar="CAMPAIGN",
                     help="fly nothing: write the report over the runs of these campaign directories (their runs/) "
                     "into --out; DIR:MODE takes one mode's runs of DIR (e.g. an ablation's semantic runs against "
                     "another campaign's classic ones); run names must not repeat across them")
     args = ap.parse_args(argv)
+    if args.sim_limit_s is not None and not args.sim_limit_s > 0:
+        ap.error("--sim-limit-s must be > 0 s")
+    if args.pool:
+        return pool_args(ap, args)
+    if args.sim_limit_s is None:
+        args.sim_limit_s = 200.0
     if args.extra_overrides:
-        why = _overrides().unreadable(args.extra_overrides)
-        if why:
-            ap.error("--extra-overrides: %s" % why)
+        check_extra_overrides(ap, args)
     fixed = PROTOCOL_RUNS[args.protocol]
     if fixed is not None and args.runs is not None and args.runs != fixed:
         ap.error("--protocol %s runs %d runs per method per scene; drop --runs %d" % (args.protocol, fixed, args.runs))
@@ -112,11 +119,53 @@ def parse_args(argv=None):
         ap.error("--runs must be at least 1")
     if args.jobs < 1:
         ap.error("--jobs must be at least 1")
-    if not args.sim_limit_s > 0:
-        ap.error("--sim-limit-s must be > 0 s")
     if args.wall_limit_s is not None and not args.wall_limit_s > 0:
         ap.error("--wall-limit-s must be > 0 s")
     return args
+
+
+#: Options that only shape the missions flown; --pool flies none.
+FLIGHT_OPTIONS = ("scenes", "protocol", "runs", "size", "classes", "wall_limit_s", "jobs", "ompl_termination",
+                  "sim_overrides", "extra_overrides")
+#: Planner settings that make the modes what they are (config/classic.yaml sets them for classic).
+MODE_SETTINGS = ("a_ent", "a_bg", "a_obj", "p_frontier")
+
+
+def pool_args(ap, args):
+    """--pool: no flight option, readable entries, and an --out that is none of the pooled campaigns."""
+    given = ["--" + o.replace("_", "-") for o in FLIGHT_OPTIONS if getattr(args, o) != ap.get_default(o)]
+    if given:
+        ap.error("--pool flies nothing: drop %s" % " ".join(given))
+    pool = _eval("pool")
+    entries = []
+    out = os.path.realpath(args.out)
+    for entry in args.pool:
+        campaign, mode, why = pool.parse_entry(entry, args.modes)
+        if why:
+            ap.error("--pool %s: %s" % (entry, why))
+        c = os.path.realpath(campaign)
+        if out == c or out.startswith(c + os.sep):
+            ap.error("--out %s lies in the pooled campaign %s: its report would be overwritten" % (args.out, campaign))
+        entries.append((campaign, mode))
+    args.pool = entries
+    return args
+
+
+def check_extra_overrides(ap, args):
+    """Refuses an --extra-overrides that cannot be read, sets planner/seed (each run's own) or,
+    with classic among --modes, changes what makes classic classic."""
+    overrides = _eval("overrides")
+    why = overrides.unreadable(args.extra_overrides)
+    if why:
+        ap.error("--extra-overrides: %s" % why)
+    planner = overrides.load(args.extra_overrides).get("planner") or {}
+    if "seed" in planner:
+        ap.error("--extra-overrides sets planner/seed: each run sets its own (planner seeds 1-N)")
+    defining = [k for k in MODE_SETTINGS if k in planner]
+    if defining and "classic" in args.modes:
+        ap.error("--extra-overrides sets planner/%s, which config/classic.yaml sets for the classic mode: the "
+                 "classic runs would not be classic; fly such a change with --modes semantic" % ", planner/".join(
+                     defining))
 
 
 def plan_runs(args, out: str, here: str):
@@ -162,70 +211,15 @@ def describe_setup(args, sim_overrides: str, describe_yaml) -> list:
             "missions flown at once: %d" % args.jobs]
 
 
-def campaign_setup(report_md):
-    """The setup lines of a campaign's report (its '- ' lines after the title, the detector left to the
-    pooled report, which names it from the runs); [] without a report."""
-    if not os.path.exists(report_md):
-        return []
-    lines = []
-    with open(report_md) as f:
-        for line in f.read().splitlines()[2:]:
-            if not line.startswith("- "):
-                break
-            if not line.startswith("- detector:"):
-                lines.append(line[2:])
-    return lines
-
-
-def pool_report(args, experiments):
-    """--pool: one report over the runs of campaigns already flown; 0, or 1 if none is usable.
-    Runs are paired by name (<scene>_run<k>_<mode>), so a name found in two campaigns is refused."""
-    by_mode = {m: [] for m in args.modes}
-    seen, setup = {}, []
-    for entry in args.pool:
-        campaign, only = entry, None
-        if entry.rsplit(":", 1)[-1] in args.modes:  # DIR:MODE takes that mode's runs only
-            campaign, only = entry.rsplit(":", 1)
-        runs_dir = os.path.join(campaign, "runs")
-        if not os.path.isdir(runs_dir):
-            print("[experiments] --pool: %s has no runs/ directory" % campaign)
-            return 1
-        n = 0
-        for name in sorted(os.listdir(runs_dir)):
-            mode = next((m for m in args.modes if name.endswith("_" + m)), None)
-            d = os.path.join(runs_dir, name)
-            if mode is None or (only and mode != only) or not os.path.exists(os.path.join(d, "timeseries.csv")):
-                continue
-            if name in seen:
-                print("[experiments] --pool: run %s is in both %s and %s; pairs go by run name" % (
-                    name, seen[name], campaign))
-                return 1
-            seen[name] = campaign
-            run = experiments.read_run(d)
-            why = experiments.implausible(run, args.sim_limit_s)
-            if why:
-                print("[experiments] run %s: %s; left out of the curves" % (d, why))
-                continue
-            by_mode[mode].append(run)
-            n += 1
-        setup.append("pooled: %d %sruns of %s%s" % (n, only + " " if only else "", os.path.abspath(campaign), "".join(
-            "; " + line for line in campaign_setup(os.path.join(campaign, "report.md")))))
-    by_mode = {m: r for m, r in by_mode.items() if r}
-    if not by_mode:
-        print("[experiments] --pool: no usable run")
-        return 1
-    experiments.write_outputs(os.path.abspath(args.out), by_mode, setup=setup)
-    print("[experiments] report: %s" % os.path.join(os.path.abspath(args.out), "report.md"))
-    return 0
-
-
 def main(argv=None, call=subprocess.call):
     here = os.path.dirname(os.path.abspath(__file__))
     args = parse_args(argv)
-    overrides = _overrides()
-    from semantic_exploration.eval import experiments
+    overrides, experiments = _eval("overrides"), _eval("experiments")
     if args.pool:
-        return pool_report(args, experiments)
+        rc, msgs = _eval("pool").pool_report(args.pool, args.modes, args.out, args.sim_limit_s)
+        for m in msgs:
+            print("[experiments] %s" % m)
+        return rc
 
     out = os.path.abspath(args.out)
     sim_overrides = os.path.abspath(args.sim_overrides) if args.sim_overrides else ""

@@ -1,5 +1,6 @@
 """The paired comparison behind the paper's claims (eval/claims.py): a sign
 test with hand-computed answers, runs paired by name, and the claims' text."""
+import numpy as np
 import pytest
 
 pytest.importorskip("matplotlib")
@@ -38,10 +39,19 @@ def test_claims_count_the_pairs(tmp_path):
     by_mode = campaign(tmp_path, {"scene0_run0": (10, 20), "scene1_run0": (30, 20), "scene2_run0": (20, 20)})
     by_mode["semantic"].append(make_run(str(tmp_path / "scene3_run0_semantic"), [0, 5], [0, 5], [0, 4]))  # no pair
     res = experiments.write_outputs(str(tmp_path / "out"), by_mode, grid_step_s=10)
+    # the share seen from <= d_obj at the end: semantic 60 / 10 / 30 / 30 (unpaired), classic 20 / 20 / 20
+    for mode, shares in (("semantic", (60, 10, 30, 30)), ("classic", (20, 20, 20))):
+        for r, share in zip(by_mode[mode], shares):
+            r["series"]["object_observed_percent"] = np.array([0.0, share, share][:len(r["t"])])
+    closer = experiments.write_outputs(str(tmp_path / "out2"), by_mode, grid_step_s=10)["claims"][5]
+    assert closer["holds"] is True  # medians 30% against 20%
+    assert closer["measured"] == ("semantic 30%, classic 20% (medians); in 3 paired runs semantic more in 2, less "
+                                  "in 1, tied in 0 (two-sided sign test p = 1.000: could be chance: the pairs do "
+                                  "not tell the modes apart at 5%)")
     sooner = res["claims"][1]
     assert sooner["paired"] == {"pairs": 3, "better": 1, "worse": 1, "tied": 1, "p": 1.0}
     assert sooner["measured"].endswith(
-        "in 3 paired runs semantic sooner in 1, later in 1, tied in 1 (two-sided sign test p = 1.00: could be chance: "
+        "in 3 paired runs semantic sooner in 1, later in 1, tied in 1 (two-sided sign test p = 1.000: could be chance: "
         "the pairs do not tell the modes apart at 5%)")
     assert res["claims"][5]["measured"] == "not measured"  # no observed-share column in these runs
     report = open(str(tmp_path / "out" / "report.md")).read()  # each run's time in the run table
@@ -53,11 +63,10 @@ def test_six_pairs_one_way_are_unlikely_to_be_chance(tmp_path):
     sooner = experiments.write_outputs(str(tmp_path / "out"), by_mode, grid_step_s=10)["claims"][1]
     assert sooner["holds"] is True
     assert sooner["paired"]["better"] == 6 and sooner["paired"]["p"] == pytest.approx(1 / 32)
-    assert "(two-sided sign test p = 0.03: unlikely to be chance)" in sooner["measured"]
+    assert "(two-sided sign test p = 0.031: unlikely to be chance)" in sooner["measured"]
 
 
 def test_pairs_without_the_figure_are_left_out(tmp_path):
-    import numpy as np
     by_mode = campaign(tmp_path, {"scene0_run0": (10, 20), "scene1_run0": (30, 20)})
     by_mode["semantic"][0]["series"]["object_observed_percent"] = np.array([0.0, 50.0, 60.0])
     by_mode["classic"][0]["series"]["object_observed_percent"] = np.array([0.0, 10.0, 20.0])

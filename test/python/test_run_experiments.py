@@ -93,32 +93,40 @@ def test_campaign_runs_every_mission_and_names_the_protocol(tmp_path):
 
 def test_extra_overrides_reach_every_run_under_its_seed(tmp_path, capsys):
     extra = tmp_path / "no_background_gain.yaml"
-    extra.write_text("planner:\n  a_ent: 0.5\n  a_bg: 0.0\n  seed: 99\n  yaw_step: !degrees 30\n"
+    extra.write_text("planner:\n  a_ent: 0.5\n  a_bg: 0.0\n  a_obj: 0.5\n  yaw_step: !degrees 30\n"
                      "background_map:\n  gain_threads: 1\n")
-    seen = []
+    seen = {}
 
     def fake_mission(cmd):
         with open(cmd[cmd.index("--extra-overrides") + 1]) as f:
-            seen.append(f.read())
+            seen[cmd[cmd.index("--out") + 1]] = f.read()
         return 1  # no time series: the campaign has nothing to aggregate
 
     out = str(tmp_path / "campaign")
-    args = ["--scenes", "0", "--runs", "2", "--extra-overrides", str(extra), "--out", out]
+    args = ["--scenes", "0", "--runs", "2", "--modes", "semantic", "--extra-overrides", str(extra), "--out", out]
     assert run_experiments.main(args, call=fake_mission) == 1
-    assert len(seen) == 4
+    assert len(seen) == 2
     for run in (0, 1):
-        doc = overrides.load(os.path.join(out, "runs", "planner_seed%d.yaml" % run))
-        assert doc == {"planner": {"a_ent": 0.5, "a_bg": 0.0, "seed": run + 1, "yaw_step": "30"},
+        path = os.path.join(out, "runs", "planner_seed%d.yaml" % run)
+        assert seen[os.path.join(out, "runs", "scene0_run%d_semantic" % run)] == open(path).read()
+        doc = overrides.load(path)
+        assert doc == {"planner": {"a_ent": 0.5, "a_bg": 0.0, "a_obj": 0.5, "seed": run + 1, "yaw_step": "30"},
                        "background_map": {"gain_threads": 1}}
         assert doc["planner"]["yaw_step"].tag == "!degrees"  # kept for rosparam to evaluate
     setup = run_experiments.describe_setup(run_experiments.parse_args(args), "", experiments.describe_yaml)
     assert ("node overrides (--extra-overrides): no_background_gain.yaml (planner/a_ent 0.5, planner/a_bg 0.0, "
-            "planner/seed 99, planner/yaw_step 30, background_map/gain_threads 1)") in setup
-    bad = tmp_path / "list.yaml"
-    bad.write_text("- 1\n")
-    with pytest.raises(SystemExit):
-        run_experiments.parse_args(["--extra-overrides", str(bad)])
-    assert "--extra-overrides: " in capsys.readouterr().err
+            "planner/a_obj 0.5, planner/yaw_step !degrees 30, background_map/gain_threads 1)") in setup
+    refused = {"- 1\n": "--extra-overrides: ",  # not a mapping
+               "planner:\n  seed: 99\n": "sets planner/seed: each run sets its own",
+               "planner:\n  p_frontier: 1.0\n  v_max: 2.0\n": "sets planner/p_frontier, which config/classic.yaml"}
+    for text, why in refused.items():
+        bad = tmp_path / "bad.yaml"
+        bad.write_text(text)
+        with pytest.raises(SystemExit):
+            run_experiments.parse_args(["--extra-overrides", str(bad)])  # classic among the default --modes
+        assert why in capsys.readouterr().err
+    bad.write_text("planner:\n  v_max: 2.0\n")  # the same for both modes: allowed with classic
+    assert run_experiments.parse_args(["--extra-overrides", str(bad)]).sim_limit_s == 200.0
 
 
 def test_missions_flown_at_once_are_aggregated_in_plan_order_with_a_log_each(tmp_path):
@@ -164,51 +172,3 @@ def test_missions_flown_at_once_are_aggregated_in_plan_order_with_a_log_each(tmp
     runs = [line.split(" | ")[0] for line in report.splitlines() if line.startswith("| runs/")]
     assert runs == ["| runs/scene0_run0_classic", "| runs/scene0_run0_semantic", "| runs/scene0_run1_semantic"]
 
-
-def flown(campaign, name, found_at_s, n_gt=2):
-    """A run directory <campaign>/runs/<name> as run_mission.py leaves it: all found at found_at_s."""
-    d = os.path.join(campaign, "runs", name)
-    os.makedirs(d)
-    with open(os.path.join(d, "timeseries.csv"), "w") as f:
-        f.write("sim_s,explored_volume_m3,ground_truth_found\n0,0,0\n%d,5,%d\n200,9,%d\n" % (found_at_s, n_gt, n_gt))
-    with open(os.path.join(d, "summary.json"), "w") as f:
-        json.dump({"ground_truth_objects": n_gt, "termination_reason": "sim_time_limit", "collisions": 0}, f)
-
-
-def test_pool_reports_on_campaigns_already_flown(tmp_path, capsys):
-    pytest.importorskip("matplotlib")
-    a, b = str(tmp_path / "houses_0_1"), str(tmp_path / "houses_2")
-    flown(a, "scene0_run0_semantic", 20)
-    flown(a, "scene0_run0_classic", 40)
-    flown(a, "scene1_run0_semantic", 30)
-    flown(a, "scene1_run0_classic", 50)
-    flown(b, "scene2_run0_semantic", 90)
-    flown(b, "scene2_run0_classic", 60)
-    with open(os.path.join(a, "report.md"), "w") as f:
-        f.write("# Experiment report\n\n- scenes: generated seed 0, generated seed 1\n- detector: x\n\nMedian ...\n")
-
-    def no_mission(cmd):
-        raise AssertionError("--pool flies nothing")
-
-    out = str(tmp_path / "pooled")
-    assert run_experiments.main(["--pool", a, b, "--out", out], call=no_mission) == 0
-    report = open(os.path.join(out, "report.md")).read()
-    assert "- pooled: 4 runs of %s; scenes: generated seed 0, generated seed 1\n" % a in report
-    assert "- pooled: 2 runs of %s\n" % b in report
-    # medians over the three runs per mode (30 against 50 s); the pairs cross the two campaigns
-    assert ("semantic 30 s, classic 50 s (medians); in 3 paired runs semantic sooner in 2, later in 1, tied in 0 "
-            "(two-sided sign test p = 1.00") in report
-    # an ablation's semantic runs against the classic runs of the campaigns above
-    ablation = str(tmp_path / "ablation")
-    flown(ablation, "scene0_run0_semantic", 45)
-    flown(ablation, "scene2_run0_semantic", 55)
-    assert run_experiments.main(["--pool", ablation, a + ":classic", b + ":classic", "--out", out + "2"],
-                                call=no_mission) == 0
-    report = open(os.path.join(out + "2", "report.md")).read()
-    assert "- pooled: 2 classic runs of %s; scenes: generated seed 0, generated seed 1\n" % a in report
-    assert "in 2 paired runs semantic sooner in 1, later in 1, tied in 0" in report
-    flown(b, "scene0_run0_classic", 10)  # the same run name in both: pairs would be ambiguous
-    assert run_experiments.main(["--pool", a, b, "--out", out], call=no_mission) == 1
-    assert "run scene0_run0_classic is in both" in capsys.readouterr().out
-    assert run_experiments.main(["--pool", str(tmp_path / "nothing"), "--out", out], call=no_mission) == 1
-    assert "has no runs/ directory" in capsys.readouterr().out

@@ -34,7 +34,7 @@ def sign_test_p(better: int, worse: int) -> float:
     if n == 0:
         return 1.0
     tail = sum(math.comb(n, i) for i in range(min(better, worse) + 1))
-    return min(1.0, 2.0 * tail / 2.0 ** n)
+    return min(1.0, 2 * tail / 2 ** n)  # integers: exact, and no float overflow for large n
 
 
 def pair_key(run_dir: str, mode: str) -> Optional[str]:
@@ -71,8 +71,8 @@ def describe_pairs(pr: Dict, better: str, worse: str) -> str:
         return "no paired runs"
     verdict = ("unlikely to be chance" if pr["p"] < 0.05
                else "could be chance: the pairs do not tell the modes apart at 5%")
-    return "in %d paired runs semantic %s in %d, %s in %d, tied in %d (two-sided sign test p = %.2f: %s)" % (
-        pr["pairs"], better, pr["better"], worse, pr["worse"], pr["tied"], pr["p"], verdict)
+    return "in %d paired run%s semantic %s in %d, %s in %d, tied in %d (two-sided sign test p = %.3f: %s)" % (
+        pr["pairs"], "s" if pr["pairs"] != 1 else "", better, pr["better"], worse, pr["worse"], pr["tied"], pr["p"], verdict)
 
 
 def paper_claims(agg: Dict[str, Dict[str, Dict[str, np.ndarray]]], grid: np.ndarray, rows: Sequence[Dict],
@@ -102,7 +102,7 @@ def paper_claims(agg: Dict[str, Dict[str, Dict[str, np.ndarray]]], grid: np.ndar
     ratio = v_sem / v_cls if v_cls > 0 else float("nan")
 
     def secs(x):
-        return "%.0f s" % x if np.isfinite(x) else "never"
+        return "%.0f s" % x if np.isfinite(x) else ("not measured" if np.isnan(x) else "never")
 
     runs_by_mode = runs_by_mode or {}
     t_pairs = paired(runs_by_mode, lambda r: time_to_reach(r["t"], r["series"]["found_percent"], 100.0), False)

@@ -89,7 +89,7 @@ def run_table(by_mode: Dict[str, List[Dict]], out_dir: str) -> List[str]:
             lines.append("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
                 os.path.relpath(r["dir"], out_dir), mode, s.get("termination_reason", "?"),
                 "-" if not np.isfinite(end) else "%.1f s" % end, still, _final(r, "found_percent", "%"),
-                "%.0f s" % t100 if np.isfinite(t100) else "never",
+                "%.0f s" % t100 if np.isfinite(t100) else ("-" if np.isnan(t100) else "never"),
                 _final(r, "explored_volume_m3", " m3"), _final(r, "background_observed_percent", "%"),
                 _final(r, "object_observed_percent", "%"), s.get("collisions", "-")))
     return lines
@@ -129,7 +129,9 @@ def aggregate(runs: Sequence[Dict], grid: np.ndarray) -> Dict[str, Dict[str, np.
 
 
 def time_to_reach(t: np.ndarray, y: np.ndarray, level: float) -> float:
-    """First sim time at which y >= level (inf if never)."""
+    """First sim time at which y >= level (inf if never; nan if y has no value at all: not measured)."""
+    if not np.isfinite(y).any():
+        return float("nan")
     hit = np.nonzero(y >= level - 1e-9)[0]
     return float(t[hit[0]]) if len(hit) else float("inf")
 
@@ -159,7 +161,8 @@ def describe_yaml(path: str) -> str:
             if isinstance(v, dict):
                 walk(v, prefix + str(k) + "/")
             else:
-                pairs.append("%s%s %s" % (prefix, k, v))
+                tag = getattr(v, "tag", "")  # !degrees 30 is not 30 rad
+                pairs.append("%s%s %s%s" % (prefix, k, tag + " " if tag else "", v))
     walk(tree, "")
     return "%s (%s)" % (os.path.basename(path), ", ".join(pairs) if pairs else "empty")
 
