@@ -147,6 +147,9 @@ def pool_args(ap, args):
         if out == c or out.startswith(c + os.sep):
             ap.error("--out %s lies in the pooled campaign %s: its report would be overwritten" % (args.out, campaign))
         entries.append((campaign, mode))
+    if os.path.isdir(os.path.join(out, "runs")):  # make experiments' default --out is a campaign's
+        ap.error("--out %s holds a campaign (runs/): its report would be overwritten; give --pool an --out of "
+                 "its own" % args.out)
     args.pool = entries
     return args
 
@@ -159,6 +162,8 @@ def check_extra_overrides(ap, args):
     if why:
         ap.error("--extra-overrides: %s" % why)
     planner = overrides.load(args.extra_overrides).get("planner") or {}
+    if not isinstance(planner, dict):
+        ap.error("--extra-overrides: planner must be a section of settings, not %r" % (planner,))
     if "seed" in planner:
         ap.error("--extra-overrides sets planner/seed: each run sets its own (planner seeds 1-N)")
     defining = [k for k in MODE_SETTINGS if k in planner]

@@ -44,6 +44,7 @@ def test_time_to_reach():
     t = np.array([0.0, 5.0, 9.0])
     assert experiments.time_to_reach(t, np.array([0, 50, 100.0]), 100) == 9.0
     assert experiments.time_to_reach(t, np.array([0, 50, 75.0]), 100) == float("inf")
+    assert np.isnan(experiments.time_to_reach(t, np.full(3, np.nan), 100))  # not measured, not "never"
 
 
 def test_outputs_are_written(tmp_path):

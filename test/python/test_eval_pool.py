@@ -70,9 +70,11 @@ def test_an_ablation_against_another_campaigns_classic_runs(tmp_path, two_campai
     ablation = str(tmp_path / "ablation")
     flown(ablation, "scene0_run0_semantic", 45)
     flown(ablation, "scene2_run0_semantic", 55)
-    report_of(ablation, "scenes: generated seed 0 (generated houses 8 x 6 x 3 m)",
+    protocol = "protocol default: 1 run per method and scene (planner seeds 1-1), classes chair, 200 s sim per run"
+    report_of(ablation, "scenes: generated seed 0 (generated houses 8 x 6 x 3 m)", protocol,
               "node overrides (--extra-overrides): no_bg.yaml (planner/a_bg 0.0)")
-    report_of(b, "scenes: generated seed 2 (generated houses 8 x 6 x 3 m)", "node overrides (--extra-overrides): none")
+    report_of(b, "scenes: generated seed 2 (generated houses 8 x 6 x 3 m)", protocol,
+              "node overrides (--extra-overrides): none")
     out = str(tmp_path / "pooled")
     assert run_experiments.main(["--pool", ablation, a + ":classic", b + ":classic", "--out", out],
                                 call=no_mission) == 0
@@ -87,6 +89,10 @@ def test_runs_that_cannot_be_paired_or_read(tmp_path, two_campaigns, capsys):
     os.remove(os.path.join(flown(b, "scene3_run0_semantic", 10), "summary.json"))  # a mission stopped midway
     rc, msgs = pool.pool_report([(a, None), (b, None)], ["classic", "semantic"], str(tmp_path / "out"))
     assert rc == 0 and any("scene3_run0_semantic has no timeseries.csv or summary.json" in m for m in msgs)
+    empty = str(tmp_path / "empty")  # a campaign whose missions all failed
+    os.makedirs(os.path.join(empty, "runs"))
+    rc, msgs = pool.pool_report([(a, None), (b, None), (empty, None)], ["classic", "semantic"], str(tmp_path / "out"))
+    assert rc == 0 and "no usable runs in %s" % empty in msgs
     flown(b, "scene0_run0_classic", 10)  # the same run name in both: pairs would be ambiguous
     rc, msgs = pool.pool_report([(a, None), (b, None)], ["classic", "semantic"], str(tmp_path / "out"))
     assert rc == 1 and "run scene0_run0_classic is in both %s and %s" % (a, b) in msgs[-1]
@@ -108,7 +114,8 @@ def test_entries_and_options_refused_at_start(tmp_path, two_campaigns, capsys):
                       (["--pool", a + ":clasic"], "clasic is not one of --modes (classic semantic)"),
                       (["--pool", a, "--out", os.path.join(a, "again")], "lies in the pooled campaign"),
                       (["--pool", a, "--out", a], "lies in the pooled campaign"),
-                      (["--pool", a, "--jobs", "2", "--scenes", "4"], "--pool flies nothing: drop --scenes --jobs")):
+                      (["--pool", a, "--jobs", "2", "--scenes", "4"], "--pool flies nothing: drop --scenes --jobs"),
+                      (["--pool", a, "--out", str(named)], "holds a campaign (runs/)")):
         with pytest.raises(SystemExit):
             run_experiments.parse_args(argv)
         assert why in capsys.readouterr().err
@@ -118,6 +125,11 @@ def test_setups_that_differ_are_named():
     house = "scenes: generated seed 0 (generated houses %s)"
     same = pool.shared_setup([house % "8 x 6 x 3 m", "simulator overrides: none"])
     other = pool.shared_setup([house % "10 x 8 x 3 m", "simulator overrides: none"])
-    assert same == {"house size": "8 x 6 x 3 m", "simulator overrides": "none"}
+    assert same == {"house size": "8 x 6 x 3 m", "simulator overrides": "none", "classes and sim limit": "not stated",
+                    "node overrides": "not stated", "planner timing": "not stated"}
     assert pool.differences([same, other]) == ["house size"]
-    assert pool.differences([same, same, {}]) == []  # a campaign without a report states nothing
+    assert pool.differences([same, same, pool.shared_setup([])]) == []  # a campaign without a report states nothing
+    # a report from before --extra-overrides existed against an ablation's
+    ablation = pool.shared_setup([house % "8 x 6 x 3 m", "simulator overrides: none",
+                                  "node overrides (--extra-overrides): no_bg.yaml (planner/a_bg 0.0)"])
+    assert pool.differences([same, ablation]) == ["node overrides"]

@@ -118,7 +118,8 @@ def test_extra_overrides_reach_every_run_under_its_seed(tmp_path, capsys):
             "planner/a_obj 0.5, planner/yaw_step !degrees 30, background_map/gain_threads 1)") in setup
     refused = {"- 1\n": "--extra-overrides: ",  # not a mapping
                "planner:\n  seed: 99\n": "sets planner/seed: each run sets its own",
-               "planner:\n  p_frontier: 1.0\n  v_max: 2.0\n": "sets planner/p_frontier, which config/classic.yaml"}
+               "planner:\n  p_frontier: 1.0\n  v_max: 2.0\n": "sets planner/p_frontier, which config/classic.yaml",
+               "planner: 3\n": "planner must be a section of settings, not 3"}
     for text, why in refused.items():
         bad = tmp_path / "bad.yaml"
         bad.write_text(text)

@@ -66,7 +66,7 @@ def paired(runs_by_mode: Dict[str, Sequence[Dict]], value: Callable[[Dict], floa
 
 
 def describe_pairs(pr: Dict, better: str, worse: str) -> str:
-    """'in 9 paired runs semantic sooner in 2, later in 7, tied in 0 (sign test p = 0.18: ...)'."""
+    """'in 9 paired runs semantic sooner in 2, later in 7, tied in 0 (two-sided sign test p = 0.180: ...)'."""
     if pr["pairs"] == 0:
         return "no paired runs"
     verdict = ("unlikely to be chance" if pr["p"] < 0.05
@@ -112,7 +112,7 @@ def paper_claims(agg: Dict[str, Dict[str, Dict[str, np.ndarray]]], grid: np.ndar
          "measured": "always" if len(behind) == 0 else "behind at %d of %d times (first at %.0f s, by up to %.0f points)"
          % (len(behind), len(grid), grid[behind[0]], deficit.max())},
         {"claim": "semantic finds 100% of the objects sooner (median time)",
-         "holds": bool(np.isfinite(t_sem) and t_sem < t_cls),
+         "holds": None if np.isnan(t_sem) or np.isnan(t_cls) else bool(np.isfinite(t_sem) and t_sem < t_cls),
          "measured": "semantic %s, classic %s (medians); %s" % (
              secs(t_sem), secs(t_cls), describe_pairs(t_pairs, "sooner", "later")), "paired": t_pairs},
         {"claim": "semantic's explored volume is within %.0f%% of classic's (final median)" % (100 * volume_tolerance),

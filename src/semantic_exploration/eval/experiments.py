@@ -262,7 +262,8 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
         lines.append("| %s | %d | %.0f%% | %s | %s | %.1f m3 | %s | %d | %s | %.0f%% | %.0f s | %s |" % (
             r["mode"], r["runs"], r["found_percent_median"], "-" if r["spurious"] is None else r["spurious"],
             "-" if r["duplicated"] is None else r["duplicated"], r["explored_m3_median"],
-            "%.0f s" % r["time_to_all_found_s_median"] if np.isfinite(r["time_to_all_found_s_median"]) else "never",
+            "%.0f s" % r["time_to_all_found_s_median"] if np.isfinite(r["time_to_all_found_s_median"])
+            else ("not measured" if np.isnan(r["time_to_all_found_s_median"]) else "never"),
             r["collisions"], r["termination"], 100 * r["explored_share"], r["end_sim_s_median"],
             "none ended explored" if r["explored_end_sim_s_median"] is None
             else "%.0f s" % r["explored_end_sim_s_median"]))

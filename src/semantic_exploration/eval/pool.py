@@ -47,7 +47,8 @@ def campaign_setup(report_md: str) -> List[str]:
 
 
 def shared_setup(lines: Sequence[str]) -> Dict[str, str]:
-    """The SHARED_SETUP items a campaign's setup lines state."""
+    """The SHARED_SETUP items a campaign's setup lines state; an item a report leaves out is
+    "not stated" (reports from before an option existed), and without lines nothing is known."""
     found = {}
     for name, pattern in SHARED_SETUP:
         for line in lines:
@@ -55,6 +56,9 @@ def shared_setup(lines: Sequence[str]) -> Dict[str, str]:
             if m:
                 found[name] = m.group(1)
                 break
+        else:
+            if lines:
+                found[name] = "not stated"
     return found
 
 
@@ -88,7 +92,7 @@ def pool_report(entries: Sequence[Tuple[str, Optional[str]]], modes: Sequence[st
             seen[name] = campaign
             try:
                 run = experiments.read_run(d)
-            except (OSError, ValueError, KeyError) as e:
+            except (OSError, ValueError, KeyError, TypeError, AttributeError) as e:  # a damaged summary or series
                 msgs.append("run %s cannot be read (%s); left out" % (d, e))
                 continue
             why = experiments.implausible(run, sim_limit_s if sim_limit_s is not None else float("inf"))
@@ -97,9 +101,11 @@ def pool_report(entries: Sequence[Tuple[str, Optional[str]]], modes: Sequence[st
                 continue
             by_mode[mode].append(run)
             n += 1
+        if n == 0:
+            msgs.append("no usable %sruns in %s" % (only + " " if only else "", campaign))
         own = campaign_setup(os.path.join(campaign, "report.md"))
         setups.append(shared_setup(own))
-        setup.append("pooled: %d %sruns of %s%s" % (n, only + " " if only else "", os.path.abspath(campaign),
+        setup.append("pooled: %d %sruns of %s%s" % (n, only + " " if only else "", campaign,
                                                     "".join("; " + line for line in own)))
     differ = differences(setups)
     if differ:
