@@ -14,16 +14,15 @@ import numpy as np
 SIMILAR_RMSE_CM = 0.5
 
 
-def _final(curve: Dict[str, np.ndarray]) -> float:
-    """The median curve's last finite value (nan if none)."""
-    m = curve["median"][np.isfinite(curve["median"])]
-    return float(m[-1]) if len(m) else float("nan")
-
-
 def _last(series: np.ndarray) -> float:
-    """A run's last finite value of a curve (nan if none)."""
+    """A curve's last finite value (nan if none)."""
     v = series[np.isfinite(series)]
     return float(v[-1]) if len(v) else float("nan")
+
+
+def _final(curve: Dict[str, np.ndarray]) -> float:
+    """The median curve's last finite value (nan if none)."""
+    return _last(curve["median"])
 
 
 def sign_test_p(better: int, worse: int) -> float:
@@ -90,7 +89,7 @@ def paper_claims(agg: Dict[str, Dict[str, Dict[str, np.ndarray]]], grid: np.ndar
     With runs_by_mode (each run as eval.experiments.read_run gives it), claims 2
     and 6 also carry "paired" (see paired()) and say it in "measured"; "holds"
     stays the medians' verdict."""
-    from .experiments import time_to_reach  # here: experiments imports this module
+    from .experiments import all_found_at, describe_time  # here: experiments imports this module
     if "semantic" not in agg or "classic" not in agg:
         return []
     sem, cls = agg["semantic"], agg["classic"]
@@ -101,11 +100,8 @@ def paper_claims(agg: Dict[str, Dict[str, Dict[str, np.ndarray]]], grid: np.ndar
     v_sem, v_cls = sem["explored_volume_m3"]["median"][-1], cls["explored_volume_m3"]["median"][-1]
     ratio = v_sem / v_cls if v_cls > 0 else float("nan")
 
-    def secs(x):
-        return "%.0f s" % x if np.isfinite(x) else ("not measured" if np.isnan(x) else "never")
-
     runs_by_mode = runs_by_mode or {}
-    t_pairs = paired(runs_by_mode, lambda r: time_to_reach(r["t"], r["series"]["found_percent"], 100.0), False)
+    t_pairs = paired(runs_by_mode, all_found_at, False)
     out = [
         {"claim": "semantic finds at least as many objects as classic at every time (median)",
          "holds": len(behind) == 0,
@@ -114,7 +110,7 @@ def paper_claims(agg: Dict[str, Dict[str, Dict[str, np.ndarray]]], grid: np.ndar
         {"claim": "semantic finds 100% of the objects sooner (median time)",
          "holds": None if np.isnan(t_sem) or np.isnan(t_cls) else bool(np.isfinite(t_sem) and t_sem < t_cls),
          "measured": "semantic %s, classic %s (medians); %s" % (
-             secs(t_sem), secs(t_cls), describe_pairs(t_pairs, "sooner", "later")), "paired": t_pairs},
+             describe_time(t_sem), describe_time(t_cls), describe_pairs(t_pairs, "sooner", "later")), "paired": t_pairs},
         {"claim": "semantic's explored volume is within %.0f%% of classic's (final median)" % (100 * volume_tolerance),
          "holds": bool(np.isfinite(ratio) and abs(ratio - 1.0) <= volume_tolerance),
          "measured": "%.1f vs %.1f m3 (ratio %.3f)" % (v_sem, v_cls, ratio)},

@@ -15,6 +15,7 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 from .claims import paper_claims  # noqa: F401 (part of this module's interface)
+from .overrides import load as load_overrides
 
 #: Curve -> (label, unit, figure of the paper, timeseries.csv column, scale, value before its first sample).
 #: found_percent's scale is 100 / the number of ground-truth objects.
@@ -85,11 +86,10 @@ def run_table(by_mode: Dict[str, List[Dict]], out_dir: str) -> List[str]:
             cond = s.get("end_conditions") or {}
             still = "-" if not cond else "%s (%d)" % (", ".join(cond.get("not_done", [])) or "nothing",
                                                       cond.get("active_frontiers", 0))
-            t100 = time_to_reach(r["t"], r["series"]["found_percent"], 100.0)
             lines.append("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
                 os.path.relpath(r["dir"], out_dir), mode, s.get("termination_reason", "?"),
                 "-" if not np.isfinite(end) else "%.1f s" % end, still, _final(r, "found_percent", "%"),
-                "%.0f s" % t100 if np.isfinite(t100) else ("-" if np.isnan(t100) else "never"),
+                describe_time(all_found_at(r), "-"),
                 _final(r, "explored_volume_m3", " m3"), _final(r, "background_observed_percent", "%"),
                 _final(r, "object_observed_percent", "%"), s.get("collisions", "-")))
     return lines
@@ -136,6 +136,16 @@ def time_to_reach(t: np.ndarray, y: np.ndarray, level: float) -> float:
     return float(t[hit[0]]) if len(hit) else float("inf")
 
 
+def all_found_at(run: Dict) -> float:
+    """A run's sim time when every ground-truth object was found (time_to_reach's inf and nan)."""
+    return time_to_reach(run["t"], run["series"]["found_percent"], 100.0)
+
+
+def describe_time(t_s: float, missing: str = "not measured") -> str:
+    """A time for a report: "12 s", "never" (inf) or `missing` (nan)."""
+    return "%.0f s" % t_s if np.isfinite(t_s) else (missing if np.isnan(t_s) else "never")
+
+
 #: Minimum mask size (px) -> from how far a whole chair is detected (config/sim.yaml's comment).
 DETECTOR_RANGES = {1200: "a whole chair detected from about 4 m", 50: "a whole chair detected from 10 m"}
 
@@ -152,8 +162,7 @@ def describe_detector(detector: Optional[Dict]) -> str:
 
 def describe_yaml(path: str) -> str:
     """A YAML file's settings as "section/key value" pairs for a report (its path, then the pairs)."""
-    from .overrides import load  # keeps rosparam's angle tags, which safe_load refuses
-    tree = load(path)
+    tree = load_overrides(path)  # keeps rosparam's angle tags, which safe_load refuses
     pairs = []
 
     def walk(node, prefix):
@@ -227,7 +236,7 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
     for mode, runs in by_mode.items():
         final_found = [r["series"]["found_percent"][-1] for r in runs]
         final_vol = [r["series"]["explored_volume_m3"][-1] for r in runs]
-        t100 = [time_to_reach(r["t"], r["series"]["found_percent"], 100.0) for r in runs]
+        t100 = [all_found_at(r) for r in runs]
         reasons = sorted(set(r["summary"].get("termination_reason", "?") for r in runs))
         explored = sum(r["summary"].get("termination_reason") == "explored" for r in runs)
         # sim time at the end: of every run, and of those that ended explored (the paper's end)
@@ -262,8 +271,7 @@ def write_outputs(out_dir: str, by_mode: Dict[str, List[Dict]], grid_step_s: flo
         lines.append("| %s | %d | %.0f%% | %s | %s | %.1f m3 | %s | %d | %s | %.0f%% | %.0f s | %s |" % (
             r["mode"], r["runs"], r["found_percent_median"], "-" if r["spurious"] is None else r["spurious"],
             "-" if r["duplicated"] is None else r["duplicated"], r["explored_m3_median"],
-            "%.0f s" % r["time_to_all_found_s_median"] if np.isfinite(r["time_to_all_found_s_median"])
-            else ("not measured" if np.isnan(r["time_to_all_found_s_median"]) else "never"),
+            describe_time(r["time_to_all_found_s_median"]),
             r["collisions"], r["termination"], 100 * r["explored_share"], r["end_sim_s_median"],
             "none ended explored" if r["explored_end_sim_s_median"] is None
             else "%.0f s" % r["explored_end_sim_s_median"]))
