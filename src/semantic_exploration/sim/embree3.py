@@ -24,6 +24,17 @@ _BUILD_QUALITY_HIGH = 2
 _CONTEXT_FLAG_COHERENT = 1
 _MAX_INSTANCE_LEVELS = 8  # hit instID pointers handed over; Embree reads only as many as it was built with
 
+#: Embree's device configuration: one build thread (the BVH is built once per
+#: scene, and the simulator shares the machine with the mapping), and vector
+#: kernels no wider than AVX2. Embree picks its kernels at run time, and where
+#: two faces tie (coincident faces: generated furniture has some) kernels of
+#: other widths can report the other face, so a pixel's instance differs and a
+#: deterministic flight parts from its twin on a machine with other vector
+#: units (AVX-512 against AVX2: docs/BENCHMARKS.md "Deterministic flights on
+#: other processors"). AVX2 is the widest set that x86-64 machines of the last
+#: decade share; where it is missing Embree takes the widest it has.
+DEVICE_CONFIG = "threads=1,max_isa=avx2"
+
 _f = ctypes.POINTER(ctypes.c_float)
 _u = ctypes.POINTER(ctypes.c_uint)
 
@@ -84,15 +95,17 @@ class EmbreeError(RuntimeError):
 class TriangleScene:
     """A static triangle mesh that answers first-hit queries for many rays at once."""
 
-    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray, device_config: str = DEVICE_CONFIG):
+        """``device_config``: Embree's configuration string. (Embree 3.13 takes an ISA name it does not
+        know for its narrowest kernels, SSE2, rather than failing.)"""
         lib = library()
         if lib is None:
             raise EmbreeError("libembree3 is not installed")
         self._lib = lib
-        # One thread: the BVH is built once per scene, and the simulator shares the machine with the mapping.
-        self._device = lib.rtcNewDevice(b"threads=1")
+        self.device_config = device_config
+        self._device = lib.rtcNewDevice(device_config.encode())
         if not self._device:
-            raise EmbreeError("rtcNewDevice failed")
+            raise EmbreeError("rtcNewDevice failed (configuration %r)" % device_config)
         self._scene = lib.rtcNewScene(self._device)
         lib.rtcSetSceneBuildQuality(self._scene, _BUILD_QUALITY_HIGH)
         geom = lib.rtcNewGeometry(self._device, _GEOMETRY_TYPE_TRIANGLE)

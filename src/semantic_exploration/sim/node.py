@@ -267,10 +267,11 @@ class MavSimNode:
         self.sim = sim
         lo, hi = sim.bounds
         rospy.loginfo("mav_sim: scene '%s': %d triangles, %d objects (%d of known classes), bounds [%s] - [%s], "
-                      "start (%.2f, %.2f, %.2f, yaw %.2f), rays through %s", sim.scene.name, len(sim.scene.faces),
+                      "start (%.2f, %.2f, %.2f, yaw %.2f), rays through %s%s", sim.scene.name, len(sim.scene.faces),
                       len(sim.scene.objects), len(sim.scene.thing_ids(c.classes.names)),
                       ", ".join("%.2f" % v for v in lo), ", ".join("%.2f" % v for v in hi), *sim.start,
-                      sim.renderer.backend)
+                      sim.renderer.backend,
+                      " (%s)" % sim.renderer.device_config if sim.renderer.device_config else "")
         unl = getattr(sim.scene, "unlabelled_ids", [])
         if unl:
             rospy.logwarn("mav_sim: %d face object ids have no entry in the label table; treated as background",

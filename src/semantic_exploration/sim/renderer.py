@@ -58,6 +58,7 @@ class _Embree3:
     def __init__(self, scene: Scene, n_rays: int):
         from .embree3 import TriangleScene
         self._scene = TriangleScene(scene.vertices, scene.faces)
+        self.device_config = self._scene.device_config
         self._scene.first_hit(np.zeros(3), np.ones((n_rays, 3)))  # allocates the ray buffers once
 
     def first_hit(self, t_W: np.ndarray, dirs_W: np.ndarray) -> np.ndarray:
@@ -132,6 +133,8 @@ class Renderer:
         self._dirs_W = np.empty((npx, 3))  # reused every frame; the returned images are fresh arrays
         self._rays = _backend(scene, npx, backend)
         self.backend = self._rays.name
+        #: Embree 3's device configuration (embree3.DEVICE_CONFIG), "" for embreex (its default kernels)
+        self.device_config = getattr(self._rays, "device_config", "")
 
     def camera_info(self) -> Dict:
         """Intrinsics as sensor_msgs/CameraInfo fields (plumb_bob, zero distortion)."""
