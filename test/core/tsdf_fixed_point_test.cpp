@@ -141,23 +141,40 @@ void aroundHalfIntegers(T max, F&& check) {
   }
 }
 
-// The voxel setters round inline instead of calling std::round: same result for every input they get.
-TEST(TsdfFixedPoint, InlineRoundingMatchesStdRound) {
+// The voxel setters round inline instead of calling std::nearbyint: halfway cases to even, the same result for
+// every input they get (the stored ranges, either sign).
+TEST(TsdfFixedPoint, InlineRoundingMatchesNearbyint) {
   std::size_t checked = 0;
   const auto check = [&](float x) {
-    ASSERT_EQ(tsdf_fixed::roundToInt(x), static_cast<int>(std::round(x))) << x;
-    if (x >= 0.f) {
-      ASSERT_EQ(tsdf_fixed::roundNonNegativeToInt(x), static_cast<int>(std::round(x))) << x;
-    }
+    ASSERT_EQ(tsdf_fixed::roundHalfEvenToInt(x), static_cast<int>(std::nearbyint(x))) << x;
     ++checked;
   };
-  // Around every integer and half-integer of the stored ranges (the cases a shortcut like (int)(x + 0.5f) gets
-  // wrong, e.g. 0.49999997f), three floats on either side.
+  // Around every integer and half-integer of the stored ranges, three floats on either side.
   aroundHalfIntegers(70000.f, check);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> uni(-70000.f, 70000.f);
   for (int i = 0; i < 200000; ++i) check(uni(rng));
   EXPECT_GT(checked, 1000000u);
+  // Halfway cases by hand: to the even neighbour, either sign.
+  EXPECT_EQ(tsdf_fixed::roundHalfEvenToInt(0.5f), 0);
+  EXPECT_EQ(tsdf_fixed::roundHalfEvenToInt(1.5f), 2);
+  EXPECT_EQ(tsdf_fixed::roundHalfEvenToInt(2.5f), 2);
+  EXPECT_EQ(tsdf_fixed::roundHalfEvenToInt(-2.5f), -2);
+  EXPECT_EQ(tsdf_fixed::roundHalfEvenToInt(-32766.5f), -32766);
+  EXPECT_EQ(tsdf_fixed::roundHalfEvenToInt(65534.4f), 65534);
+}
+
+// The colour's rounding (both layouts) is std::round's, inline.
+TEST(TsdfFixedPoint, InlineColourRoundingMatchesStdRound) {
+  const auto check = [&](float x) {
+    if (x >= 0.f) {
+      ASSERT_EQ(tsdf_fixed::roundNonNegativeToInt(x), static_cast<int>(std::round(x))) << x;
+    }
+  };
+  // (the cases a shortcut like (int)(x + 0.5f) gets wrong, e.g. 0.49999997f)
+  aroundHalfIntegers(300.f, check);
+  EXPECT_EQ(tsdf_fixed::roundNonNegativeToInt(0.49999997f), 0);
+  EXPECT_EQ(tsdf_fixed::roundNonNegativeToInt(2.5f), 3);
 }
 
 // The double overload rounds the integration's pixel coordinates as std::lround did: around every integer and
@@ -204,7 +221,7 @@ TEST(TsdfFixedPoint, WallMatchesFloatLayoutVoxelByVoxel) {
     EXPECT_EQ(a.foreground_q, 254);  // every observation inside the mask: p = 1
     EXPECT_EQ(b->foreground(), 1.f);
     if (std::isfinite(b->minDistance())) {
-      EXPECT_EQ(a.min_distance_mm, static_cast<int>(std::round(b->minDistance() * 1e3f))) << index.transpose();
+      EXPECT_EQ(a.min_distance_mm, static_cast<int>(std::nearbyint(b->minDistance() * 1e3f))) << index.transpose();
     } else {
       EXPECT_EQ(a.min_distance_mm, 65535);
     }

@@ -10,8 +10,10 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <opencv2/core.hpp>
 #include <unordered_map>
@@ -27,28 +29,37 @@ namespace semexp {
 /// Helpers of the fixed-point voxel. Without SSE4.1 std::round compiles to a
 /// libm call, and the voxel update quantises four fields per voxel; inline
 /// rounding and a table for the foreground division keep the fixed-point
-/// update close to the float one (issue 16) with bit-identical results.
+/// update close to the float one (issue 16).
 namespace tsdf_fixed {
 
-/// std::round (halfway cases away from zero) for |x| < 2^31, as an int, inline.
-/// Exact: the truncated value and the fraction x - trunc(x) are exact floats.
-inline int roundToInt(float x) {
-  const int i = static_cast<int>(x);  // truncates towards zero
-  const float frac = x - static_cast<float>(i);
-  return i + (frac >= 0.5f) - (frac <= -0.5f);
-}
-/// std::lround for |x| < 2^31 in double, inline; exact as above. Not a voxel
-/// field: the integration's pixel coordinates (both layouts), which called
-/// libm's lround twice per voxel.
+/// std::lround (halfway cases away from zero) for |x| < 2^31 in double,
+/// inline. Exact: the truncated value and the fraction x - trunc(x) are exact
+/// doubles. Not a voxel field: the integration's pixel coordinates (both
+/// layouts), which called libm's lround twice per voxel.
 inline int roundToInt(double x) {
   const int i = static_cast<int>(x);
   const double frac = x - static_cast<double>(i);
   return i + (frac >= 0.5) - (frac <= -0.5);
 }
-/// roundToInt for 0 <= x < 2^31 (one comparison fewer).
+/// std::round for 0 <= x < 2^31 in float, inline (the fused colour, both layouts).
 inline int roundNonNegativeToInt(float x) {
   const int i = static_cast<int>(x);
   return i + (x - static_cast<float>(i) >= 0.5f);
+}
+
+/// Round to nearest, halfway cases to even (as std::nearbyint in the default
+/// rounding mode), for |x| < 2^22, inline and branch-free: adding 1.5 * 2^23
+/// leaves the float with no fraction bits, so the addition itself rounds x,
+/// and the low bits of the sum are the result. The voxel setters' rounding:
+/// no conversion to int and back and no comparison, as a round half away from
+/// zero needs, and unbiased over many halfway cases. Needs float arithmetic
+/// in float precision (no x87 excess precision).
+static_assert(FLT_EVAL_METHOD == 0, "roundHalfEvenToInt needs float arithmetic in float precision");
+inline int roundHalfEvenToInt(float x) {
+  const float t = x + 12582912.f;  // 1.5 * 2^23
+  std::int32_t bits;
+  std::memcpy(&bits, &t, sizeof bits);
+  return bits - 0x4B400000;  // the bits of 1.5 * 2^23
 }
 
 /// Foreground probability of each stored byte, q / 254.f, so that reading it costs no division.
@@ -65,7 +76,7 @@ inline constexpr ForegroundTable kForeground{};
 /// Fixed-point voxel: SDF as int16 normalised by the truncation distance,
 /// foreground probability as uint8 (p = q / 254, so 0.5 is exact), weight as
 /// uint16 in 1/16 steps (so at most 4095.9), minimum observed distance in
-/// millimetres. Setters round half away from zero (as std::round) after
+/// millimetres. Setters round to nearest, halfway cases to even, after
 /// clamping to the representable range; NaN saturates to the upper bound.
 struct TsdfVoxel {
   std::int16_t sdf_q = 32767;           ///< sdf / truncation * 32767
@@ -78,7 +89,7 @@ struct TsdfVoxel {
   void setSdf(float sdf_m, float truncation_m) {
     // Clamping first equals clamping the rounded value (round is monotonic, the bounds are integers).
     const float q = std::max(-32767.f, std::min(32767.f, sdf_m / truncation_m * 32767.f));
-    sdf_q = static_cast<std::int16_t>(tsdf_fixed::roundToInt(q));
+    sdf_q = static_cast<std::int16_t>(tsdf_fixed::roundHalfEvenToInt(q));
   }
   /// Fuses an observation s_m (m) of weight w_obs into the stored SDF of
   /// weight w (w_new = w + w_obs > 0): the weighted mean, clamped and
@@ -87,19 +98,19 @@ struct TsdfVoxel {
   /// the mean is negative.
   bool fuseSdf(float s_m, float w, float w_obs, float w_new, float /*truncation_m*/, float to_q) {
     const float q = (static_cast<float>(sdf_q) * w + s_m * to_q * w_obs) / w_new;
-    sdf_q = static_cast<std::int16_t>(tsdf_fixed::roundToInt(std::max(-32767.f, std::min(32767.f, q))));
+    sdf_q = static_cast<std::int16_t>(tsdf_fixed::roundHalfEvenToInt(std::max(-32767.f, std::min(32767.f, q))));
     return q < 0.f;
   }
   float weight() const { return weight_q * (1.f / 16.f); }
   void setWeight(float w) {
     const float q = std::max(0.f, std::min(65535.f, w * 16.f));
-    weight_q = static_cast<std::uint16_t>(tsdf_fixed::roundNonNegativeToInt(q));
+    weight_q = static_cast<std::uint16_t>(tsdf_fixed::roundHalfEvenToInt(q));
   }
   static constexpr double kMaxWeight = 65535.0 / 16.0;  ///< largest representable weight
   float foreground() const { return tsdf_fixed::kForeground.p[foreground_q]; }
   void setForeground(float p) {
     const float q = std::max(0.f, std::min(1.f, p)) * 254.f;
-    foreground_q = static_cast<std::uint8_t>(tsdf_fixed::roundNonNegativeToInt(q));
+    foreground_q = static_cast<std::uint8_t>(tsdf_fixed::roundHalfEvenToInt(q));
   }
   float minDistance() const {
     return min_distance_mm == 65535 ? std::numeric_limits<float>::infinity() : min_distance_mm * 1e-3f;
@@ -113,7 +124,7 @@ struct TsdfVoxel {
  private:
   static std::uint16_t quantiseDistance(float d_m) {
     const float q = std::max(0.f, std::min(65534.f, d_m * 1e3f));
-    return static_cast<std::uint16_t>(tsdf_fixed::roundNonNegativeToInt(q));
+    return static_cast<std::uint16_t>(tsdf_fixed::roundHalfEvenToInt(q));
   }
 };
 
