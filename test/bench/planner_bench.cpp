@@ -142,7 +142,6 @@ int main(int argc, char** argv) {
   std::vector<double> total, sampling, paths, gains, yaw, retire, total_all, paths_all, retire_all;
   int planned = 0, planned_all = 0, reachable = 0, identical = 0, winners = 0;
   std::size_t ring_views = 0;  // object view ring positions whose gains the lazy mode computed
-  std::size_t reused = 0;      // candidates whose gains were their chosen ring view's
   std::string winner_list;  // to compare builds: the same winners and retirement mean the same decisions
   semexp::IterationResult last;
   const int kIterations = 20;
@@ -178,7 +177,6 @@ int main(int argc, char** argv) {
     paths_all.push_back(1e3 * a.path_planning_s);
     planned += r.candidates_planned;
     ring_views += r.object_views;
-    reused += r.object_views_reused;
     planned_all += a.candidates_planned;
     reachable += a.candidates_reachable;
     if (it + 1 == kIterations) last = std::move(r);
@@ -211,10 +209,9 @@ int main(int argc, char** argv) {
               semexp_bench::median(sampling), semexp_bench::median(paths), semexp_bench::median(gains),
               semexp_bench::median(yaw), semexp_bench::median(retire));
 
-  std::printf("  gain positions per iteration: %.1f object view ring positions (planner/object_view_samples) and "
-              "%d candidates' views, %.1f of them a ring view already evaluated, both modes\n",
-              static_cast<double>(ring_views) / kIterations, config.n_candidates,
-              static_cast<double>(reused) / kIterations);
+  std::printf("  gain positions per iteration: %d candidates' views and %.1f object view ring positions "
+              "(planner/object_view_samples), both modes\n",
+              config.n_candidates, static_cast<double>(ring_views) / kIterations);
   std::printf("  lazy winners:%s; after %d iterations %zu of %zu frontier clusters retired (geometry %zu, evidence %zu), "
               "%zu active frontier voxels\n",
               winner_list.c_str(), kIterations, last.retired_clusters_geometry + last.retired_clusters_evidence,

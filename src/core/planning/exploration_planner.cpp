@@ -20,6 +20,13 @@ std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
   return buf;
 }
 
+/// One view position's gain images, G (Eq. 2) and best yaw window.
+struct ViewGains {
+  GainSet gains;
+  GainImage combined;
+  YawWindow window;
+};
+
 /// Gains at `ps` (one batched call to each provider), combined and windowed.
 /// On a provider failure or bad images: reports it in r, returns false.
 bool evaluateViews(const std::vector<Eigen::Vector3d>& ps, const ExplorationProviders& prov,
@@ -89,9 +96,7 @@ ExplorationPlanner::ExplorationPlanner(const PlannerConfig& planner, const Explo
 
 bool ExplorationPlanner::chooseObjectViews(std::vector<CandidateSample>& samples,
                                            const std::vector<ObjectSummary>& objects,
-                                           const ExplorationProviders& prov, IterationResult& r,
-                                           std::vector<std::optional<ViewGains>>& chosen) {
-  chosen.assign(samples.size(), std::nullopt);
+                                           const ExplorationProviders& prov, IterationResult& r) {
   const auto t0 = Clock::now();
   std::vector<Eigen::Vector3d> views;
   std::vector<std::pair<std::size_t, std::size_t>> range(samples.size(), {0, 0});  // per sample: [first, last)
@@ -112,18 +117,13 @@ bool ExplorationPlanner::chooseObjectViews(std::vector<CandidateSample>& samples
       // The object gain this view's yaw window takes in first, then G; ties keep the first; a ring with no positive
       // gain leaves the sample where it was drawn.
       std::pair<double, double> best{0.0, 0.0};
-      std::size_t best_k = range[i].second;
       for (std::size_t k = range[i].first; k < range[i].second; ++k) {
         const YawWindow& w = g[k].window;
         const std::pair<double, double> key{windowMean(g[k].gains.object, w.first_column, w.columns), w.gain};
         if (key > best) {
           best = key;
-          best_k = k;
+          samples[i].position_W = views[k];
         }
-      }
-      if (best_k < range[i].second) {
-        samples[i].position_W = views[best_k];
-        chosen[i] = std::move(g[best_k]);  // the gains there are known: step 3 does not ask for them again
       }
     }
   }
@@ -223,9 +223,7 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   // their background gain like any other candidate, close the gap.
   if (samples.empty() && !r.termination.background_done) samples = sampler_.sampleFreeSpace(prov.is_free);
   r.sampling_s = secondsSince(t0);
-  std::vector<std::optional<ViewGains>> ring_gains;
-  if (planner_.object_view_samples > 1 && !chooseObjectViews(samples, in.objects, prov, r, ring_gains))
-    return finish();
+  if (planner_.object_view_samples > 1 && !chooseObjectViews(samples, in.objects, prov, r)) return finish();
   if (samples.empty()) {
     fail(r, "nothing to sample (no active frontiers, no object left to observe, no free view point)");
     return finish();
@@ -258,26 +256,10 @@ IterationResult ExplorationPlanner::plan(const ExplorationInputs& in, const Expl
   r.path_planning_s = secondsSince(t0);
 
   // 3. Gains at the view positions (one batched call), Eq. 2, sliding
-  // window, and each candidate's utility bound. A view on an object's ring
-  // that its goal left in place was evaluated in chooseObjectViews: the same
-  // map, the same position, the same gains.
+  // window, and each candidate's utility bound.
   t0 = Clock::now();
-  std::vector<ViewGains> view_gains(n);
-  std::vector<Eigen::Vector3d> to_evaluate;
-  std::vector<std::size_t> evaluated;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (i < ring_gains.size() && ring_gains[i] && views[i] == samples[i].position_W) {
-      view_gains[i] = std::move(*ring_gains[i]);
-      ++r.object_views_reused;
-    } else {
-      to_evaluate.push_back(views[i]);
-      evaluated.push_back(i);
-    }
-  }
-  std::vector<ViewGains> fresh;
-  const bool gains_ok =
-      to_evaluate.empty() || evaluateViews(to_evaluate, prov, planner_, window_columns_, fresh, r);
-  for (std::size_t j = 0; gains_ok && j < evaluated.size(); ++j) view_gains[evaluated[j]] = std::move(fresh[j]);
+  std::vector<ViewGains> view_gains;
+  const bool gains_ok = evaluateViews(views, prov, planner_, window_columns_, view_gains, r);
   r.gains_s += secondsSince(t0);
   if (!gains_ok) return finish();
   for (std::size_t i = 0; i < n; ++i) {

@@ -96,13 +96,6 @@ struct YawWindow {
   int columns = 1;       ///< window width in columns
 };
 
-/// One view position's gain images, G (Eq. 2) and best yaw window.
-struct ViewGains {
-  GainSet gains;
-  GainImage combined;
-  YawWindow window;
-};
-
 /// Window width in columns for a horizontal field of view: round(hfov / 2 pi
 /// * width), clamped to [1, width].
 int windowColumns(double hfov_rad, int width);

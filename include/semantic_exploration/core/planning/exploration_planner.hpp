@@ -13,7 +13,6 @@
 
 #include <Eigen/Core>
 #include <cstdint>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -90,8 +89,6 @@ struct IterationResult {
   int candidates_reachable = 0;          ///< of the planned candidates
   int candidates_planned = 0;            ///< candidates a path was planned for
   std::size_t object_views = 0;          ///< view points around the object candidates whose gains were computed
-  /// Candidates whose gains were those of their chosen ring view (not asked for again)
-  std::size_t object_views_reused = 0;
   /// The termination check of this iteration: which conditions of "explored" hold.
   TerminationDecision termination;
   std::size_t active_frontiers = 0;              ///< frontier voxels still to be observed
@@ -144,11 +141,8 @@ class ExplorationPlanner {
   /// candidate will fly it) holds the most object gain, ties broken by G: one
   /// batched gain call for all of them. The utility that ranks candidates is
   /// untouched. False on a provider failure (reported in r).
-  /// Moves each object candidate to the best view on its ring; `chosen` gets
-  /// the gains at each moved candidate's new position (nullopt elsewhere).
   bool chooseObjectViews(std::vector<CandidateSample>& samples, const std::vector<ObjectSummary>& objects,
-                         const ExplorationProviders& prov, IterationResult& r,
-                         std::vector<std::optional<ViewGains>>& chosen);
+                         const ExplorationProviders& prov, IterationResult& r);
 
   PlannerConfig planner_;
   ExplorationConfig exploration_;
