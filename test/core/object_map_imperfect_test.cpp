@@ -187,13 +187,13 @@ TEST(ObjectMapImperfect, DetectionMissedInEverySecondFrameIsOneObject) {
   const Mesh mesh = o.tsdf.extractMesh();
   EXPECT_LT(rmse(mesh.vertices_W, c), 0.02);
   // Most of the chair's mesh, not a fragment: the undetected frames lower the foreground of what they see
-  // (the paper's update), so the mesh keeps 2,000 of the 2,757 vertices that the same frames give when every
-  // one is detected (73%); at least 60% is asked.
+  // (the paper's update), so the mesh keeps fewer vertices than the same frames give when every one is
+  // detected (73% when this was written: 2,000 of 2,757); at least 70% is asked.
   const ObjectMap every = fly(false);
   ASSERT_EQ(every.objects().size(), 1u);
   const std::size_t all = every.objects().begin()->second->tsdf.extractMesh().vertices_W.size();
   EXPECT_GT(all, 2000u);
-  EXPECT_GE(mesh.vertices_W.size(), 0.6 * all);
+  EXPECT_GE(mesh.vertices_W.size(), 0.7 * all);
 }
 
 // The pixels of `mask` whose depth puts them above (z_W > z_m) or below the height z_m.

@@ -161,7 +161,10 @@ TEST(TsdfFixedPoint, InlineRoundingMatchesNearbyint) {
   EXPECT_EQ(tsdf_fixed::roundHalfEvenToInt(2.5f), 2);
   EXPECT_EQ(tsdf_fixed::roundHalfEvenToInt(-2.5f), -2);
   EXPECT_EQ(tsdf_fixed::roundHalfEvenToInt(-32766.5f), -32766);
+  EXPECT_EQ(tsdf_fixed::roundHalfEvenToInt(65533.5f), 65534);
+  // Near the top of the stored ranges, not halfway.
   EXPECT_EQ(tsdf_fixed::roundHalfEvenToInt(65534.4f), 65534);
+  EXPECT_EQ(tsdf_fixed::roundHalfEvenToInt(-32767.f), -32767);
 }
 
 // The colour's rounding (both layouts) is std::round's, inline.

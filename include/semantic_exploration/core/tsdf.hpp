@@ -52,14 +52,21 @@ inline int roundNonNegativeToInt(float x) {
 /// leaves the float with no fraction bits, so the addition itself rounds x,
 /// and the low bits of the sum are the result. The voxel setters' rounding:
 /// no conversion to int and back and no comparison, as a round half away from
-/// zero needs, and unbiased over many halfway cases. Needs float arithmetic
-/// in float precision (no x87 excess precision).
-static_assert(FLT_EVAL_METHOD == 0, "roundHalfEvenToInt needs float arithmetic in float precision");
+/// zero needs, and unbiased over many halfway cases. Where float arithmetic
+/// may run in more than float precision (x87, or FLT_EVAL_METHOD unknown, as
+/// some compilers report under -ffast-math), std::nearbyint gives the same
+/// results, more slowly.
 inline int roundHalfEvenToInt(float x) {
+#if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD == 0
+  static_assert(std::numeric_limits<float>::is_iec559 && sizeof(float) == sizeof(std::int32_t),
+                "roundHalfEvenToInt reads the bits of an IEEE 754 single");
   const float t = x + 12582912.f;  // 1.5 * 2^23
   std::int32_t bits;
   std::memcpy(&bits, &t, sizeof bits);
   return bits - 0x4B400000;  // the bits of 1.5 * 2^23
+#else
+  return static_cast<int>(std::nearbyint(x));
+#endif
 }
 
 /// Foreground probability of each stored byte, q / 254.f, so that reading it costs no division.

@@ -31,8 +31,8 @@ _MAX_INSTANCE_LEVELS = 8  # hit instID pointers handed over; Embree reads only a
 #: other widths can report the other face, so a pixel's instance differs and a
 #: deterministic flight parts from its twin on a machine with other vector
 #: units (AVX-512 against AVX2: docs/BENCHMARKS.md "Deterministic flights on
-#: other processors"). AVX2 is the widest set that x86-64 machines of the last
-#: decade share; where it is missing Embree takes the widest it has.
+#: other processors"). Intel Core and Xeon processors since Haswell and AMD's
+#: since Zen have AVX2; where it is missing Embree takes the widest it has.
 DEVICE_CONFIG = "threads=1,max_isa=avx2"
 
 _f = ctypes.POINTER(ctypes.c_float)
