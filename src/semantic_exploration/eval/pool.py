@@ -101,12 +101,12 @@ def pool_report(entries: Sequence[Tuple[str, Optional[str]]], modes: Sequence[st
                 continue
             by_mode[mode].append(run)
             n += 1
+        runs = only + " runs" if only else "runs"
         if n == 0:
-            msgs.append("no usable %sruns in %s" % (only + " " if only else "", campaign))
+            msgs.append("no usable %s in %s" % (runs, campaign))
         own = campaign_setup(os.path.join(campaign, "report.md"))
         setups.append(shared_setup(own))
-        setup.append("pooled: %d %sruns of %s%s" % (n, only + " " if only else "", campaign,
-                                                    "".join("; " + line for line in own)))
+        setup.append("pooled: %d %s of %s%s" % (n, runs, campaign, "".join("; " + line for line in own)))
     differ = differences(setups)
     if differ:
         setup.append("the pooled campaigns differ in: %s (pairs compare runs flown under different settings)"
