@@ -9,7 +9,6 @@ import json
 import os
 import shutil
 import struct
-import subprocess
 import sys
 import time
 
@@ -161,36 +160,16 @@ def child(work):
 
 @pytest.mark.skipif(not ROS_SOURCED, reason="ROS environment (roslaunch) not sourced")
 def test_mav_sim_survives_a_malformed_scene_and_a_huge_path(tmp_path):
-    import rviz_screenshot as rs
-    import run_mission as mission
+    import sim_child
     work = str(tmp_path)
-    port = mission._free_port()
-    env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOSTNAME="127.0.0.1",
-               ROS_HOME=os.path.join(work, "ros_home"))
-    procs = []
+    env, procs = sim_child.master(work)
     try:
-        procs.append(subprocess.Popen(["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL,
-                                      stderr=subprocess.STDOUT, start_new_session=True))
-        time.sleep(3.0)
-        procs.append(subprocess.Popen(
-            ["roslaunch", "semantic_exploration", "sim_only.launch", "scene:=" + EXAMPLE, "output:=log"], env=env,
-            stdout=open(os.path.join(work, "sim.log"), "w"), stderr=subprocess.STDOUT, start_new_session=True))
-        kid = subprocess.Popen([sys.executable, __file__, work], env=env,
-                               stdout=open(os.path.join(work, "child.log"), "w"), stderr=subprocess.STDOUT,
-                               start_new_session=True)
+        procs.append(sim_child.start_sim(work, env, "scene:=" + EXAMPLE))
+        kid = sim_child.start_child(__file__, work, env)
         procs.append(kid)
-        try:
-            kid.wait(timeout=240)
-        except subprocess.TimeoutExpired:
-            pass
-        with open(os.path.join(work, "child.log")) as f:
-            print(f.read())
-        assert kid.returncode == 0, "the child did not finish"
-        with open(os.path.join(work, "events.json")) as f:
-            ev = json.load(f)
+        ev = sim_child.child_events(kid, work, 240, "the child did not finish")
     finally:
-        for p in reversed(procs):
-            rs._stop(p, grace_s=20.0)
+        sim_child.stop_all(procs)
     print({k: v if not isinstance(v, list) else v[:5] + ["..."] for k, v in ev.items()})
     assert ev["scene_errors"] and "face element lacks vertex_indices" in ev["scene_errors"][0], ev["scene_errors"]
     assert ev["rejected_paths"], "the %d-pose path was not rejected" % HUGE

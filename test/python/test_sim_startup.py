@@ -11,7 +11,6 @@ vain would end the test by its deadline. Skipped where ROS is not sourced."""
 import json
 import os
 import shutil
-import subprocess
 import sys
 import time
 
@@ -79,40 +78,21 @@ def child(work):
 
 @pytest.mark.skipif(not ROS_SOURCED, reason="ROS environment (roslaunch) not sourced")
 def test_clock_first_and_a_late_lockstep_node_does_not_stall(tmp_path):
-    import rviz_screenshot as rs
-    import run_mission as mission
+    import sim_child
     work = str(tmp_path)
-    port = mission._free_port()
-    env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOSTNAME="127.0.0.1",
-               ROS_HOME=os.path.join(work, "ros_home"))
     over = os.path.join(work, "sim_overrides.yaml")
     with open(over, "w") as f:
         f.write("lockstep_timeout_s: 600.0\nlockstep_startup_timeout_s: 2.0\n")
-    procs = []
+    env, procs = sim_child.master(work)
     try:
-        procs.append(subprocess.Popen(["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL,
-                                      stderr=subprocess.STDOUT, start_new_session=True))
-        time.sleep(3.0)
-        kid = subprocess.Popen([sys.executable, __file__, work], env=env, stdout=open(os.path.join(work, "child.log"), "w"),
-                               stderr=subprocess.STDOUT, start_new_session=True)
+        kid = sim_child.start_child(__file__, work, env)
         procs.append(kid)
         time.sleep(2.0)  # the child is registered (not subscribed to depth) before the simulator starts
-        procs.append(subprocess.Popen(
-            ["roslaunch", "semantic_exploration", "sim_only.launch", "scene:=" + EXAMPLE, "overrides:=" + over,
-             "lockstep:=true", "real_time_factor:=0", "lockstep_nodes:=[%s]" % NODE, "output:=log"], env=env,
-            stdout=open(os.path.join(work, "sim.log"), "w"), stderr=subprocess.STDOUT, start_new_session=True))
-        try:
-            kid.wait(timeout=150)
-        except subprocess.TimeoutExpired:
-            pass
-        with open(os.path.join(work, "child.log")) as f:
-            print(f.read())
-        assert kid.returncode == 0, "the child did not finish: the simulator stalled?"
-        with open(os.path.join(work, "events.json")) as f:
-            ev = json.load(f)
+        procs.append(sim_child.start_sim(work, env, "scene:=" + EXAMPLE, "overrides:=" + over, "lockstep:=true",
+                                         "real_time_factor:=0", "lockstep_nodes:=[%s]" % NODE))
+        ev = sim_child.child_events(kid, work, 150, "the child did not finish: the simulator stalled?")
     finally:
-        for p in reversed(procs):
-            rs._stop(p, grace_s=20.0)
+        sim_child.stop_all(procs)
     print({k: v if not isinstance(v, list) else v[:5] + ["..."] for k, v in ev.items()})
     # frame 0 is the first frame, and the clock had reached it before it arrived
     assert ev["first_rgb"] == pytest.approx(START_S)
