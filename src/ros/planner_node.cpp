@@ -86,12 +86,17 @@ bool PlannerNode::applyBlocks(const semantic_exploration::MapBlocks& msg, bool& 
     return false;
   }
   switch (replica_.apply(u)) {
-    case semexp::MapReplica::Result::kApplied: return true;
+    case semexp::MapReplica::Result::kApplied:
+      replica_stamp_ = u.full ? msg.header.stamp : std::max(replica_stamp_, msg.header.stamp);
+      return true;
     case semexp::MapReplica::Result::kStale:
-      // Sequence 1 after a later one: background_map restarted and counts
-      // from 1 again, and its blocks must not be merged onto the old map.
-      // Older updates queued before a resync are only stale.
-      gap = u.sequence == 1 && replica_.sequence() > 1;
+      // background_map restarted and counts from 1 again; its blocks must not
+      // be merged onto the old map. Seen as sequence 1 after a later one, or,
+      // should 1 never arrive (a full queue) or its resync fail, as any older
+      // sequence with a newer stamp: an update queued before a resync is
+      // older than what the replica holds, in sequence and in stamp, and is
+      // only stale.
+      gap = (u.sequence == 1 && replica_.sequence() > 1) || msg.header.stamp > replica_stamp_;
       return false;
     case semexp::MapReplica::Result::kGap: gap = true; return false;
     case semexp::MapReplica::Result::kBadInput: drops_.drop("bad_map_update", replica_.lastError()); return false;
@@ -127,7 +132,7 @@ void PlannerNode::mapUpdateCallback(const semantic_exploration::MapBlocksConstPt
   if (!applyBlocks(*msg, gap) && gap) {
     ROS_WARN("planner: map update %lu after %lu (%s): resyncing", static_cast<unsigned long>(msg->sequence),
              static_cast<unsigned long>(replica_.sequence()),
-             msg->sequence == 1 ? "the map restarted" : "updates were lost");
+             msg->sequence <= replica_.sequence() ? "the map restarted" : "updates were lost");
     resync();
   }
 }

@@ -44,3 +44,28 @@ def test_freeze_keeps_every_figure():
     log.freeze()
     log.handle("/mav/collisions", std_msgs.UInt32(5))
     assert log.collisions == 2
+
+
+def _counts(node, stamp_s, **counts):
+    from semantic_exploration.msg import DropCounts
+    from std_msgs.msg import Header
+    return DropCounts(header=Header(stamp=rospy.Time.from_sec(stamp_s)), node=node, reasons=list(counts),
+                      counts=list(counts.values()))
+
+
+def test_freeze_lets_the_faults_catch_up_with_the_drop_counts():
+    """At the stop, a node's count of frame 1.2 s is in, the simulator's count
+    of the fault it injected into that frame (sent first, over another
+    connection) is not: it is still taken, and later faults are not."""
+    pytest.importorskip("semantic_exploration.msg")
+    log = RunLog()
+    log.handle("/mav_sim/faults", _counts("/mav_sim", 1.0, detections_rescaled=10))
+    log.handle("/dropped_input", _counts("/instance_matching", 1.1, size_mismatch=10))
+    log.handle("/dropped_input", _counts("/instance_matching", 1.25, size_mismatch=11))
+    log.freeze()
+    log.handle("/mav_sim/faults", _counts("/mav_sim", 1.1, detections_rescaled=11))
+    log.handle("/mav_sim/faults", _counts("/mav_sim", 1.2, detections_rescaled=12))
+    log.handle("/mav_sim/faults", _counts("/mav_sim", 1.3, detections_rescaled=13))  # after the stop
+    log.handle("/dropped_input", _counts("/instance_matching", 1.35, size_mismatch=12))
+    assert log.faults == {"detections_rescaled": 12}
+    assert log.drops == {"instance_matching": {"size_mismatch": 11}}

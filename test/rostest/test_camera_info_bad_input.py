@@ -17,34 +17,13 @@ from semantic_exploration.msg import Detection, Detections, DropCounts, FrameInt
 
 # test_object_map_bad_input.py lies beside this file's real path (a catkin devel-space relay runs this file from elsewhere).
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
-from test_object_map_bad_input import start_camera_broadcast  # noqa: E402
+from test_object_map_bad_input import camera_info, image, start_camera_broadcast  # noqa: E402
 
 
 PKG = "semantic_exploration"
 W, H = 320, 240
 CHAIR = 1  # class id of "chair" in config/semantic.yaml
 NODES = ("/instance_matching", "/depth_history")
-
-
-def image(arr, encoding, stamp):
-    m = Image()
-    m.header.stamp = stamp
-    m.header.frame_id = "camera"
-    m.height, m.width = arr.shape[:2]
-    m.encoding = encoding
-    m.step = arr.strides[0]
-    m.data = arr.tobytes()
-    return m
-
-
-def camera_info(w, h, D=(), model=""):
-    ci = CameraInfo()
-    ci.header.frame_id = "camera"
-    ci.width, ci.height = w, h
-    ci.K = [262.5, 0.0, (w - 1) / 2.0, 0.0, 262.5, (h - 1) / 2.0, 0.0, 0.0, 1.0]
-    ci.D = list(D)
-    ci.distortion_model = model
-    return ci
 
 
 class BadCameraInfo(unittest.TestCase):

@@ -10,7 +10,7 @@ import rospy
 import rostest
 import tf2_ros
 from geometry_msgs.msg import TransformStamped
-from sensor_msgs.msg import Image
+from sensor_msgs.msg import CameraInfo, Image
 
 from semantic_exploration.msg import Detection, Detections, DropCounts, FrameIntegrated, MatchedDetections, \
     ObjectArray
@@ -21,6 +21,7 @@ CHAIR = 1  # class id of "chair" in config/semantic.yaml
 
 
 def image(arr, encoding, stamp):
+    """arr as a sensor_msgs/Image in frame "camera". Shared by the camera-fed bad-input rostests."""
     m = Image()
     m.header.stamp = stamp
     m.header.frame_id = "camera"
@@ -29,6 +30,18 @@ def image(arr, encoding, stamp):
     m.step = arr.strides[0]
     m.data = arr.tobytes()
     return m
+
+
+def camera_info(w, h, D=(), model=""):
+    """CameraInfo of a w x h camera, f = 262.5 px, centred, distortion D of `model`
+    (none by default). Shared by the camera-fed bad-input rostests."""
+    ci = CameraInfo()
+    ci.header.frame_id = "camera"
+    ci.width, ci.height = w, h
+    ci.K = [262.5, 0.0, (w - 1) / 2.0, 0.0, 262.5, (h - 1) / 2.0, 0.0, 0.0, 1.0]
+    ci.D = list(D)
+    ci.distortion_model = model
+    return ci
 
 
 

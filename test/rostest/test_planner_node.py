@@ -237,6 +237,20 @@ class PlannerNodeTest(unittest.TestCase):
         self.assertTrue(answers[-1].success, answers[-1].message)
         self.assertTrue(self.wait_for(lambda: len(self.paths) > n_paths), "no path after the inputs arrived")
 
+    def test_2c_a_restarted_map_is_seen_without_its_sequence_1(self):
+        # The replica holds sequence 8 (test_2b). An update older in sequence and
+        # in stamp (queued before a resync) is only stale. One older in sequence
+        # but newer in stamp comes from a background_map that restarted and whose
+        # update 1 never arrived (or whose resync failed): resync.
+        before = self.get_map_calls
+        queued = blocks_msg(self.grid, 3, False)
+        queued.header.stamp = rospy.Time(1.0)
+        self.map_pub.publish(queued)
+        time.sleep(1.0)
+        self.assertEqual(self.get_map_calls, before, "a stale update led to a resync")
+        self.map_pub.publish(blocks_msg(self.grid, 3, False))
+        self.assertTrue(self.wait_for(lambda: self.get_map_calls > before), "no resync after the map restarted")
+
     def test_3_no_frontiers_terminates(self):
         # Semantic mode: "explored" also needs the background seen from <= d_bg
         # (termination/background_observed_share 0.9) and no object left; the

@@ -85,7 +85,8 @@ class PlannerNode {
   std::string missingInputs(const ros::Time& frame_stamp) const;
   void publishStatus(uint8_t state, const std::string& message);
 
-  /// Applies one MapBlocks message to the replica; `gap` is set when a resync is needed.
+  /// Applies one MapBlocks message to the replica; `gap` is set when a resync is needed:
+  /// a sequence skipped, or one that went back while its stamp went on (background_map restarted).
   bool applyBlocks(const semantic_exploration::MapBlocks& msg, bool& gap);
   bool resync();
   /// One planning iteration; true if a path was published. `message` says what happened. `stamp`:
@@ -107,6 +108,8 @@ class PlannerNode {
   std::unique_ptr<PlannerServices> services_;
 
   semexp::MapReplica replica_;
+  /// Stamp of the newest update applied to the replica (of the full map after a resync).
+  ros::Time replica_stamp_;
   std::unique_ptr<semexp::ExplorationPlanner> planner_;
   double planner_resolution_m_ = 0.0;
   std::vector<Eigen::Vector3d> frontiers_W_;

@@ -67,11 +67,20 @@ class RunLog:
         self.found_at_s: Optional[float] = None
         self._last_pos = None
         self._frozen = False
+        self._drops_stamp_s = 0.0  # sim time of the newest /dropped_input message
 
     def freeze(self):
         """Keeps every figure as it is now (the run stopped; a simulator that
-        goes on while the maps are saved adds nothing to it)."""
+        goes on while the maps are saved adds nothing to it). One exception:
+        the simulator's fault counts still come in up to the sim time of the
+        newest drop count. Each topic has its own connection, so at the stop
+        a node's count of frame k can be here while the simulator's count of
+        the fault it injected into frame k (sent before the frame) is not yet;
+        the report would then show more drops than faults."""
         self._frozen = True
+
+    def _late_faults(self, topic: str, msg) -> bool:
+        return topic == "/mav_sim/faults" and msg.header.stamp.to_sec() <= self._drops_stamp_s
 
     # ------------------------------------------------------------- input
     def subscribe(self):
@@ -92,7 +101,7 @@ class RunLog:
         """Feeds one message of `topic` (live, or read from a bag); other
         topics, and everything after freeze(), are ignored."""
         h = TOPICS.get(topic)
-        if h is not None and not self._frozen:
+        if h is not None and (not self._frozen or self._late_faults(topic, msg)):
             getattr(self, h)(msg)
 
     def _on_status(self, msg):
@@ -123,6 +132,7 @@ class RunLog:
 
     def _on_drops(self, msg):
         self.drops[short_node(msg.node)] = dict(zip(msg.reasons, (int(c) for c in msg.counts)))
+        self._drops_stamp_s = max(self._drops_stamp_s, msg.header.stamp.to_sec())
 
     def _on_faults(self, msg):
         self.faults = dict(zip(msg.reasons, (int(c) for c in msg.counts)))

@@ -73,6 +73,13 @@ struct BoxRoom {
   }
 };
 
+/// A wall facing -x at x = 2.013 m (off the voxel grid) inside a generous box.
+inline BoxRoom wallScene() {
+  BoxRoom s;
+  s.room = {{-8.0, -6.0, -4.0}, {2.013, 6.0, 4.0}};
+  return s;
+}
+
 /// A room of 6 x 4.5 x 2.7 m with four boxes; walls deliberately off the voxel grid.
 inline BoxRoom standardRoom() {
   BoxRoom s;
