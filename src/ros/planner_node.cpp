@@ -87,15 +87,19 @@ bool PlannerNode::applyBlocks(const semantic_exploration::MapBlocks& msg, bool& 
   }
   switch (replica_.apply(u)) {
     case semexp::MapReplica::Result::kApplied:
-      replica_stamp_ = u.full ? msg.header.stamp : std::max(replica_stamp_, msg.header.stamp);
+      // The last applied, not the newest: applied updates come in sequence,
+      // and after a clock that went back (a bag played again) the stamps of
+      // the same map go back with it.
+      replica_stamp_ = msg.header.stamp;
       return true;
     case semexp::MapReplica::Result::kStale:
       // background_map restarted and counts from 1 again; its blocks must not
-      // be merged onto the old map. Seen as sequence 1 after a later one, or,
-      // should 1 never arrive (a full queue) or its resync fail, as any older
-      // sequence with a newer stamp: an update queued before a resync is
-      // older than what the replica holds, in sequence and in stamp, and is
-      // only stale.
+      // be merged onto the old map. Seen as sequence 1 after a later one, or
+      // as any older sequence with a newer stamp: the restarted node's 1 may
+      // never arrive (map_update is not latched, and it can go out before the
+      // planner has connected to the new node), or its resync may fail. An
+      // update queued before a resync is older than what the replica holds,
+      // in sequence and in stamp, and is only stale.
       gap = (u.sequence == 1 && replica_.sequence() > 1) || msg.header.stamp > replica_stamp_;
       return false;
     case semexp::MapReplica::Result::kGap: gap = true; return false;

@@ -112,7 +112,7 @@ bool PlannerServices::getMap(semantic_exploration::GetMap& srv) {
   caller_.forgetTimeout("background_map/get_map");  // a resync is not part of an iteration
   srv.request.compact = true;  // uniform blocks as one value: the answer grows with the map's detail, not its volume
   if (caller_.call("background_map/get_map", srv, why) == ServiceCaller::Result::kOk) return true;
-  drops_.drop("resync_failed", why + "; the replica may be stale until the next gap");
+  drops_.drop("resync_failed", why + "; the replica may be stale until the next update calls for a resync");
   return false;
 }
 

@@ -8,17 +8,21 @@ import subprocess
 import sys
 import time
 
+# scripts/ (conftest.py puts it on the path): a free port, and stopping a process group.
+import rviz_screenshot
+import run_mission
 
-def master(work):
-    """Starts roscore on a free port; returns (env of that master, [the roscore process])."""
-    import run_mission as mission
-    port = mission._free_port()
+
+def master(work, procs):
+    """Starts roscore on a free port, appended to procs (for stop_all) before
+    it is waited for; returns the environment that names that master."""
+    port = run_mission._free_port()
     env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOSTNAME="127.0.0.1",
                ROS_HOME=os.path.join(work, "ros_home"))
-    roscore = subprocess.Popen(["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL,
-                               stderr=subprocess.STDOUT, start_new_session=True)
+    procs.append(subprocess.Popen(["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.STDOUT, start_new_session=True))
     time.sleep(3.0)
-    return env, [roscore]
+    return env
 
 
 def start_child(script, work, env):
@@ -43,9 +47,8 @@ def child_events(kid, work, timeout_s, why):
 
 def stop_all(procs):
     """Stops the processes, the last started first."""
-    import rviz_screenshot as rs
     for p in reversed(procs):
-        rs._stop(p, grace_s=20.0)
+        rviz_screenshot._stop(p, grace_s=20.0)
 
 
 def start_sim(work, env, *launch_args):

@@ -162,8 +162,9 @@ def child(work):
 def test_mav_sim_survives_a_malformed_scene_and_a_huge_path(tmp_path):
     import sim_child
     work = str(tmp_path)
-    env, procs = sim_child.master(work)
+    procs = []
     try:
+        env = sim_child.master(work, procs)
         procs.append(sim_child.start_sim(work, env, "scene:=" + EXAMPLE))
         kid = sim_child.start_child(__file__, work, env)
         procs.append(kid)

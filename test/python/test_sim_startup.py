@@ -83,8 +83,9 @@ def test_clock_first_and_a_late_lockstep_node_does_not_stall(tmp_path):
     over = os.path.join(work, "sim_overrides.yaml")
     with open(over, "w") as f:
         f.write("lockstep_timeout_s: 600.0\nlockstep_startup_timeout_s: 2.0\n")
-    env, procs = sim_child.master(work)
+    procs = []
     try:
+        env = sim_child.master(work, procs)
         kid = sim_child.start_child(__file__, work, env)
         procs.append(kid)
         time.sleep(2.0)  # the child is registered (not subscribed to depth) before the simulator starts

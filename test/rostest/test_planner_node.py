@@ -163,7 +163,10 @@ class PlannerNodeTest(unittest.TestCase):
     def get_map(cls, _req):
         with cls.lock:
             cls.get_map_calls += 1
-        return GetMapResponse(map=blocks_msg(cls.grid, 7, True))
+        # Stamped as background_map stamps it: its last integrated frame, here an old one.
+        m = blocks_msg(cls.grid, 7, True)
+        m.header.stamp = rospy.Time(2.0)
+        return GetMapResponse(map=m)
 
     def plan_once(self):
         return rospy.ServiceProxy("/planner/plan_once", PlanOnce)()
@@ -241,15 +244,18 @@ class PlannerNodeTest(unittest.TestCase):
         # The replica holds sequence 8 (test_2b). An update older in sequence and
         # in stamp (queued before a resync) is only stale. One older in sequence
         # but newer in stamp comes from a background_map that restarted and whose
-        # update 1 never arrived (or whose resync failed): resync.
+        # update 1 never arrived (or whose resync failed): resync. Both go over
+        # one connection, in order. Had the first led to a resync, its full map
+        # (stamped 2 s) would leave the second stale and newer again: a second call.
         before = self.get_map_calls
         queued = blocks_msg(self.grid, 3, False)
         queued.header.stamp = rospy.Time(1.0)
         self.map_pub.publish(queued)
-        time.sleep(1.0)
-        self.assertEqual(self.get_map_calls, before, "a stale update led to a resync")
         self.map_pub.publish(blocks_msg(self.grid, 3, False))
         self.assertTrue(self.wait_for(lambda: self.get_map_calls > before), "no resync after the map restarted")
+        time.sleep(1.0)
+        self.assertEqual(self.get_map_calls, before + 1, "the stale update led to a resync too")
+        self.map_pub.publish(blocks_msg(self.grid, 8, False))  # back at 8 (the resync answers 7), as test_2b left it
 
     def test_3_no_frontiers_terminates(self):
         # Semantic mode: "explored" also needs the background seen from <= d_bg

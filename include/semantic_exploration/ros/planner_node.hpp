@@ -108,7 +108,7 @@ class PlannerNode {
   std::unique_ptr<PlannerServices> services_;
 
   semexp::MapReplica replica_;
-  /// Stamp of the newest update applied to the replica (of the full map after a resync).
+  /// Stamp of the last update applied to the replica (of the full map after a resync).
   ros::Time replica_stamp_;
   std::unique_ptr<semexp::ExplorationPlanner> planner_;
   double planner_resolution_m_ = 0.0;

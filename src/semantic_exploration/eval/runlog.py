@@ -99,7 +99,8 @@ class RunLog:
 
     def handle(self, topic: str, msg) -> None:
         """Feeds one message of `topic` (live, or read from a bag); other
-        topics, and everything after freeze(), are ignored."""
+        topics, and everything after freeze() but the late fault counts
+        freeze() names, are ignored."""
         h = TOPICS.get(topic)
         if h is not None and (not self._frozen or self._late_faults(topic, msg)):
             getattr(self, h)(msg)

@@ -18,7 +18,7 @@ import numpy as np
 
 from .classes import ClassTable
 from .config import CameraConfig, NoiseConfig
-from .renderer import camera_info, face_tables, pixel_rays_C, sigma_of_depth
+from .renderer import sigma_of_depth
 from .scene import Scene
 
 
@@ -45,15 +45,37 @@ class ReferenceRenderer:
         n[self._valid_face] /= norm[self._valid_face, None]
         self._normal = n
         self._offset = np.einsum("ij,ij->i", n, tri[:, 0])
-        # Per-face lookups (index len(faces) = "no hit").
-        (self._face_instance, self._face_class, self._face_nonreturning,
-         self._face_color) = face_tables(scene, classes, non_returning)
-        self._dirs_C, self._inv_ray_len = pixel_rays_C(camera)
+        # Per-face lookups (index M = "no hit").
+        m = len(scene.faces)
+        # Object id -> (instance, class) tables, then per face by one gather.
+        things = scene.thing_ids(classes.names)
+        top = int(max(scene.face_object.max(), max(things, default=0))) + 1
+        id_inst = np.zeros(top, np.uint16)
+        id_cls = np.zeros(top, np.uint16)
+        for oid in things:
+            id_inst[oid] = oid
+            id_cls[oid] = classes.id(scene.objects[oid])
+        fo = np.clip(scene.face_object, 0, top - 1)
+        self._face_instance = np.append(id_inst[fo], np.uint16(0))
+        self._face_class = np.append(id_cls[fo], np.uint16(0))
+        nr = np.zeros(m + 1, bool)
+        nr[:m] = scene.non_returning_faces(non_returning)
+        nr[m] = True
+        self._face_nonreturning = nr
+        self._face_color = np.vstack([scene.face_colors, [[0, 0, 0]]]).astype(np.float32)
+        u, v = np.meshgrid(np.arange(camera.width, dtype=np.float64), np.arange(camera.height, dtype=np.float64))
+        self._dirs_C = np.stack([(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy,
+                                 np.ones_like(u)], -1).reshape(-1, 3)
+        self._inv_ray_len = 1.0 / np.linalg.norm(self._dirs_C, axis=1)  # rotation-invariant
         self._origins = np.empty((camera.width * camera.height, 3), np.float32)
 
     def camera_info(self) -> Dict:
         """Intrinsics as sensor_msgs/CameraInfo fields (plumb_bob, zero distortion)."""
-        return camera_info(self.camera)
+        c = self.camera
+        return {"width": c.width, "height": c.height, "distortion_model": "plumb_bob", "D": [0.0] * 5,
+                "K": [c.fx, 0.0, c.cx, 0.0, c.fy, c.cy, 0.0, 0.0, 1.0],
+                "R": [1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0],
+                "P": [c.fx, 0.0, c.cx, 0.0, 0.0, c.fy, c.cy, 0.0, 0.0, 0.0, 1.0, 0.0]}
 
     def cast(self, T_WC: np.ndarray):
         """Hit face per pixel (M = no hit) and optical-axis depth (inf where no hit)."""

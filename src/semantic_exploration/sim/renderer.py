@@ -33,43 +33,6 @@ def sigma_of_depth(d, sigma_min, sigma_max, s):
     return np.maximum(sigma_min, np.minimum(s * np.square(d), sigma_max))
 
 
-def camera_info(c: CameraConfig) -> Dict:
-    """Intrinsics of c as sensor_msgs/CameraInfo fields (plumb_bob, zero distortion)."""
-    return {"width": c.width, "height": c.height, "distortion_model": "plumb_bob", "D": [0.0] * 5,
-            "K": [c.fx, 0.0, c.cx, 0.0, c.fy, c.cy, 0.0, 0.0, 1.0],
-            "R": [1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0],
-            "P": [c.fx, 0.0, c.cx, 0.0, 0.0, c.fy, c.cy, 0.0, 0.0, 0.0, 1.0, 0.0]}
-
-
-def pixel_rays_C(camera: CameraConfig):
-    """Each pixel's ray in the camera frame, row by row, scaled to z = 1 ((N, 3)),
-    and 1 / its length ((N,); the same in any frame: rotations keep lengths)."""
-    u, v = np.meshgrid(np.arange(camera.width, dtype=np.float64), np.arange(camera.height, dtype=np.float64))
-    dirs_C = np.stack([(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, np.ones_like(u)], -1).reshape(-1, 3)
-    return dirs_C, 1.0 / np.linalg.norm(dirs_C, axis=1)
-
-
-def face_tables(scene: Scene, classes: ClassTable, non_returning: Iterable[str]):
-    """What a hit on each face returns: instance id, class id (uint16), whether
-    the face returns no depth (bool) and its colour (float32 RGB), each with
-    one entry more, index len(scene.faces), for a ray that hits nothing (0, 0,
-    no return, black). Shared by the renderer and the reference renderer."""
-    m = len(scene.faces)
-    # Object id -> (instance, class) tables, then per face by one gather.
-    things = scene.thing_ids(classes.names)
-    top = int(max(scene.face_object.max(), max(things, default=0))) + 1
-    id_inst = np.zeros(top, np.uint16)
-    id_cls = np.zeros(top, np.uint16)
-    for oid in things:
-        id_inst[oid] = oid
-        id_cls[oid] = classes.id(scene.objects[oid])
-    fo = np.clip(scene.face_object, 0, top - 1)
-    nr = np.ones(m + 1, bool)
-    nr[:m] = scene.non_returning_faces(non_returning)
-    return (np.append(id_inst[fo], np.uint16(0)), np.append(id_cls[fo], np.uint16(0)), nr,
-            np.vstack([scene.face_colors, [[0, 0, 0]]]).astype(np.float32))
-
-
 class _Embreex:
     """First hits through embreex (Embree 2), one ray per call."""
     name = "embreex"
@@ -147,9 +110,25 @@ class Renderer:
         self._normal = n  # unit normal (degenerate faces keep their tiny one and are rejected per hit)
         self._offset = np.zeros(m + 1)
         self._offset[:m] = np.einsum("ij,ij->i", n[:m], tri[:, 0])
-        (self._face_instance, self._face_class, self._face_nonreturning,
-         self._face_color) = face_tables(scene, classes, non_returning)
-        self._dirs_C, self._inv_ray_len = pixel_rays_C(camera)
+        # Object id -> (instance, class) tables, then per face by one gather.
+        things = scene.thing_ids(classes.names)
+        top = int(max(scene.face_object.max(), max(things, default=0))) + 1
+        id_inst = np.zeros(top, np.uint16)
+        id_cls = np.zeros(top, np.uint16)
+        for oid in things:
+            id_inst[oid] = oid
+            id_cls[oid] = classes.id(scene.objects[oid])
+        fo = np.clip(scene.face_object, 0, top - 1)
+        self._face_instance = np.append(id_inst[fo], np.uint16(0))
+        self._face_class = np.append(id_cls[fo], np.uint16(0))
+        nr = np.ones(m + 1, bool)
+        nr[:m] = scene.non_returning_faces(non_returning)
+        self._face_nonreturning = nr
+        self._face_color = np.vstack([scene.face_colors, [[0, 0, 0]]]).astype(np.float32)
+        u, v = np.meshgrid(np.arange(camera.width, dtype=np.float64), np.arange(camera.height, dtype=np.float64))
+        self._dirs_C = np.stack([(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy,
+                                 np.ones_like(u)], -1).reshape(-1, 3)
+        self._inv_ray_len = 1.0 / np.linalg.norm(self._dirs_C, axis=1)  # rotation-invariant
         npx = camera.width * camera.height
         self._dirs_W = np.empty((npx, 3))  # reused every frame; the returned images are fresh arrays
         self._rays = _backend(scene, npx, backend)
@@ -159,7 +138,11 @@ class Renderer:
 
     def camera_info(self) -> Dict:
         """Intrinsics as sensor_msgs/CameraInfo fields (plumb_bob, zero distortion)."""
-        return camera_info(self.camera)
+        c = self.camera
+        return {"width": c.width, "height": c.height, "distortion_model": "plumb_bob", "D": [0.0] * 5,
+                "K": [c.fx, 0.0, c.cx, 0.0, c.fy, c.cy, 0.0, 0.0, 1.0],
+                "R": [1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0],
+                "P": [c.fx, 0.0, c.cx, 0.0, 0.0, c.fy, c.cy, 0.0, 0.0, 0.0, 1.0, 0.0]}
 
     def cast(self, T_WC: np.ndarray):
         """Hit face per pixel (M = no hit), optical-axis depth (inf where no hit), ray directions in
