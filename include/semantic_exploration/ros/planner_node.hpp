@@ -85,8 +85,9 @@ class PlannerNode {
   std::string missingInputs(const ros::Time& frame_stamp) const;
   void publishStatus(uint8_t state, const std::string& message);
 
-  /// Applies one MapBlocks message to the replica; `gap` is set when a resync is needed:
-  /// a sequence skipped, or one that went back while its stamp went on (background_map restarted).
+  /// Applies one MapBlocks message to the replica; `gap` is set when a resync is needed: a
+  /// sequence skipped, or (background_map restarted) sequence 1 after a later one or any older
+  /// sequence with a newer stamp than the last update applied.
   bool applyBlocks(const semantic_exploration::MapBlocks& msg, bool& gap);
   bool resync();
   /// One planning iteration; true if a path was published. `message` says what happened. `stamp`:
