@@ -4,7 +4,7 @@
 the generated 15 x 12 x 3 m house, without ROS.
 
 The loop runs in two child processes, one after the other: with one BLAS thread (what mav_sim
-sets, scripts/mav_sim.py one_blas_thread) and with OpenBLAS's default (a thread per core), whose
+sets, scripts/mav_sim.py blas_setup) and with OpenBLAS's default (a thread per core), whose
 worker spins in sched_yield after every small numpy product. A child's CPU time is user + system
 over all its threads (os.wait4), so the spinning thread counts. Prints the figures and appends
 JSON lines to --out: sim_loop_cpu_ms_per_sim_s and sim_loop_sim_s_per_wall_s (peer: the BLAS

@@ -43,16 +43,41 @@ def _ensure_ray_tracer():
     sys.exit(1)
 
 
-def one_blas_thread():
-    """One BLAS thread, to be set before numpy loads. The simulator's matrices are 3x3 and 4x4,
-    and after each call OpenBLAS's worker thread spins in sched_yield: with the default (a thread
-    per core) that thread kept a second core busy for the whole run (docs/BENCHMARKS.md, "End to
-    end"). A setting in the environment wins."""
+#: OpenBLAS's kernels for the simulator's numpy where the processor has AVX2 and FMA. OpenBLAS
+#: picks its kernels by processor model, and with another choice numpy's results can differ in
+#: their last bits: a deterministic flight of a house parted at 301 s of sim time between an
+#: Intel Xeon (SkylakeX kernels) and the same flight with these (docs/BENCHMARKS.md,
+#: "Deterministic flights on other processors").
+BLAS_CORETYPE = "Haswell"
+
+
+def _has_avx2_fma(cpuinfo="/proc/cpuinfo"):
+    try:
+        with open(cpuinfo) as f:
+            for line in f:
+                if line.startswith("flags"):
+                    flags = line.split()
+                    return "avx2" in flags and "fma" in flags
+    except OSError:
+        pass
+    return False
+
+
+def blas_setup():
+    """To be called before numpy loads:
+    - one BLAS thread: the simulator's matrices are 3x3 and 4x4, and after each call OpenBLAS's
+      worker thread spins in sched_yield; with the default (a thread per core) that thread kept a
+      second core busy for the whole run (docs/BENCHMARKS.md, "End to end");
+    - BLAS_CORETYPE's kernels where the processor can run them, so that runs on other processors
+      compute alike.
+    A setting in the environment wins."""
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    if _has_avx2_fma():
+        os.environ.setdefault("OPENBLAS_CORETYPE", BLAS_CORETYPE)
 
 
 if __name__ == "__main__":
-    one_blas_thread()
+    blas_setup()
     _ensure_ray_tracer()
     try:
         from semantic_exploration.sim.node import main

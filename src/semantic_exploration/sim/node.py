@@ -44,6 +44,7 @@ frames that are not sent (no images, camera_info or detections; lockstep does
 not wait for a frame that was not sent).
 """
 
+import os
 import queue
 import threading
 import time
@@ -267,11 +268,13 @@ class MavSimNode:
         self.sim = sim
         lo, hi = sim.bounds
         rospy.loginfo("mav_sim: scene '%s': %d triangles, %d objects (%d of known classes), bounds [%s] - [%s], "
-                      "start (%.2f, %.2f, %.2f, yaw %.2f), rays through %s%s", sim.scene.name, len(sim.scene.faces),
+                      "start (%.2f, %.2f, %.2f, yaw %.2f), rays through %s%s, OpenBLAS kernels %s",
+                      sim.scene.name, len(sim.scene.faces),
                       len(sim.scene.objects), len(sim.scene.thing_ids(c.classes.names)),
                       ", ".join("%.2f" % v for v in lo), ", ".join("%.2f" % v for v in hi), *sim.start,
                       sim.renderer.backend,
-                      " (%s)" % sim.renderer.device_config if sim.renderer.device_config else "")
+                      " (%s)" % sim.renderer.device_config if sim.renderer.device_config else "",
+                      os.environ.get("OPENBLAS_CORETYPE", "of OpenBLAS's own choice"))
         unl = getattr(sim.scene, "unlabelled_ids", [])
         if unl:
             rospy.logwarn("mav_sim: %d face object ids have no entry in the label table; treated as background",
