@@ -46,8 +46,8 @@ def _ensure_ray_tracer():
 #: OpenBLAS's kernels for the simulator's numpy where the processor has AVX2 and FMA. OpenBLAS
 #: picks its kernels by processor model, and with another choice numpy's results can differ in
 #: their last bits: a deterministic flight of a house parted at 301 s of sim time between an
-#: Intel Xeon (SkylakeX kernels) and the same flight with these (docs/BENCHMARKS.md,
-#: "Deterministic flights on other processors").
+#: Intel Xeon with its own choice (SkylakeX) and the same flight with these, which gave an AMD
+#: EPYC's figures (docs/BENCHMARKS.md, "Deterministic flights on other processors").
 BLAS_CORETYPE = "Haswell"
 
 
@@ -72,8 +72,10 @@ def blas_setup():
       compute alike.
     A setting in the environment wins."""
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    if _has_avx2_fma():
-        os.environ.setdefault("OPENBLAS_CORETYPE", BLAS_CORETYPE)
+    # An empty setting (a launch file's unset $(optenv ...)) is no setting: OpenBLAS would fall back to a
+    # choice of its own.
+    if _has_avx2_fma() and not os.environ.get("OPENBLAS_CORETYPE"):
+        os.environ["OPENBLAS_CORETYPE"] = BLAS_CORETYPE
 
 
 if __name__ == "__main__":

@@ -44,7 +44,6 @@ frames that are not sent (no images, camera_info or detections; lockstep does
 not wait for a frame that was not sent).
 """
 
-import os
 import queue
 import threading
 import time
@@ -62,6 +61,7 @@ from std_msgs.msg import Header, String, UInt32, UInt32MultiArray
 
 from semantic_exploration.msg import Detection, Detections, DropCounts, FrameIntegrated
 
+from . import blas
 from .config import ConfigError, SimConfig, from_dict
 from .direct_publish import DirectTransformBroadcaster, direct_publisher
 from .drops import DropCounter
@@ -274,7 +274,7 @@ class MavSimNode:
                       ", ".join("%.2f" % v for v in lo), ", ".join("%.2f" % v for v in hi), *sim.start,
                       sim.renderer.backend,
                       " (%s)" % sim.renderer.device_config if sim.renderer.device_config else "",
-                      os.environ.get("OPENBLAS_CORETYPE", "of OpenBLAS's own choice"))
+                      blas.openblas_corename() or "(numpy's BLAS is not OpenBLAS)")
         unl = getattr(sim.scene, "unlabelled_ids", [])
         if unl:
             rospy.logwarn("mav_sim: %d face object ids have no entry in the label table; treated as background",
