@@ -49,7 +49,6 @@ def test_without_it_numpy_starts_worker_threads_and_a_setting_in_the_environment
     assert _threads_after_a_matrix_product(call=True, env_threads=2) == 2
 
 
-
 _CORE = """
 import sys
 sys.path.insert(0, {scripts!r})
