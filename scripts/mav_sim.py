@@ -51,16 +51,19 @@ def _ensure_ray_tracer():
 BLAS_CORETYPE = "Haswell"
 
 
-def _has_avx2_fma(cpuinfo="/proc/cpuinfo"):
+def cpu_flags(cpuinfo="/proc/cpuinfo"):
+    """The processor's feature flags (the first "flags" line of cpuinfo) as a set, empty where
+    there is none (aarch64 names them "Features"), or None where the file cannot be read."""
     try:
         with open(cpuinfo) as f:
-            for line in f:
-                if line.startswith("flags"):
-                    flags = line.split()
-                    return "avx2" in flags and "fma" in flags
+            return set(next((line for line in f if line.startswith("flags")), "").split())
     except OSError:
-        pass
-    return False
+        return None
+
+
+def _has_avx2_fma(cpuinfo="/proc/cpuinfo"):
+    flags = cpu_flags(cpuinfo) or set()
+    return "avx2" in flags and "fma" in flags
 
 
 def blas_setup():

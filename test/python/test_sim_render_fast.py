@@ -151,15 +151,6 @@ def test_triangle_scene_first_hit():
     assert s.first_hit([4, 0, 0], d[:1]).tolist() == [-1]
 
 
-def _cpu_flags():
-    """The processor's feature flags from /proc/cpuinfo, or None where it cannot be read."""
-    try:
-        with open("/proc/cpuinfo") as f:
-            return set(next((line for line in f if line.startswith("flags")), "").split())
-    except OSError:
-        return None
-
-
 @needs_embree3
 def test_pinned_scene_breaks_ties_like_avx2_kernels():
     # A 2 x 2 m floor of 3,200 triangles, each face given twice: every hit is a tie between two
@@ -169,7 +160,8 @@ def test_pinned_scene_breaks_ties_like_avx2_kernels():
     # the pin reported the other face for 447 of these 5,282 hits, so there this test fails without the
     # pin; on an AVX2 machine the pinned and the explicit AVX2 device are the same kernels, and only the
     # configuration check below can fail.
-    flags = _cpu_flags()
+    import mav_sim  # scripts/ (conftest.py): the simulator's reading of /proc/cpuinfo
+    flags = mav_sim.cpu_flags()
     if flags is None or "avx2" not in flags:
         pytest.skip("cannot tell that this processor has AVX2" if flags is None else "no AVX2 on this processor")
     n = 40

@@ -12,10 +12,11 @@ _CONFIG_SYMBOLS = ("openblas_get_config", "openblas_get_config64_", "scipy_openb
 def _mapped_openblas(maps="/proc/self/maps"):
     try:
         with open(maps) as f:
-            paths = [line.split()[-1] for line in f if len(line.split()) >= 6]
+            fields = [line.split() for line in f]
     except OSError:
         return []
-    return list(dict.fromkeys(p for p in paths if "openblas" in p.lower()))
+    # A mapping's sixth field is its file; anonymous mappings have five.
+    return list(dict.fromkeys(x[5] for x in fields if len(x) >= 6 and "openblas" in x[5].lower()))
 
 
 def _call(symbols) -> Optional[str]:
